@@ -1,0 +1,37 @@
+#include "AsrtTypes.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace asrt
+{
+const char* toString(Termination t)
+{
+  switch (t)
+  {
+    case Termination::Running:
+      return "running";
+    case Termination::Escaped:
+      return "escaped";
+    case Termination::Captured:
+      return "captured";
+    case Termination::StepBudget:
+      return "step budget spent";
+    case Termination::NumericalFailure:
+      return "numerical failure";
+    case Termination::HitObject:
+      return "hit object";
+  }
+  return "unknown";
+}
+
+void requireFinite(double v, const char* what)
+{
+  if (!std::isfinite(v))
+  {
+    std::ostringstream os;
+    os << what << " must be finite, got " << v;
+    throw InvalidParameter(os.str());
+  }
+}
+}
