@@ -1,0 +1,17 @@
+// Loading a scene in the VTK layer: textures through VTK's image readers.
+#ifndef asrt_GeodesicSceneLoading_h
+#define asrt_GeodesicSceneLoading_h
+
+#include "SceneFile.h"
+
+namespace asrt
+{
+/// An ImageLoader on vtkImageReader2Factory; throws InvalidParameter for missing or unreadable
+/// files.
+ImageLoader vtkImageFileLoader();
+/// The scene from JSON text if given (relative paths against the working directory), else from
+/// the file; throws InvalidParameter if neither is set or the scene is invalid.
+SceneDescription loadScene(const char* text, const char* fileName);
+}
+
+#endif

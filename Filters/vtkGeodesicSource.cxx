@@ -1,0 +1,510 @@
+#include "vtkGeodesicSource.h"
+
+#include "FrameTracer.h"
+#include "GeodesicSceneLoading.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkImageReader2.h"
+#include "vtkImageReader2Factory.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkLongLongArray.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkStringArray.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+vtkStandardNewMacro(vtkGeodesicSource);
+
+namespace
+{
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool isSet(double v)
+{
+  return !std::isnan(v);
+}
+
+/// Bytes a traced pixel needs at most: its record, the image arrays and the hit arrays.
+constexpr double kBytesPerPixel = sizeof(asrt::RayRecord) + 32.0 + 320.0;
+
+double physicalMemory()
+{
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && size > 0 ? static_cast<double>(pages) * size : 8e9;
+}
+
+template<class A>
+vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
+{
+  auto a = vtkSmartPointer<A>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(tuples);
+  return a;
+}
+}
+
+vtkCxxSetSmartPointerMacro(vtkGeodesicSource, PixelSubset, vtkIntArray);
+vtkCxxSetSmartPointerMacro(vtkGeodesicSource, PolylinePixels, vtkIntArray);
+
+vtkIntArray* vtkGeodesicSource::GetPixelSubset()
+{
+  return this->PixelSubset;
+}
+
+vtkIntArray* vtkGeodesicSource::GetPolylinePixels()
+{
+  return this->PolylinePixels;
+}
+
+vtkGeodesicSource::vtkGeodesicSource()
+  : Mass(kNaN)
+  , Spin(kNaN)
+  , Charge(kNaN)
+  , CameraPosition{ kNaN, kNaN, kNaN }
+  , FocalPoint{ kNaN, kNaN, kNaN }
+  , ViewUp{ kNaN, kNaN, kNaN }
+  , ViewAngle(kNaN)
+  , IntegrationStep(kNaN)
+{
+  this->SetNumberOfInputPorts(0);
+  this->SetNumberOfOutputPorts(3);
+}
+
+vtkGeodesicSource::~vtkGeodesicSource()
+{
+  this->SetSceneFileName(nullptr);
+  this->SetSceneText(nullptr);
+  this->SetIntegrationMethod(nullptr);
+}
+
+vtkImageData* vtkGeodesicSource::GetImageOutput()
+{
+  return vtkImageData::SafeDownCast(this->GetOutputDataObject(0));
+}
+
+vtkPolyData* vtkGeodesicSource::GetHitsOutput()
+{
+  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(1));
+}
+
+vtkPolyData* vtkGeodesicSource::GetPolylinesOutput()
+{
+  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(2));
+}
+
+int vtkGeodesicSource::FillOutputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkImageData" : "vtkPolyData");
+  return 1;
+}
+
+void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int& height,
+                                        std::vector<unsigned char>& rgb)
+{
+  if (!std::ifstream(path).good())
+    throw asrt::InvalidParameter("cannot open image file \"" + path + "\"");
+  vtkSmartPointer<vtkImageReader2> reader;
+  reader.TakeReference(vtkImageReader2Factory::CreateImageReader2(path.c_str()));
+  if (!reader)
+    throw asrt::InvalidParameter("no VTK reader recognises the image file \"" + path + "\"");
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkImageData* img = reader->GetOutput();
+  int dims[3];
+  img->GetDimensions(dims);
+  vtkDataArray* scalars = img->GetPointData()->GetScalars();
+  if (!scalars || dims[0] < 1 || dims[1] < 1)
+    throw asrt::InvalidParameter("image file \"" + path + "\" holds no pixels");
+  const int nc = scalars->GetNumberOfComponents();
+  // 8-bit images pass through; wider ones are scaled from their data type's range.
+  const double scale =
+    scalars->GetDataType() == VTK_UNSIGNED_CHAR ? 1.0 : 255.0 / scalars->GetDataTypeMax();
+  width = dims[0];
+  height = dims[1];
+  rgb.resize(static_cast<size_t>(width) * height * 3);
+  for (vtkIdType k = 0; k < static_cast<vtkIdType>(width) * height; ++k)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const int src = nc >= 3 ? c : 0; // grey (and grey + alpha) to RGB
+      const double value = scalars->GetComponent(k, src) * scale;
+      rgb[3 * k + c] = static_cast<unsigned char>(std::lround(std::clamp(value, 0.0, 255.0)));
+    }
+  }
+}
+
+struct vtkGeodesicSource::Internals
+{
+  /// The scene with this filter's overrides applied.
+  static asrt::SceneDescription Load(vtkGeodesicSource* self)
+  {
+    asrt::SceneDescription d = asrt::loadScene(self->SceneText, self->SceneFileName);
+    if (isSet(self->Mass))
+      d.mass = self->Mass;
+    if (isSet(self->Spin))
+      d.spin = self->Spin;
+    if (isSet(self->Charge))
+      d.charge = self->Charge;
+    auto override3 = [](const double* v, asrt::Vec3& target)
+    {
+      if (isSet(v[0]) || isSet(v[1]) || isSet(v[2]))
+        target = asrt::Vec3(v[0], v[1], v[2]);
+    };
+    override3(self->CameraPosition, d.camera.position);
+    override3(self->FocalPoint, d.camera.focalPoint);
+    override3(self->ViewUp, d.camera.viewUp);
+    if (isSet(self->ViewAngle))
+      d.camera.viewAngle = self->ViewAngle;
+    if (self->Resolution[0] != 0 || self->Resolution[1] != 0)
+    {
+      d.camera.width = self->Resolution[0];
+      d.camera.height = self->Resolution[1];
+    }
+    if (self->IntegrationMethod && *self->IntegrationMethod)
+      d.integrator.method = self->IntegrationMethod;
+    if (isSet(self->IntegrationStep))
+      d.integrator.step = self->IntegrationStep;
+    if (d.camera.width <= 0 || d.camera.height <= 0)
+    {
+      std::ostringstream os;
+      os << "resolution must be positive, got " << d.camera.width << " x " << d.camera.height;
+      throw asrt::InvalidParameter(os.str());
+    }
+    return d;
+  }
+};
+
+int vtkGeodesicSource::RequestInformation(vtkInformation*, vtkInformationVector**,
+                                          vtkInformationVector* outputVector)
+{
+  asrt::SceneDescription d;
+  try
+  {
+    d = Internals::Load(this);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  const int ext[6] = { 0, d.camera.width - 1, 0, d.camera.height - 1, 0, 0 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  vtkInformation* image = outputVector->GetInformationObject(0);
+  image->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
+  image->Set(vtkDataObject::SPACING(), spacing, 3);
+  image->Set(vtkDataObject::ORIGIN(), origin, 3);
+  vtkDataObject::SetPointDataActiveScalarInfo(image, VTK_UNSIGNED_CHAR, 3);
+  image->Set(vtkAlgorithm::CAN_PRODUCE_SUB_EXTENT(), 1);
+  for (int port = 0; port < 3; ++port)
+    outputVector->GetInformationObject(port)->Set(CAN_HANDLE_PIECE_REQUEST(), 1);
+  return 1;
+}
+
+int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
+                                   vtkInformationVector* outputVector)
+{
+  vtkInformation* imageInfo = outputVector->GetInformationObject(0);
+  vtkImageData* image = vtkImageData::GetData(outputVector, 0);
+  vtkPolyData* hits = vtkPolyData::GetData(outputVector, 1);
+  vtkPolyData* lines = vtkPolyData::GetData(outputVector, 2);
+  try
+  {
+    const asrt::SceneDescription d = Internals::Load(this);
+    const asrt::FrameTracer tracer(d);
+    const int W = d.camera.width, H = d.camera.height;
+
+    // Pieces are bands of whole rows.
+    int piece = 0, pieces = 1;
+    if (imageInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()))
+      piece = imageInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER());
+    if (imageInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES()))
+      pieces =
+        std::max(1, imageInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES()));
+    const int rowBegin = static_cast<int>(static_cast<long long>(H) * piece / pieces);
+    const int rowEnd = static_cast<int>(static_cast<long long>(H) * (piece + 1) / pieces);
+
+    const double pixels = static_cast<double>(W) * (rowEnd - rowBegin);
+    const double limit = this->MemoryLimit > 0.0 ? this->MemoryLimit : 0.8 * physicalMemory();
+    if (pixels * kBytesPerPixel > limit)
+    {
+      std::ostringstream os;
+      os << "a " << W << " x " << H << " frame needs about " << pixels * kBytesPerPixel / 1e9
+         << " GB, more than the " << limit / 1e9 << " GB allowed";
+      throw asrt::InvalidParameter(os.str());
+    }
+
+    auto progress = [this](double f)
+    {
+      this->UpdateProgress(0.95 * f);
+      return !this->GetAbortExecute();
+    };
+    std::vector<asrt::RayRecord> records;
+    if (this->PixelSubset)
+    {
+      std::vector<std::pair<int, int>> subset;
+      for (vtkIdType k = 0; k < this->PixelSubset->GetNumberOfTuples(); ++k)
+      {
+        const int i = this->PixelSubset->GetTypedComponent(k, 0);
+        const int j = this->PixelSubset->GetTypedComponent(k, 1);
+        if (i < 0 || i >= W || j < 0 || j >= H)
+        {
+          std::ostringstream os;
+          os << "pixel subset entry " << k << " = (" << i << ", " << j << ") lies outside the " << W
+             << " x " << H << " frame";
+          throw asrt::InvalidParameter(os.str());
+        }
+        if (j >= rowBegin && j < rowEnd)
+          subset.emplace_back(i, j);
+      }
+      records = tracer.tracePixels(subset, progress);
+    }
+    else
+    {
+      records = tracer.traceRows(rowBegin, rowEnd, progress);
+    }
+    if (this->GetAbortExecute())
+    {
+      image->Initialize();
+      hits->Initialize();
+      lines->Initialize();
+      return 1;
+    }
+
+    // Port 0: the frame.
+    int ext[6] = { 0, W - 1, rowBegin, rowEnd - 1, 0, 0 };
+    image->SetExtent(ext);
+    image->SetSpacing(1, 1, 1);
+    image->SetOrigin(0, 0, 0);
+    const vtkIdType n = image->GetNumberOfPoints();
+    auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
+    auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
+    auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
+    auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
+    auto termination = makeArray<vtkIntArray>("Termination", 1, n);
+    colors->Fill(0);
+    objectId->Fill(-1);
+    order->Fill(0);
+    pathLength->Fill(0);
+    termination->Fill(0);
+    for (const asrt::RayRecord& r : records)
+    {
+      if (r.termination == asrt::Termination::Running)
+        continue; // not traced (aborted subset)
+      const vtkIdType k = static_cast<vtkIdType>(r.j - rowBegin) * W + r.i;
+      for (int c = 0; c < 3; ++c)
+        colors->SetTypedComponent(
+          k, c, static_cast<unsigned char>(std::lround(255.0 * std::clamp(r.color[c], 0.0, 1.0))));
+      objectId->SetValue(k, r.objectId);
+      order->SetValue(k, r.imageOrder);
+      pathLength->SetValue(k, r.affineLength);
+      termination->SetValue(k, static_cast<int>(r.termination));
+    }
+    vtkPointData* pd = image->GetPointData();
+    pd->Initialize();
+    pd->SetScalars(colors);
+    pd->AddArray(objectId);
+    pd->AddArray(order);
+    pd->AddArray(pathLength);
+    pd->AddArray(termination);
+
+    // Port 1: the records, one vertex each at the hit.
+    const vtkIdType m = static_cast<vtkIdType>(records.size());
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    points->SetDataTypeToDouble();
+    points->SetNumberOfPoints(m);
+    auto pixel = makeArray<vtkIntArray>("Pixel", 2, m);
+    auto origin = makeArray<vtkDoubleArray>("Origin", 3, m);
+    auto direction = makeArray<vtkDoubleArray>("Direction", 3, m);
+    auto momentum = makeArray<vtkDoubleArray>("Momentum", 4, m);
+    auto term = makeArray<vtkIntArray>("Termination", 1, m);
+    auto object = makeArray<vtkIntArray>("ObjectId", 1, m);
+    auto normal = makeArray<vtkDoubleArray>("HitNormal", 3, m);
+    auto uv = makeArray<vtkDoubleArray>("UV", 2, m);
+    auto chord = makeArray<vtkDoubleArray>("ChordError", 1, m);
+    auto length = makeArray<vtkDoubleArray>("PathLength", 1, m);
+    auto winding = makeArray<vtkDoubleArray>("Winding", 1, m);
+    auto imageOrder = makeArray<vtkIntArray>("ImageOrder", 1, m);
+    auto steps = makeArray<vtkLongLongArray>("Steps", 1, m);
+    auto maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
+    auto color = makeArray<vtkDoubleArray>("Color", 3, m);
+    auto jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    for (vtkIdType k = 0; k < m; ++k)
+    {
+      const asrt::RayRecord& r = records[k];
+      points->SetPoint(k, r.hitPoint.data());
+      pixel->SetTypedComponent(k, 0, r.i);
+      pixel->SetTypedComponent(k, 1, r.j);
+      origin->SetTuple(k, r.origin.data());
+      direction->SetTuple(k, r.direction.data());
+      momentum->SetTuple(k, r.momentum.data());
+      term->SetValue(k, static_cast<int>(r.termination));
+      object->SetValue(k, r.objectId);
+      normal->SetTuple(k, r.hitNormal.data());
+      uv->SetTypedComponent(k, 0, r.u);
+      uv->SetTypedComponent(k, 1, r.v);
+      chord->SetValue(k, r.chordError);
+      length->SetValue(k, r.affineLength);
+      winding->SetValue(k, r.winding);
+      imageOrder->SetValue(k, r.imageOrder);
+      steps->SetValue(k, r.steps);
+      maxH->SetValue(k, r.maxAbsH);
+      color->SetTuple(k, r.color.data());
+      const double jac[4] = { r.dudi, r.dudj, r.dvdi, r.dvdj };
+      jacobian->SetTuple(k, jac);
+      verts->InsertNextCell(1, &k);
+    }
+    hits->Initialize();
+    hits->SetPoints(points);
+    hits->SetVerts(verts);
+    for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{
+           pixel, origin, direction, momentum, term, object, normal, uv, chord, length, winding,
+           imageOrder, steps, maxH, color, jacobian })
+      hits->GetPointData()->AddArray(a);
+
+    // The frame's parameters travel with the hits, for the writer and for readers of the data.
+    vtkFieldData* fd = hits->GetFieldData();
+    auto sceneText = vtkSmartPointer<vtkStringArray>::New();
+    sceneText->SetName("SceneJSON");
+    sceneText->InsertNextValue(d.sourceText);
+    fd->AddArray(sceneText);
+    auto method = vtkSmartPointer<vtkStringArray>::New();
+    method->SetName("IntegrationMethod");
+    method->InsertNextValue(d.integrator.method == "auto" ? asrt::defaultMethod(tracer.spacetime())
+                                                          : d.integrator.method);
+    fd->AddArray(method);
+    auto addScalar = [fd](const char* name, std::initializer_list<double> values)
+    {
+      auto a = vtkSmartPointer<vtkDoubleArray>::New();
+      a->SetName(name);
+      a->SetNumberOfComponents(static_cast<int>(values.size()));
+      a->InsertNextTuple(values.begin());
+      fd->AddArray(a);
+    };
+    addScalar("Mass", { d.mass });
+    addScalar("Spin", { d.spin });
+    addScalar("Charge", { d.charge });
+    addScalar("CameraPosition",
+              { d.camera.position.x(), d.camera.position.y(), d.camera.position.z() });
+    addScalar("FocalPoint",
+              { d.camera.focalPoint.x(), d.camera.focalPoint.y(), d.camera.focalPoint.z() });
+    addScalar("ViewUp", { d.camera.viewUp.x(), d.camera.viewUp.y(), d.camera.viewUp.z() });
+    addScalar("ViewAngle", { d.camera.viewAngle });
+    addScalar("Resolution", { double(W), double(H) });
+    addScalar("IntegrationStep", { d.integrator.step });
+    addScalar("Tolerances", { d.integrator.relativeTolerance, d.integrator.absoluteTolerance });
+
+    // Port 2: polylines of chosen rays.
+    lines->Initialize();
+    if (this->GeneratePolylines)
+    {
+      std::vector<std::pair<int, int>> chosen;
+      if (this->PolylinePixels)
+      {
+        for (vtkIdType k = 0; k < this->PolylinePixels->GetNumberOfTuples(); ++k)
+        {
+          const int i = this->PolylinePixels->GetTypedComponent(k, 0);
+          const int j = this->PolylinePixels->GetTypedComponent(k, 1);
+          if (i >= 0 && i < W && j >= rowBegin && j < rowEnd)
+            chosen.emplace_back(i, j);
+        }
+      }
+      else
+      {
+        const int s = this->PolylineStride;
+        for (int j = rowBegin + (s - rowBegin % s) % s; j < rowEnd; j += s)
+          for (int i = 0; i < W; i += s)
+            chosen.emplace_back(i, j);
+      }
+      auto linePoints = vtkSmartPointer<vtkPoints>::New();
+      linePoints->SetDataTypeToDouble();
+      auto cells = vtkSmartPointer<vtkCellArray>::New();
+      auto lambda = makeArray<vtkDoubleArray>("Lambda", 1, 0);
+      auto radius = makeArray<vtkDoubleArray>("R", 1, 0);
+      auto absH = makeArray<vtkDoubleArray>("AbsH", 1, 0);
+      auto linePixel = makeArray<vtkIntArray>("Pixel", 2, 0);
+      auto lineTermination = makeArray<vtkIntArray>("Termination", 1, 0);
+      std::vector<asrt::PathPoint> path;
+      for (const auto& [i, j] : chosen)
+      {
+        path.clear();
+        const asrt::RayRecord r = tracer.tracePixel(i, j, &path);
+        std::vector<vtkIdType> ids;
+        ids.reserve(path.size());
+        for (const asrt::PathPoint& pp : path)
+        {
+          ids.push_back(linePoints->InsertNextPoint(pp.x.data()));
+          lambda->InsertNextValue(pp.lambda);
+          radius->InsertNextValue(pp.r);
+          absH->InsertNextValue(pp.absH);
+        }
+        cells->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
+        const int ij[2] = { i, j };
+        linePixel->InsertNextTypedTuple(ij);
+        lineTermination->InsertNextValue(static_cast<int>(r.termination));
+      }
+      lines->SetPoints(linePoints);
+      lines->SetLines(cells);
+      lines->GetPointData()->AddArray(lambda);
+      lines->GetPointData()->AddArray(radius);
+      lines->GetPointData()->AddArray(absH);
+      lines->GetCellData()->AddArray(linePixel);
+      lines->GetCellData()->AddArray(lineTermination);
+    }
+    this->UpdateProgress(1.0);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    image->Initialize();
+    hits->Initialize();
+    lines->Initialize();
+    return 0;
+  }
+  return 1;
+}
+
+void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "SceneFileName: " << (this->SceneFileName ? this->SceneFileName : "(none)")
+     << "\n";
+  os << indent << "SceneText: " << (this->SceneText ? "(set)" : "(none)") << "\n";
+  os << indent << "Mass: " << this->Mass << "\n";
+  os << indent << "Spin: " << this->Spin << "\n";
+  os << indent << "Charge: " << this->Charge << "\n";
+  os << indent << "CameraPosition: " << this->CameraPosition[0] << " " << this->CameraPosition[1]
+     << " " << this->CameraPosition[2] << "\n";
+  os << indent << "FocalPoint: " << this->FocalPoint[0] << " " << this->FocalPoint[1] << " "
+     << this->FocalPoint[2] << "\n";
+  os << indent << "ViewUp: " << this->ViewUp[0] << " " << this->ViewUp[1] << " " << this->ViewUp[2]
+     << "\n";
+  os << indent << "ViewAngle: " << this->ViewAngle << "\n";
+  os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
+  os << indent
+     << "IntegrationMethod: " << (this->IntegrationMethod ? this->IntegrationMethod : "(scene)")
+     << "\n";
+  os << indent << "IntegrationStep: " << this->IntegrationStep << "\n";
+  os << indent << "PixelSubset: " << (this->PixelSubset ? "set" : "(none)") << "\n";
+  os << indent << "GeneratePolylines: " << this->GeneratePolylines << "\n";
+  os << indent << "PolylineStride: " << this->PolylineStride << "\n";
+  os << indent << "MemoryLimit: " << this->MemoryLimit << "\n";
+}

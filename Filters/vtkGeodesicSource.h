@@ -1,0 +1,148 @@
+/**
+ * @class   vtkGeodesicSource
+ * @brief   traces one light ray per pixel through a scene around a black hole
+ *
+ * vtkGeodesicSource reads a scene (a JSON file or text: spacetime, camera, objects, integrator and
+ * tolerances), traces each pixel's null geodesic backwards from the eye with the scene's
+ * integrator, and outputs
+ *  - port 0: the rendered frame, a vtkImageData with RGB "Colors" and per-pixel "ObjectId",
+ *    "ImageOrder", "PathLength" and "Termination";
+ *  - port 1: a vtkPolyData with one vertex per traced ray at its hit point (or where it ended),
+ *    carrying every field of the ray's record as point data, and the scene and frame parameters
+ *    as field data;
+ *  - port 2: optionally, the rays themselves as polylines (point data "Lambda", "R", "AbsH"), for
+ *    a chosen subset or stride of pixels; off by default, as a full frame's paths are large.
+ *
+ * Scene values can be overridden per frame (mass, spin, camera, resolution, method, step), which
+ * is how a movie's frames differ. A subset of pixels can be traced alone. VTK pieces split the
+ * image by rows. Tracing runs on OpenMP threads; results do not depend on their number.
+ */
+#ifndef vtkGeodesicSource_h
+#define vtkGeodesicSource_h
+
+#include "asrtFiltersModule.h" // for export macro
+#include "vtkImageAlgorithm.h"
+#include "vtkSmartPointer.h" // for members
+
+#include <string> // for std::string
+#include <vector> // for std::vector
+
+class vtkImageData;
+class vtkIntArray;
+class vtkPolyData;
+
+class ASRTFILTERS_EXPORT vtkGeodesicSource : public vtkImageAlgorithm
+{
+public:
+  static vtkGeodesicSource* New();
+  vtkTypeMacro(vtkGeodesicSource, vtkImageAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /// The scene: a JSON file, or JSON text (the text wins when both are set).
+  vtkSetStringMacro(SceneFileName);
+  vtkGetStringMacro(SceneFileName);
+  vtkSetStringMacro(SceneText);
+  vtkGetStringMacro(SceneText);
+  ///@}
+
+  ///@{
+  /// Per-frame overrides of the scene. NaN (the default) keeps the scene's value.
+  vtkSetMacro(Mass, double);
+  vtkGetMacro(Mass, double);
+  vtkSetMacro(Spin, double);
+  vtkGetMacro(Spin, double);
+  vtkSetMacro(Charge, double);
+  vtkGetMacro(Charge, double);
+  vtkSetVector3Macro(CameraPosition, double);
+  vtkGetVector3Macro(CameraPosition, double);
+  vtkSetVector3Macro(FocalPoint, double);
+  vtkGetVector3Macro(FocalPoint, double);
+  vtkSetVector3Macro(ViewUp, double);
+  vtkGetVector3Macro(ViewUp, double);
+  vtkSetMacro(ViewAngle, double);
+  vtkGetMacro(ViewAngle, double);
+  vtkSetMacro(IntegrationStep, double);
+  vtkGetMacro(IntegrationStep, double);
+  ///@}
+
+  ///@{
+  /// Resolution override; 0 keeps the scene's.
+  vtkSetVector2Macro(Resolution, int);
+  vtkGetVector2Macro(Resolution, int);
+  ///@}
+
+  ///@{
+  /// Integration method override (a name from asrt::methodTable()); empty keeps the scene's.
+  vtkSetStringMacro(IntegrationMethod);
+  vtkGetStringMacro(IntegrationMethod);
+  ///@}
+
+  ///@{
+  /// Trace only these pixels: a 2-component array of (i, j). Null traces the whole frame.
+  /// Untraced pixels of the image are black with Termination 0 ("running").
+  void SetPixelSubset(vtkIntArray* ij);
+  vtkIntArray* GetPixelSubset();
+  ///@}
+
+  ///@{
+  /// Output the rays as polylines (port 2), for every PolylineStride-th pixel in i and j, or for
+  /// the pixels in PolylinePixels when set.
+  vtkSetMacro(GeneratePolylines, bool);
+  vtkGetMacro(GeneratePolylines, bool);
+  vtkBooleanMacro(GeneratePolylines, bool);
+  vtkSetClampMacro(PolylineStride, int, 1, VTK_INT_MAX);
+  vtkGetMacro(PolylineStride, int);
+  void SetPolylinePixels(vtkIntArray* ij);
+  vtkIntArray* GetPolylinePixels();
+  ///@}
+
+  ///@{
+  /// Memory the frame may use, in bytes; 0 (default) allows 80 % of this machine's memory. A
+  /// resolution that would need more is refused before anything is allocated.
+  vtkSetMacro(MemoryLimit, double);
+  vtkGetMacro(MemoryLimit, double);
+  ///@}
+
+  vtkImageData* GetImageOutput();
+  vtkPolyData* GetHitsOutput();
+  vtkPolyData* GetPolylinesOutput();
+
+  /// Reads an image file with VTK's readers into RGB bytes (the scene's texture loader).
+  /// Throws asrt::InvalidParameter if it cannot.
+  static void LoadImagePixels(const std::string& path, int& width, int& height,
+                              std::vector<unsigned char>& rgb);
+
+protected:
+  vtkGeodesicSource();
+  ~vtkGeodesicSource() override;
+
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  char* SceneFileName = nullptr;
+  char* SceneText = nullptr;
+  double Mass;
+  double Spin;
+  double Charge;
+  double CameraPosition[3];
+  double FocalPoint[3];
+  double ViewUp[3];
+  double ViewAngle;
+  double IntegrationStep;
+  int Resolution[2] = { 0, 0 };
+  char* IntegrationMethod = nullptr;
+  bool GeneratePolylines = false;
+  int PolylineStride = 10;
+  double MemoryLimit = 0.0;
+  vtkSmartPointer<vtkIntArray> PixelSubset;
+  vtkSmartPointer<vtkIntArray> PolylinePixels;
+
+private:
+  vtkGeodesicSource(const vtkGeodesicSource&) = delete;
+  void operator=(const vtkGeodesicSource&) = delete;
+  struct Internals;
+};
+
+#endif

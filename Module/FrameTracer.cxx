@@ -1,0 +1,216 @@
+#include "FrameTracer.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace asrt
+{
+namespace
+{
+double angleBetween(const Vec3& a, const Vec3& b)
+{
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+/// Diagnostic colour of rays the integrator lost: never a colour of a real scene.
+const Color failureColor(1.0, 0.0, 1.0);
+}
+
+FrameTracer::FrameTracer(const SceneDescription& scene)
+  : Desc(scene)
+  , St(makeSpacetime(scene.mass, scene.spin, scene.charge))
+  , Tracing(scene.tracing)
+{
+  this->Cam = std::make_unique<Camera>(*this->St, scene.camera);
+  makePropagator(*this->St, scene.integrator); // validates method and step before any tracing
+  if (!scene.scene)
+    throw InvalidParameter("scene has no objects container");
+  // Rays must be able to reach the sky before they count as escaped.
+  this->Tracing.escapeRadius =
+    std::max(this->Tracing.escapeRadius, 1.001 * scene.scene->celestialRadius());
+}
+
+FrameTracer::~FrameTracer() = default;
+
+namespace
+{
+RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOptions& opts, int i,
+                    int j, std::vector<PathPoint>* path)
+{
+  const Spacetime& st = tracer.spacetime();
+  const Scene& scene = *tracer.description().scene;
+  RayRecord rec;
+  rec.i = i;
+  rec.j = j;
+  const PhasePoint z = tracer.camera().pixelRay(i, j);
+  rec.origin = z.x.tail<3>();
+  rec.direction = tracer.camera().localDirection(i, j);
+  rec.momentum = z.p;
+
+  SurfaceHit hit;
+  Segment hitSegment;
+  bool found = false;
+  auto visitor = [&](const Segment& seg)
+  {
+    if (path)
+      path->push_back(
+        { seg.x0.tail<3>(), seg.lambda0, st.radius(seg.x0), std::abs(st.value(seg.x0, seg.p0)) });
+    if (scene.firstHit(seg, hit))
+    {
+      found = true;
+      hitSegment = seg;
+      return true;
+    }
+    return false;
+  };
+  const TraceResult res = traceRay(st, prop, z, opts, visitor);
+  rec.termination = res.termination;
+  rec.steps = res.steps;
+  rec.maxAbsH = res.maxAbsH;
+  rec.winding = res.winding;
+  rec.affineLength = res.affineLength;
+  if (found)
+  {
+    // The tracer counted the whole last step; keep only the part up to the hit.
+    const Vec3 a = hitSegment.x0.tail<3>();
+    rec.winding += angleBetween(a, hit.point) - angleBetween(a, hitSegment.x1.tail<3>());
+    rec.affineLength = hitSegment.lambda0 + hit.tau * (hitSegment.lambda1 - hitSegment.lambda0);
+    rec.objectId = hit.objectId;
+    rec.hitPoint = hit.point;
+    rec.hitNormal = hit.normal;
+    rec.u = hit.u;
+    rec.v = hit.v;
+    rec.chordError = (hit.chordPoint - hit.point).norm();
+    rec.color = scene.shade(hit);
+  }
+  else
+  {
+    rec.hitPoint = res.final.x.tail<3>();
+    switch (res.termination)
+    {
+      case Termination::Captured:
+        rec.color = scene.horizonColor;
+        break;
+      case Termination::Escaped:
+        rec.color = scene.background;
+        break;
+      default:
+        rec.color = failureColor;
+    }
+  }
+  rec.imageOrder = static_cast<std::int32_t>(std::floor(rec.winding / M_PI));
+  if (path)
+  {
+    const Vec4 endX =
+      found ? Vec4(0.0, rec.hitPoint.x(), rec.hitPoint.y(), rec.hitPoint.z()) : res.final.x;
+    path->push_back({ endX.tail<3>(), rec.affineLength, st.radius(endX),
+                      std::abs(st.value(res.final.x, res.final.p)) });
+  }
+  return rec;
+}
+}
+
+RayRecord FrameTracer::tracePixel(int i, int j, std::vector<PathPoint>* path) const
+{
+  auto prop = makePropagator(*this->St, this->Desc.integrator);
+  return traceWith(*this, *prop, this->Tracing, i, j, path);
+}
+
+std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
+                                                const std::function<bool(double)>& progress) const
+{
+  const long n = static_cast<long>(pixels.size());
+  std::vector<RayRecord> out(pixels.size());
+  std::atomic<long> done{ 0 };
+  std::atomic<bool> stop{ false };
+  const long reportEvery = std::max(1L, n / 200);
+#pragma omp parallel
+  {
+    // One propagator per thread: it carries the state of the ray being traced.
+    std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
+    long lastReported = 0;
+#pragma omp for schedule(dynamic, 8)
+    for (long k = 0; k < n; ++k)
+    {
+      if (stop.load(std::memory_order_relaxed))
+        continue;
+      out[k] = traceWith(*this, *prop, this->Tracing, pixels[k].first, pixels[k].second, nullptr);
+      const long d = ++done;
+      // Only the master thread reports: VTK's progress events are not thread-safe.
+      if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)
+      {
+        lastReported = d;
+        if (!progress(static_cast<double>(d) / n))
+          stop = true;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<RayRecord> FrameTracer::traceRows(int rowBegin, int rowEnd,
+                                              const std::function<bool(double)>& progress) const
+{
+  const int w = this->Desc.camera.width;
+  std::vector<std::pair<int, int>> pixels;
+  pixels.reserve(static_cast<size_t>(std::max(0, rowEnd - rowBegin)) * w);
+  for (int j = rowBegin; j < rowEnd; ++j)
+    for (int i = 0; i < w; ++i)
+      pixels.emplace_back(i, j);
+  std::vector<RayRecord> records = this->tracePixels(pixels, progress);
+  computeJacobians(records, w, rowBegin, rowEnd);
+  return records;
+}
+
+void FrameTracer::computeJacobians(std::vector<RayRecord>& rows, int width, int rowBegin,
+                                   int rowEnd)
+{
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto at = [&](int i, int j) -> const RayRecord*
+  {
+    if (i < 0 || i >= width || j < rowBegin || j >= rowEnd)
+      return nullptr;
+    return &rows[static_cast<size_t>(j - rowBegin) * width + i];
+  };
+  auto same = [](const RayRecord& a, const RayRecord* b)
+  { return b && b->objectId == a.objectId && b->imageOrder == a.imageOrder; };
+  // u is periodic on closed surfaces: a difference is taken as the short way round.
+  auto du = [](double a, double b) { return (a - b) - std::round(a - b); };
+  for (RayRecord& r : rows)
+  {
+    if (r.objectId < 0)
+    {
+      r.dudi = r.dudj = r.dvdi = r.dvdj = nan;
+      continue;
+    }
+    auto derivative = [&](const RayRecord* minus, const RayRecord* plus, double& dU, double& dV)
+    {
+      const bool m = same(r, minus), p = same(r, plus);
+      if (m && p)
+      {
+        dU = 0.5 * du(plus->u, minus->u);
+        dV = 0.5 * (plus->v - minus->v);
+      }
+      else if (p)
+      {
+        dU = du(plus->u, r.u);
+        dV = plus->v - r.v;
+      }
+      else if (m)
+      {
+        dU = du(r.u, minus->u);
+        dV = r.v - minus->v;
+      }
+      else
+      {
+        dU = dV = nan;
+      }
+    };
+    derivative(at(r.i - 1, r.j), at(r.i + 1, r.j), r.dudi, r.dvdi);
+    derivative(at(r.i, r.j - 1), at(r.i, r.j + 1), r.dudj, r.dvdj);
+  }
+}
+}
