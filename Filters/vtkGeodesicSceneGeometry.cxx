@@ -95,8 +95,13 @@ int vtkGeodesicSceneGeometry::RequestData(vtkInformation*, vtkInformationVector*
         continue;
       const asrt::SceneObject& o = *object;
       auto surface = [&o](double u, double v) { return o.surfacePoint(u, v); };
-      auto shade = [&o](double u, double v)
-      { return o.texture().sample(u - std::floor(u), v - std::floor(v)); };
+      // Closed surfaces wrap u and clamp v, as the textures do; infinite planes repeat in both.
+      const bool tiled = o.isInfinite();
+      auto shade = [&o, tiled](double u, double v)
+      {
+        return o.texture().sample(u - std::floor(u),
+                                  tiled ? v - std::floor(v) : std::clamp(v, 0.0, 1.0));
+      };
       if (o.isInfinite())
       {
         // One texture tile spans |∂x/∂u|; draw PlaneExtent M around the centre.

@@ -22,6 +22,8 @@
 #include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <vtksys/SystemTools.hxx>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -125,8 +127,21 @@ void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int
   reader.TakeReference(vtkImageReader2Factory::CreateImageReader2(path.c_str()));
   if (!reader)
     throw asrt::InvalidParameter("no VTK reader recognises the image file \"" + path + "\"");
+  // The factory also accepts readers that merely tolerate a file (HDR takes any "#" text), so the
+  // file's extension must be one the chosen reader declares.
+  const std::string ext =
+    path.find('.') == std::string::npos
+      ? std::string()
+      : vtksys::SystemTools::LowerCase(vtksys::SystemTools::GetFilenameLastExtension(path));
+  const std::string declared = reader->GetFileExtensions() ? reader->GetFileExtensions() : "";
+  if (ext.empty() || (" " + declared + " ").find(" " + ext + " ") == std::string::npos)
+    throw asrt::InvalidParameter("\"" + path +
+                                 "\" is not an image file VTK can read (extension \"" + ext +
+                                 "\", " + reader->GetClassName() + " reads \"" + declared + "\")");
   reader->SetFileName(path.c_str());
   reader->Update();
+  if (reader->GetErrorCode() != 0)
+    throw asrt::InvalidParameter("cannot read image file \"" + path + "\"");
   vtkImageData* img = reader->GetOutput();
   int dims[3];
   img->GetDimensions(dims);
@@ -134,9 +149,13 @@ void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int
   if (!scalars || dims[0] < 1 || dims[1] < 1)
     throw asrt::InvalidParameter("image file \"" + path + "\" holds no pixels");
   const int nc = scalars->GetNumberOfComponents();
-  // 8-bit images pass through; wider ones are scaled from their data type's range.
-  const double scale =
-    scalars->GetDataType() == VTK_UNSIGNED_CHAR ? 1.0 : 255.0 / scalars->GetDataTypeMax();
+  // 8-bit images pass through; wider integers are scaled from their type's range; floating-point
+  // (HDR) images are taken as linear [0, 1] and clamped.
+  const int type = scalars->GetDataType();
+  const double scale = type == VTK_UNSIGNED_CHAR ? 1.0
+                       : (type == VTK_FLOAT || type == VTK_DOUBLE)
+                         ? 255.0
+                         : 255.0 / scalars->GetDataTypeMax();
   width = dims[0];
   height = dims[1];
   rgb.resize(static_cast<size_t>(width) * height * 3);
@@ -199,10 +218,17 @@ int vtkGeodesicSource::RequestInformation(vtkInformation*, vtkInformationVector*
   try
   {
     d = Internals::Load(this);
+    this->Cache = std::make_shared<asrt::SceneDescription>(d);
+    this->CacheTime = this->GetMTime();
   }
   catch (const std::exception& e)
   {
     vtkErrorMacro(<< e.what());
+    // RequestData will not run: empty the outputs here, so that no stale frame survives an error.
+    this->Cache.reset();
+    for (int port = 0; port < 3; ++port)
+      if (vtkDataObject* out = vtkDataObject::GetData(outputVector, port))
+        out->Initialize();
     return 0;
   }
   const int ext[6] = { 0, d.camera.width - 1, 0, d.camera.height - 1, 0, 0 };
@@ -227,7 +253,9 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
   vtkPolyData* lines = vtkPolyData::GetData(outputVector, 2);
   try
   {
-    const asrt::SceneDescription d = Internals::Load(this);
+    // The scene (and its textures) as RequestInformation loaded it, unless something changed since.
+    const asrt::SceneDescription d =
+      this->Cache && this->CacheTime == this->GetMTime() ? *this->Cache : Internals::Load(this);
     const asrt::FrameTracer tracer(d);
     const int W = d.camera.width, H = d.camera.height;
 
@@ -238,8 +266,16 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
     if (imageInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES()))
       pieces =
         std::max(1, imageInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES()));
-    const int rowBegin = static_cast<int>(static_cast<long long>(H) * piece / pieces);
-    const int rowEnd = static_cast<int>(static_cast<long long>(H) * (piece + 1) / pieces);
+    int rowBegin = static_cast<int>(static_cast<long long>(H) * piece / pieces);
+    int rowEnd = static_cast<int>(static_cast<long long>(H) * (piece + 1) / pieces);
+    if (pieces == 1 && imageInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT()))
+    {
+      // A sub-extent request: trace just its rows (whole rows, as pieces are).
+      int ue[6];
+      imageInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), ue);
+      rowBegin = std::clamp(ue[2], 0, H);
+      rowEnd = std::clamp(ue[3] + 1, rowBegin, H);
+    }
 
     const double pixels = static_cast<double>(W) * (rowEnd - rowBegin);
     const double limit = this->MemoryLimit > 0.0 ? this->MemoryLimit : 0.8 * physicalMemory();
@@ -257,6 +293,17 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       return !this->GetAbortExecute();
     };
     std::vector<asrt::RayRecord> records;
+    auto requirePairs = [](vtkIntArray* a, const char* what)
+    {
+      if (a && a->GetNumberOfComponents() != 2)
+      {
+        std::ostringstream os;
+        os << what << " must have 2 components (i, j), has " << a->GetNumberOfComponents();
+        throw asrt::InvalidParameter(os.str());
+      }
+    };
+    requirePairs(this->PixelSubset, "PixelSubset");
+    requirePairs(this->PolylinePixels, "PolylinePixels");
     if (this->PixelSubset)
     {
       std::vector<std::pair<int, int>> subset;
@@ -384,7 +431,7 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
     vtkFieldData* fd = hits->GetFieldData();
     auto sceneText = vtkSmartPointer<vtkStringArray>::New();
     sceneText->SetName("SceneJSON");
-    sceneText->InsertNextValue(d.sourceText);
+    sceneText->InsertNextValue(asrt::effectiveSceneText(d));
     fd->AddArray(sceneText);
     auto method = vtkSmartPointer<vtkStringArray>::New();
     method->SetName("IntegrationMethod");
@@ -423,7 +470,14 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
         {
           const int i = this->PolylinePixels->GetTypedComponent(k, 0);
           const int j = this->PolylinePixels->GetTypedComponent(k, 1);
-          if (i >= 0 && i < W && j >= rowBegin && j < rowEnd)
+          if (i < 0 || i >= W || j < 0 || j >= H)
+          {
+            std::ostringstream os;
+            os << "polyline pixel entry " << k << " = (" << i << ", " << j << ") lies outside the "
+               << W << " x " << H << " frame";
+            throw asrt::InvalidParameter(os.str());
+          }
+          if (j >= rowBegin && j < rowEnd)
             chosen.emplace_back(i, j);
         }
       }

@@ -24,9 +24,14 @@
 #include "vtkImageAlgorithm.h"
 #include "vtkSmartPointer.h" // for members
 
+#include <memory> // for std::shared_ptr
 #include <string> // for std::string
 #include <vector> // for std::vector
 
+namespace asrt
+{
+struct SceneDescription;
+}
 class vtkImageData;
 class vtkIntArray;
 class vtkPolyData;
@@ -138,6 +143,9 @@ protected:
   double MemoryLimit = 0.0;
   vtkSmartPointer<vtkIntArray> PixelSubset;
   vtkSmartPointer<vtkIntArray> PolylinePixels;
+  // The scene as RequestInformation loaded it (textures decoded once per update).
+  std::shared_ptr<asrt::SceneDescription> Cache;
+  vtkMTimeType CacheTime = 0;
 
 private:
   vtkGeodesicSource(const vtkGeodesicSource&) = delete;

@@ -127,8 +127,11 @@ Camera::Camera(const Spacetime& st, const CameraParameters& params)
 Vec3 Camera::localDirection(double i, double j) const
 {
   const double aspect = static_cast<double>(this->Params.width) / this->Params.height;
-  const double x = (2.0 * (i + 0.5) / this->Params.width - 1.0) * this->TanHalf * aspect;
-  const double y = (2.0 * (j + 0.5) / this->Params.height - 1.0) * this->TanHalf;
+  // (2i + 1 − W)/W is exactly antisymmetric under i → W − 1 − i, so mirrored pixels get mirrored
+  // directions to the bit and symmetric scenes give symmetric images.
+  const double W = this->Params.width, H = this->Params.height;
+  const double x = (2.0 * i + 1.0 - W) / W * this->TanHalf * aspect;
+  const double y = (2.0 * j + 1.0 - H) / H * this->TanHalf;
   return Vec3(x, y, 1.0).normalized();
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace asrt
 {
@@ -77,7 +78,7 @@ RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOpti
     // The tracer counted the whole last step; keep only the part up to the hit.
     const Vec3 a = hitSegment.x0.tail<3>();
     rec.winding += angleBetween(a, hit.point) - angleBetween(a, hitSegment.x1.tail<3>());
-    rec.affineLength = hitSegment.lambda0 + hit.tau * (hitSegment.lambda1 - hitSegment.lambda0);
+    rec.affineLength = hitSegment.lambda(hit.tau);
     rec.objectId = hit.objectId;
     rec.hitPoint = hit.point;
     rec.hitNormal = hit.normal;
@@ -148,38 +149,55 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
       }
     }
   }
+  computeJacobians(out);
   return out;
 }
 
 std::vector<RayRecord> FrameTracer::traceRows(int rowBegin, int rowEnd,
                                               const std::function<bool(double)>& progress) const
 {
-  const int w = this->Desc.camera.width;
+  const int w = this->Desc.camera.width, h = this->Desc.camera.height;
+  if (rowEnd <= rowBegin)
+    return {};
+  const int first = std::max(0, rowBegin - 1), last = std::min(h, rowEnd + 1);
   std::vector<std::pair<int, int>> pixels;
-  pixels.reserve(static_cast<size_t>(std::max(0, rowEnd - rowBegin)) * w);
-  for (int j = rowBegin; j < rowEnd; ++j)
+  pixels.reserve(static_cast<size_t>(std::max(0, last - first)) * w);
+  for (int j = first; j < last; ++j)
     for (int i = 0; i < w; ++i)
       pixels.emplace_back(i, j);
   std::vector<RayRecord> records = this->tracePixels(pixels, progress);
-  computeJacobians(records, w, rowBegin, rowEnd);
+  // Drop the halo rows, which were traced only for their neighbours' Jacobians.
+  const size_t before = static_cast<size_t>(rowBegin - first) * w;
+  const size_t after = static_cast<size_t>(last - std::max(rowBegin, rowEnd)) * w;
+  records.erase(records.end() - static_cast<std::ptrdiff_t>(std::min(after, records.size())),
+                records.end());
+  records.erase(records.begin(),
+                records.begin() + static_cast<std::ptrdiff_t>(std::min(before, records.size())));
   return records;
 }
 
-void FrameTracer::computeJacobians(std::vector<RayRecord>& rows, int width, int rowBegin,
-                                   int rowEnd)
+void FrameTracer::computeJacobians(std::vector<RayRecord>& records)
 {
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::unordered_map<std::int64_t, size_t> index;
+  index.reserve(records.size());
+  auto key = [](int i, int j)
+  { return (static_cast<std::int64_t>(j) << 32) ^ static_cast<std::uint32_t>(i); };
+  for (size_t k = 0; k < records.size(); ++k)
+    index.emplace(key(records[k].i, records[k].j), k);
   auto at = [&](int i, int j) -> const RayRecord*
   {
-    if (i < 0 || i >= width || j < rowBegin || j >= rowEnd)
-      return nullptr;
-    return &rows[static_cast<size_t>(j - rowBegin) * width + i];
+    const auto it = index.find(key(i, j));
+    return it == index.end() ? nullptr : &records[it->second];
   };
   auto same = [](const RayRecord& a, const RayRecord* b)
-  { return b && b->objectId == a.objectId && b->imageOrder == a.imageOrder; };
+  {
+    return b && b->termination != Termination::Running && b->objectId == a.objectId &&
+           b->imageOrder == a.imageOrder;
+  };
   // u is periodic on closed surfaces: a difference is taken as the short way round.
   auto du = [](double a, double b) { return (a - b) - std::round(a - b); };
-  for (RayRecord& r : rows)
+  for (RayRecord& r : records)
   {
     if (r.objectId < 0)
     {

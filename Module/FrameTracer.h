@@ -67,16 +67,18 @@ public:
   /// sphere cost far more than the rest). The result is in the order given and identical for any
   /// number of threads. `progress` is called now and then with the fraction done; if it returns
   /// false the work stops early and the returned records of untraced pixels keep termination
-  /// Running.
+  /// Running. Jacobians come from the neighbours among these pixels (NaN without any).
   std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                      const std::function<bool(double)>& progress = nullptr) const;
 
-  /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left.
+  /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left. The rows just outside
+  /// the band are traced too (and dropped) so that the Jacobians of a band are those of the whole
+  /// frame: pieces assemble into exactly the single-piece frame.
   std::vector<RayRecord> traceRows(int rowBegin, int rowEnd,
                                    const std::function<bool(double)>& progress = nullptr) const;
 
-  /// Fills the screen-space Jacobians of records laid out as whole rows [rowBegin, rowEnd).
-  static void computeJacobians(std::vector<RayRecord>& rows, int width, int rowBegin, int rowEnd);
+  /// Fills the screen-space Jacobians of the records from their neighbours among them.
+  static void computeJacobians(std::vector<RayRecord>& records);
 
 private:
   SceneDescription Desc;

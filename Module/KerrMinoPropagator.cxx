@@ -397,6 +397,12 @@ bool KerrMinoPropagator::advance(Segment& seg)
   seg.p0 = this->Current.p;
   seg.lambda0 = this->S.lambda;
   const Vec4 rate0 = this->CurrentRate;
+  // dλ/dσ = Σ = r² + a² u² at the step's start (state before the step).
+  const double sigma0 = [&]
+  {
+    const double r = 1.0 / this->S.w;
+    return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
+  }();
 
   // Step fraction. Within kFixedStepRadius the step is the fixed h in σ (symplectic). Beyond it a
   // Mino step would move the point by ~h r relative, without bound as r grows (dλ = Σ dσ), so the
@@ -474,6 +480,9 @@ bool KerrMinoPropagator::advance(Segment& seg)
   seg.d0 = h * rate0;
   seg.d1 = h * rate1;
   seg.lambda1 = this->S.lambda;
+  const double r1 = 1.0 / this->S.w;
+  seg.dl0 = h * sigma0;
+  seg.dl1 = h * (r1 * r1 + this->Ray.a * this->Ray.a * this->S.u * this->S.u);
   return true;
 }
 

@@ -15,6 +15,13 @@ Vec4 Segment::position(double t) const
          (-2 * t3 + 3 * t2) * this->x1 + (t3 - t2) * this->d1;
 }
 
+double Segment::lambda(double t) const
+{
+  const double t2 = t * t, t3 = t2 * t;
+  return (2 * t3 - 3 * t2 + 1) * this->lambda0 + (t3 - 2 * t2 + t) * this->dl0 +
+         (-2 * t3 + 3 * t2) * this->lambda1 + (t3 - t2) * this->dl1;
+}
+
 Vec4 Segment::tangent(double t) const
 {
   const double t2 = t * t;
@@ -49,16 +56,18 @@ void GeneralPropagator::endPoint(const Vec4& x, const Vec4& p, EndPoint& e) cons
 {
   // dx/ds = g ∂H/∂p, and g with its slope dg/ds = ∇g · dx/ds for the λ quadrature.
   Vec4 dHdx;
-  this->St.gradient(x, p, dHdx, e.v);
   if (this->TimeTransform)
   {
     Vec4 grad;
-    e.g = this->Transformed.timeScaleGradient(x, grad);
+    double r;
+    this->St.gradientAndRadius(x, p, dHdx, e.v, r, grad);
+    e.g = r - this->St.outerHorizon();
     e.v *= e.g;
     e.dg = grad.dot(e.v);
   }
   else
   {
+    this->St.gradient(x, p, dHdx, e.v);
     e.g = 1.0;
     e.dg = 0.0;
   }
@@ -86,6 +95,8 @@ bool GeneralPropagator::advance(Segment& seg)
   const EndPoint& e1 = this->Start;
   seg.d0 = h * e0.v;
   seg.d1 = h * e1.v;
+  seg.dl0 = h * e0.g;
+  seg.dl1 = h * e1.g;
   // λ = ∫ g ds over the step, by the Hermite quadrature of g(s) with its end slopes (exact for
   // cubics, O(h⁵) locally); for the affine parameter g = 1 and this is just h.
   this->Lambda += h * 0.5 * (e0.g + e1.g) + h * h * (e0.dg - e1.dg) / 12.0;
@@ -127,6 +138,7 @@ bool StraightLinePropagator::advance(Segment& seg)
   seg.x1 = this->Z.x;
   seg.p1 = this->Z.p;
   seg.d0 = seg.d1 = dl * v;
+  seg.dl0 = seg.dl1 = dl;
   seg.lambda1 = this->Lambda;
   return true;
 }
@@ -264,6 +276,22 @@ std::string defaultMethod(const Spacetime& st)
       return "KerrMino4";
   }
   return "DormandPrince54";
+}
+
+IntegratorConfig integratorPreset(const std::string& name)
+{
+  IntegratorConfig c;
+  c.method = "auto";
+  if (name == "fast")
+    c.relativeTolerance = 1e-6;
+  else if (name == "balanced")
+    c.relativeTolerance = 1e-8;
+  else if (name == "accurate")
+    c.relativeTolerance = 1e-10;
+  else
+    throw InvalidParameter("unknown preset \"" + name + "\" (known: fast, balanced, accurate)");
+  c.absoluteTolerance = 1e-2 * c.relativeTolerance;
+  return c;
 }
 
 std::unique_ptr<Propagator> makePropagator(const Spacetime& st, const IntegratorConfig& cfg)

@@ -24,9 +24,14 @@ struct Segment
   Vec4 p0, p1;                     ///< covariant momenta at the ends
   Vec4 d0, d1;                     ///< dx/dτ at the ends, τ the step fraction
   double lambda0 = 0, lambda1 = 0; ///< affine parameter at the ends
+  /// dλ/dτ at the ends (step length × dλ/ds): λ is no more linear in τ than x is, since methods
+  /// step a transformed parameter s with dλ/ds = g(x).
+  double dl0 = 0, dl1 = 0;
 
   /// Position at step fraction τ ∈ [0, 1].
   Vec4 position(double tau) const;
+  /// Affine parameter at τ, on the cubic Hermite interpolant of λ (O(h⁴) like position()).
+  double lambda(double tau) const;
   /// dx/dτ at τ.
   Vec4 tangent(double tau) const;
 };
@@ -38,8 +43,8 @@ struct IntegratorConfig
   double step = 0.05;        ///< h: affine for plain methods, s for time-transformed ones
   bool timeTransform = true; ///< general methods: integrate K = (r − r₊)·H (Poincaré), else H
   double omega = 1.0;        ///< Tao's coupling
-  double relativeTolerance = 1e-8; ///< Dormand–Prince
-  double absoluteTolerance = 1e-10;
+  double relativeTolerance = 1e-8;  ///< Dormand–Prince
+  double absoluteTolerance = 1e-10; ///< Dormand–Prince
 };
 
 class ASRTCORE_EXPORT Propagator
@@ -87,6 +92,11 @@ ASRTCORE_EXPORT const std::vector<MethodInfo>& methodTable();
 ASRTCORE_EXPORT const MethodInfo& findMethod(const std::string& name);
 /// The method "auto" resolves to for this spacetime (see bench/REPORT.md for the measurements).
 ASRTCORE_EXPORT std::string defaultMethod(const Spacetime& st);
+
+/// The named speed/accuracy presets, measured in bench/REPORT.md on the paper's 200×200 scene:
+/// "fast" (Dormand–Prince, rtol 1e-6), "balanced" (rtol 1e-8, the default) and "accurate"
+/// (rtol 1e-10), each with atol = 1e-2 rtol. Throws InvalidParameter for any other name.
+ASRTCORE_EXPORT IntegratorConfig integratorPreset(const std::string& name);
 
 /// Builds the propagator for `cfg` on `st`. Flat space is always solved analytically, whatever
 /// method is asked for: it has nothing to integrate. Throws InvalidParameter for an unknown method,

@@ -37,6 +37,20 @@ double ReissnerNordstromSpacetime::gradient(const Vec4& x, const Vec4& p, Vec4& 
   return detail::sphericalKerrSchildGradient(x, p, r, f, fPrime, dHdx, dHdp);
 }
 
+double ReissnerNordstromSpacetime::gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx,
+                                                     Vec4& dHdp, double& r, Vec4& dr) const
+{
+  const double M = this->Mass, q2 = this->Charge * this->Charge;
+  return detail::sphericalGradientAndRadius(
+    x, p,
+    [M, q2](double, double inv, double& f, double& fPrime)
+    {
+      f = (2.0 * M - q2 * inv) * inv;
+      fPrime = (-2.0 * M + 2.0 * q2 * inv) * inv * inv;
+    },
+    dHdx, dHdp, r, dr);
+}
+
 double ReissnerNordstromSpacetime::radiusGradient(const Vec4& x, Vec4& grad) const
 {
   return detail::sphericalRadiusGradient(x, grad);

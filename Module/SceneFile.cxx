@@ -480,10 +480,22 @@ private:
 
   void integrator(const json& j, SceneDescription& d, const Spacetime& st)
   {
-    Fields f(
-      j, "integrator",
-      { "method", "step", "timeTransform", "omega", "relativeTolerance", "absoluteTolerance" });
+    Fields f(j, "integrator",
+             { "preset", "method", "step", "timeTransform", "omega", "relativeTolerance",
+               "absoluteTolerance" });
     IntegratorConfig& c = d.integrator;
+    // A preset sets every field first; the fields given beside it refine it.
+    if (const json* v = f.get("preset"))
+    {
+      try
+      {
+        c = integratorPreset(str(*v, f.sub("preset"), true));
+      }
+      catch (const InvalidParameter& e)
+      {
+        fail(f.sub("preset"), e.what());
+      }
+    }
     if (const json* v = f.get("method"))
     {
       c.method = str(*v, f.sub("method"), true);
@@ -757,5 +769,31 @@ SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loade
   {
     throw InvalidParameter(path + ": " + e.what());
   }
+}
+std::string effectiveSceneText(const SceneDescription& d)
+{
+  json j = d.sourceText.empty() ? json::object() : json::parse(d.sourceText);
+  auto vec = [](const Vec3& v) { return json::array({ v.x(), v.y(), v.z() }); };
+  j["spacetime"] = { { "mass", d.mass }, { "spin", d.spin }, { "charge", d.charge } };
+  json& cam = j["camera"];
+  cam["position"] = vec(d.camera.position);
+  cam["focalPoint"] = vec(d.camera.focalPoint);
+  cam["viewUp"] = vec(d.camera.viewUp);
+  cam["viewAngle"] = d.camera.viewAngle;
+  cam["resolution"] = json::array({ d.camera.width, d.camera.height });
+  cam["observer"] = toString(d.camera.observer);
+  const IntegratorConfig& c = d.integrator;
+  j["integrator"] = { { "method", c.method },
+                      { "step", c.step },
+                      { "timeTransform", c.timeTransform },
+                      { "omega", c.omega },
+                      { "relativeTolerance", c.relativeTolerance },
+                      { "absoluteTolerance", c.absoluteTolerance } };
+  const TraceOptions& t = d.tracing;
+  j["tracing"] = { { "escapeRadius", t.escapeRadius },
+                   { "maxSteps", t.maxSteps },
+                   { "horizonEpsilon", t.horizonEpsilon },
+                   { "maxHamiltonianError", t.maxHamiltonianError } };
+  return j.dump();
 }
 }

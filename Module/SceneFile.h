@@ -59,6 +59,11 @@ struct SceneDescription
 /// spheres enclosing the camera, frames of at most 2²⁸ pixels.
 ASRTCORE_EXPORT SceneDescription parseScene(const std::string& jsonText, const std::string& baseDir,
                                             const ImageLoader& loader);
+/// The description as JSON, with its current spacetime, camera and integrator values (which may
+/// have been changed since parsing, e.g. per movie frame) written over the parsed text: the scene
+/// exactly as it is traced, for storage, hashing and re-tracing.
+ASRTCORE_EXPORT std::string effectiveSceneText(const SceneDescription& d);
+
 /// Reads and parses a scene file; its directory is the base for relative texture paths. Error
 /// messages are prefixed with the file's path.
 ASRTCORE_EXPORT SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader);

@@ -168,6 +168,7 @@ bool SchwarzschildPlanePropagator::advance(Segment& seg)
   seg.x0 = this->Current.x;
   seg.p0 = this->Current.p;
   seg.lambda0 = this->Lambda;
+  seg.dl0 = this->R.value; // dλ/ds = r, times h below
   const Vec4 v0 = this->CurrentTangent;
   // Near the horizon the flows are large and nearly cancel (ṙ = r p_r − 2M p_r), so a single one
   // could carry r across r = 2M, where the chart ends. The step is therefore limited so that no
@@ -199,6 +200,8 @@ bool SchwarzschildPlanePropagator::advance(Segment& seg)
   seg.lambda1 = this->Lambda;
   seg.d0 = h * v0;
   seg.d1 = h * this->CurrentTangent;
+  seg.dl0 *= h;
+  seg.dl1 = h * this->R.value;
   return std::isfinite(seg.x1[1]) && std::isfinite(seg.p1[1]);
 }
 }

@@ -21,9 +21,23 @@ SchwarzschildSpacetime::SchwarzschildSpacetime(double mass)
 
 double SchwarzschildSpacetime::gradient(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp) const
 {
-  const double r = x.tail<3>().norm();
-  const double f = 2.0 * this->Mass / r;
-  return detail::sphericalKerrSchildGradient(x, p, r, f, -f / r, dHdx, dHdp);
+  const double r = x.tail<3>().norm(), inv = 1.0 / r;
+  const double f = 2.0 * this->Mass * inv;
+  return detail::sphericalKerrSchildGradient(x, p, r, f, -f * inv, dHdx, dHdp);
+}
+
+double SchwarzschildSpacetime::gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx,
+                                                 Vec4& dHdp, double& r, Vec4& dr) const
+{
+  const double twoM = 2.0 * this->Mass;
+  return detail::sphericalGradientAndRadius(
+    x, p,
+    [twoM](double, double inv, double& f, double& fPrime)
+    {
+      f = twoM * inv;
+      fPrime = -f * inv;
+    },
+    dHdx, dHdp, r, dr);
 }
 
 double SchwarzschildSpacetime::radiusGradient(const Vec4& x, Vec4& grad) const

@@ -121,6 +121,8 @@ public:
   std::string name() const override { return "Schwarzschild"; }
   double value(const Vec4& x, const Vec4& p) const override { return hamiltonian<double>(x, p); }
   double gradient(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp) const override;
+  double gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp, double& r,
+                           Vec4& dr) const override;
   double radius(const Vec4& x) const override { return x.tail<3>().norm(); }
   double radiusGradient(const Vec4& x, Vec4& grad) const override;
   Mat4 inverseMetric(const Vec4& x) const override;
@@ -150,6 +152,8 @@ public:
   double charge() const override { return this->Charge; }
   double value(const Vec4& x, const Vec4& p) const override { return hamiltonian<double>(x, p); }
   double gradient(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp) const override;
+  double gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp, double& r,
+                           Vec4& dr) const override;
   double radius(const Vec4& x) const override { return x.tail<3>().norm(); }
   double radiusGradient(const Vec4& x, Vec4& grad) const override;
   Mat4 inverseMetric(const Vec4& x) const override;

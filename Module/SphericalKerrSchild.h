@@ -34,6 +34,19 @@ inline double sphericalKerrSchildGradient(const Vec4& x, const Vec4& p, double r
   return 0.5 * (-p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - f * s * s);
 }
 
+/// The same with r = |x| and ∇r = (0, x/r) handed back, for time transformations.
+template<class F>
+inline double sphericalGradientAndRadius(const Vec4& x, const Vec4& p, const F& fAndSlope,
+                                         Vec4& dHdx, Vec4& dHdp, double& r, Vec4& dr)
+{
+  r = x.tail<3>().norm();
+  const double inv = 1.0 / r;
+  dr << 0.0, x[1] * inv, x[2] * inv, x[3] * inv;
+  double f, fPrime;
+  fAndSlope(r, inv, f, fPrime);
+  return sphericalKerrSchildGradient(x, p, r, f, fPrime, dHdx, dHdp);
+}
+
 inline Mat4 sphericalKerrSchildInverseMetric(const Vec4& x, double f)
 {
   const double r = x.tail<3>().norm();

@@ -4,6 +4,7 @@
 #define asrt_RayFixtures_h
 
 #include "Analytic.h"
+#include "Camera.h"
 #include "RayTracer.h"
 #include "Spacetime.h"
 
@@ -13,6 +14,21 @@ namespace asrt
 {
 namespace testing
 {
+/// A camera at `from` looking at `at`.
+inline CameraParameters looking(const Vec3& from, const Vec3& at, const Vec3& up, double angle,
+  int w, int h, ObserverMotion motion = ObserverMotion::Static)
+{
+  CameraParameters p;
+  p.position = from;
+  p.focalPoint = at;
+  p.viewUp = up;
+  p.viewAngle = angle;
+  p.width = w;
+  p.height = h;
+  p.observer = motion;
+  return p;
+}
+
 /// An incoming ray in the equatorial plane at (R, 0, 0) with E = 1 and L_z = b (impact parameter
 /// b).
 inline PhasePoint equatorialRay(const Spacetime& st, double R, double b)

@@ -10,22 +10,10 @@
 #include <string>
 
 using namespace asrt;
+using asrt::testing::looking;
 
 namespace
 {
-CameraParameters looking(const Vec3& from, const Vec3& at, const Vec3& up, double angle, int w,
-                         int h, ObserverMotion motion = ObserverMotion::Static)
-{
-  CameraParameters p;
-  p.position = from;
-  p.focalPoint = at;
-  p.viewUp = up;
-  p.viewAngle = angle;
-  p.width = w;
-  p.height = h;
-  p.observer = motion;
-  return p;
-}
 
 void expectOrthonormalTetrad(const Spacetime& st, const Camera& cam)
 {

@@ -670,7 +670,7 @@ TEST(KerrConservation, GaussLegendreKeepsCarterQBoundedWhereRK4Drifts)
         d.last = std::max(d.last, dQ);
     }
     std::printf("%-16s h=%g: max |dQ|/Q first tenth %.2e, last tenth %.2e\n", method, h, d.first,
-      d.last);
+                d.last);
     return d;
   };
   const Drift gl = run("GaussLegendre4", 1.0);

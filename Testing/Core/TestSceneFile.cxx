@@ -556,7 +556,7 @@ TEST(SceneFilePresets, PaperFiguresAreOneSceneAtDifferentMasses)
     double mass;
   } others[] = { { "fig2-no-hole.json", 0.0 },
                  { "fig4-mass-start.json", 0.1 },
-                 { "fig5-mass-end.json", 1.5 } };
+                 { "fig5-mass-end.json", 1.2 } };
   for (const auto& o : others)
   {
     const SceneDescription d = preset(o.file);
@@ -615,4 +615,62 @@ TEST(SceneFilePresets, DiskScenesMatchTheirSpecification)
   EXPECT_TRUE(probe(6.01));
   EXPECT_TRUE(probe(19.99));
   EXPECT_FALSE(probe(20.01));
+}
+
+TEST(SceneFile, IntegratorPresetsSetTolerancesAndAreRefinedByFields)
+{
+  const ImageLoader none = [](const std::string& path) -> ImagePixels
+  { throw InvalidParameter("no images in this test: " + path); };
+  auto parse = [&](const std::string& integrator)
+  {
+    return parseScene(
+      R"({"spacetime": {"mass": 1}, "camera": {"position": [0, -30, 0], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1],
+        "viewAngle": 30, "resolution": [8, 8]}, "objects": [],
+      "integrator": )" +
+        integrator + "}",
+      ".", none);
+  };
+  EXPECT_EQ(parse(R"({"preset": "fast"})").integrator.relativeTolerance, 1e-6);
+  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.relativeTolerance, 1e-10);
+  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.absoluteTolerance, 1e-12);
+  const SceneDescription refined = parse(R"({"preset": "fast", "method": "RK4", "step": 0.01})");
+  EXPECT_EQ(refined.integrator.method, "RK4");
+  EXPECT_EQ(refined.integrator.relativeTolerance, 1e-6);
+  try
+  {
+    parse(R"({"preset": "ludicrous"})");
+    FAIL();
+  }
+  catch (const InvalidParameter& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("integrator.preset"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneFile, EffectiveSceneTextCarriesOverridesAndParsesBack)
+{
+  // What is stored with a frame must be the scene as traced, overrides included, and must parse
+  // back to the same description.
+  const ImageLoader none = [](const std::string& path) -> ImagePixels
+  { throw InvalidParameter("no images in this test: " + path); };
+  SceneDescription d = parseScene(R"({"spacetime": {"mass": 1},
+      "camera": {"position": [0, -30, 0], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1],
+                 "viewAngle": 30, "resolution": [8, 8]},
+      "objects": [{"type": "sphere", "id": 3, "center": [0, 20, 0], "radius": 2,
+                   "texture": {"color": [1, 0, 0]}}]})",
+                                  ".", none);
+  d.mass = 0.5;
+  d.camera.position = Vec3(1, -25, 2);
+  d.camera.width = 16;
+  d.integrator.method = "RK4";
+  d.integrator.step = 0.02;
+  const SceneDescription back = parseScene(effectiveSceneText(d), ".", none);
+  EXPECT_EQ(back.mass, 0.5);
+  EXPECT_EQ(back.camera.position, Vec3(1, -25, 2));
+  EXPECT_EQ(back.camera.width, 16);
+  EXPECT_EQ(back.integrator.method, "RK4");
+  EXPECT_EQ(back.integrator.step, 0.02);
+  ASSERT_EQ(back.scene->objects().size(), 1u);
+  EXPECT_EQ(back.scene->objects()[0]->id(), 3);
+  EXPECT_EQ(effectiveSceneText(back), effectiveSceneText(d)); // a fixed point: stable for hashing
 }

@@ -60,6 +60,10 @@ TEST(Segment, EndsAndTangentsAreConsistent)
     EXPECT_LT((a.position(0.0) - a.x0).norm(), 1e-14) << method;
     EXPECT_LT((a.position(1.0) - a.x1).norm(), 1e-12) << method;
     EXPECT_GT(a.lambda1, a.lambda0) << method;
+    EXPECT_NEAR(a.lambda(0.0), a.lambda0, 1e-12) << method;
+    EXPECT_NEAR(a.lambda(1.0), a.lambda1, 1e-12 * a.lambda1) << method;
+    EXPECT_GT(a.dl0, 0.0) << method; // dλ/dτ > 0: the affine parameter runs forward
+    EXPECT_GT(a.dl1, 0.0) << method;
     // The end tangents point along the step (a smooth ray, a short step).
     const Vec3 chord = (a.x1 - a.x0).tail<3>();
     EXPECT_GT(a.d0.tail<3>().normalized().dot(chord.normalized()), 0.99) << method;
