@@ -54,20 +54,34 @@ void GeneralPropagator::start(const PhasePoint& z)
 
 void GeneralPropagator::endPoint(const Vec4& x, const Vec4& p, EndPoint& e) const
 {
-  // dx/ds = g ∂H/∂p, and g with its slope dg/ds = ∇g · dx/ds for the λ quadrature.
+  // dx/ds = g ∂H/∂p, and g with its slope dg/ds = ∇g · dx/ds for the λ quadrature. A rule that
+  // ends its step with the slope there (Dormand–Prince's FSAL stage) has already paid for dx/ds.
   Vec4 dHdx;
+  const bool known = this->State.hasLastSlope && this->State.x == x && this->State.p == p;
   if (this->TimeTransform)
   {
     Vec4 grad;
     double r;
-    this->St.gradientAndRadius(x, p, dHdx, e.v, r, grad);
-    e.g = r - this->St.outerHorizon();
-    e.v *= e.g;
+    if (known)
+    {
+      e.v = this->State.lastSlope.head<4>();
+      r = this->St.radiusGradient(x, grad);
+      e.g = r - this->St.outerHorizon();
+    }
+    else
+    {
+      this->St.gradientAndRadius(x, p, dHdx, e.v, r, grad);
+      e.g = r - this->St.outerHorizon();
+      e.v *= e.g;
+    }
     e.dg = grad.dot(e.v);
   }
   else
   {
-    this->St.gradient(x, p, dHdx, e.v);
+    if (known)
+      e.v = this->State.lastSlope.head<4>();
+    else
+      this->St.gradient(x, p, dHdx, e.v);
     e.g = 1.0;
     e.dg = 0.0;
   }

@@ -30,11 +30,11 @@ ReissnerNordstromSpacetime::ReissnerNordstromSpacetime(double mass, double charg
 double ReissnerNordstromSpacetime::gradient(const Vec4& x, const Vec4& p, Vec4& dHdx,
                                             Vec4& dHdp) const
 {
-  const double r = x.tail<3>().norm();
+  const double inv = 1.0 / x.tail<3>().norm();
   const double q2 = this->Charge * this->Charge;
-  const double f = (2.0 * this->Mass - q2 / r) / r;
-  const double fPrime = (-2.0 * this->Mass + 2.0 * q2 / r) / (r * r);
-  return detail::sphericalKerrSchildGradient(x, p, r, f, fPrime, dHdx, dHdp);
+  const double f = (2.0 * this->Mass - q2 * inv) * inv;
+  const double fPrime = (-2.0 * this->Mass + 2.0 * q2 * inv) * inv * inv;
+  return detail::sphericalKerrSchildGradient(x, p, inv, f, fPrime, dHdx, dHdp);
 }
 
 double ReissnerNordstromSpacetime::gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx,

@@ -21,9 +21,9 @@ SchwarzschildSpacetime::SchwarzschildSpacetime(double mass)
 
 double SchwarzschildSpacetime::gradient(const Vec4& x, const Vec4& p, Vec4& dHdx, Vec4& dHdp) const
 {
-  const double r = x.tail<3>().norm(), inv = 1.0 / r;
+  const double inv = 1.0 / x.tail<3>().norm();
   const double f = 2.0 * this->Mass * inv;
-  return detail::sphericalKerrSchildGradient(x, p, r, f, -f * inv, dHdx, dHdp);
+  return detail::sphericalKerrSchildGradient(x, p, inv, f, -f * inv, dHdx, dHdp);
 }
 
 double SchwarzschildSpacetime::gradientAndRadius(const Vec4& x, const Vec4& p, Vec4& dHdx,

@@ -11,12 +11,12 @@ namespace asrt
 {
 namespace detail
 {
-/// H and its analytic gradient, given f(r) and f'(r) already evaluated at r = |x|.
+/// H and its analytic gradient, given 1/r and f(r), f'(r) already evaluated at r = |x| (the
+/// caller's one division: sqrt and division latency dominate this function).
 /// With s = l^μ p_μ = −p_t + n·p: H = ½(η p p − f s²), ∂s/∂x_j = (p_j − n_j n·p)/r.
-inline double sphericalKerrSchildGradient(const Vec4& x, const Vec4& p, double r, double f,
+inline double sphericalKerrSchildGradient(const Vec4& x, const Vec4& p, double inv, double f,
                                           double fPrime, Vec4& dHdx, Vec4& dHdp)
 {
-  const double inv = 1.0 / r;
   const double nx = x[1] * inv, ny = x[2] * inv, nz = x[3] * inv;
   const double np = nx * p[1] + ny * p[2] + nz * p[3];
   const double s = -p[0] + np;
@@ -44,7 +44,7 @@ inline double sphericalGradientAndRadius(const Vec4& x, const Vec4& p, const F& 
   dr << 0.0, x[1] * inv, x[2] * inv, x[3] * inv;
   double f, fPrime;
   fAndSlope(r, inv, f, fPrime);
-  return sphericalKerrSchildGradient(x, p, r, f, fPrime, dHdx, dHdp);
+  return sphericalKerrSchildGradient(x, p, inv, f, fPrime, dHdx, dHdp);
 }
 
 inline Mat4 sphericalKerrSchildInverseMetric(const Vec4& x, double f)
