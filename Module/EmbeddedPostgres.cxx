@@ -1,0 +1,967 @@
+#include "EmbeddedPostgres.h"
+
+#include "AsrtTypes.h"
+
+#include <libpq-fe.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <grp.h>
+#include <poll.h>
+#include <pwd.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifdef __linux__
+#include <linux/close_range.h>
+#endif
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+
+namespace asrt
+{
+namespace
+{
+constexpr int LockTimeoutSeconds = 120;
+constexpr int PgCtlTimeoutSeconds = 60;
+// A unix socket path (with its terminating NUL) must fit in sockaddr_un::sun_path (108 bytes);
+// PostgreSQL appends "/.s.PGSQL.<port>" (at most 15 characters) to the directory.
+constexpr std::size_t MaxSocketPath = 107;
+
+std::string errnoText(int err)
+{
+  return std::strerror(err);
+}
+
+/// The operating-system account the server runs as.
+struct ServerUser
+{
+  uid_t Uid = 0;
+  gid_t Gid = 0;
+  std::string Name;
+  std::string Home;
+  std::vector<gid_t> Groups;
+  bool Switch = false; ///< true when we are root and must drop to this user in children
+};
+
+ServerUser serverUser()
+{
+  ServerUser su;
+  const uid_t me = geteuid();
+  if (me == 0)
+  {
+    const passwd* pw = getpwnam("postgres");
+    if (!pw)
+      throw std::runtime_error(
+        "running as root, but there is no 'postgres' system user to run the PostgreSQL server as "
+        "(PostgreSQL refuses to run as root): install the Debian package postgresql-15, or run "
+        "as a normal user");
+    su.Uid = pw->pw_uid;
+    su.Gid = pw->pw_gid;
+    su.Name = pw->pw_name;
+    su.Home = pw->pw_dir ? pw->pw_dir : "/";
+    su.Switch = true;
+    int n = 0;
+    getgrouplist(pw->pw_name, pw->pw_gid, nullptr, &n);
+    su.Groups.resize(static_cast<std::size_t>(std::max(n, 1)));
+    if (getgrouplist(pw->pw_name, pw->pw_gid, su.Groups.data(), &n) < 0)
+      n = 0;
+    su.Groups.resize(static_cast<std::size_t>(n));
+    if (su.Groups.empty())
+      su.Groups.push_back(su.Gid);
+    return su;
+  }
+  su.Uid = me;
+  su.Gid = getegid();
+  const passwd* pw = getpwuid(me);
+  if (!pw)
+    throw std::runtime_error("the current user (uid " + std::to_string(me) +
+                             ") has no passwd entry, so it has no name to use as database role");
+  su.Name = pw->pw_name;
+  su.Home = pw->pw_dir ? pw->pw_dir : "";
+  return su;
+}
+
+struct Binaries
+{
+  std::string InitDb, PgCtl;
+};
+
+Binaries findBinaries()
+{
+  const char* env = std::getenv("ASRT_PG_BINDIR");
+  const std::string dir = (env && *env) ? env : "/usr/lib/postgresql/15/bin";
+  Binaries b{ dir + "/initdb", dir + "/pg_ctl" };
+  for (const std::string& p : { b.InitDb, b.PgCtl, dir + "/postgres" })
+    if (access(p.c_str(), X_OK) != 0)
+      throw std::runtime_error(
+        "PostgreSQL 15 server binaries not found: " + p + " is missing or not executable (" +
+        errnoText(errno) +
+        "); install the Debian package postgresql-15, or set ASRT_PG_BINDIR to the directory "
+        "holding initdb, pg_ctl and postgres");
+  return b;
+}
+
+std::uint64_t fnv1a(const std::string& s)
+{
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : s)
+  {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+/// The path a name should be hashed by: symlinks resolved as far as the path exists, so two
+/// spellings of one directory give one port and one socket directory.
+std::string identity(const std::string& dir)
+{
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(dir, ec);
+  return ec ? dir : p.string();
+}
+
+bool plainPath(const std::string& s)
+{
+  // postgresql.conf quoting, the comma-separated list syntax of unix_socket_directories and
+  // libpq's conninfo syntax all treat some characters specially: keep the socket away from them.
+  return std::all_of(s.begin(), s.end(),
+                     [](unsigned char c) {
+                       return std::isalnum(c) || c == '/' || c == '.' || c == '_' || c == '-' ||
+                              c == '+';
+                     });
+}
+
+std::string conninfoValue(const std::string& v)
+{
+  const bool plain =
+    !v.empty() && std::none_of(v.begin(), v.end(),
+                               [](unsigned char c)
+                               { return std::isspace(c) || c == '\'' || c == '\\' || c == '='; });
+  if (plain)
+    return v;
+  std::string q = "'";
+  for (char c : v)
+  {
+    if (c == '\'' || c == '\\')
+      q += '\\';
+    q += c;
+  }
+  return q + "'";
+}
+
+/// Reads at most maxBytes from the end of a file, without following a symlink (root reads files
+/// in a directory another user owns).
+std::string readTail(const std::string& path, std::size_t maxBytes, off_t notBefore = 0)
+{
+  const int fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0)
+    return {};
+  struct stat st
+  {
+  };
+  std::string out;
+  if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode))
+  {
+    const off_t size = st.st_size;
+    const off_t from = std::min(
+      size, std::max({ notBefore, size - static_cast<off_t>(maxBytes), static_cast<off_t>(0) }));
+    out.resize(static_cast<std::size_t>(size - from));
+    const ssize_t n = pread(fd, out.data(), out.size(), from);
+    out.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+  }
+  close(fd);
+  return out;
+}
+
+std::string lastLines(const std::string& text, int lines)
+{
+  std::size_t pos = text.size();
+  if (pos > 0 && text[pos - 1] == '\n')
+    --pos;
+  while (pos > 0 && lines > 0)
+  {
+    pos = text.rfind('\n', pos - 1);
+    if (pos == std::string::npos)
+      return text;
+    --lines;
+  }
+  return lines > 0 ? text : text.substr(pos + 1);
+}
+
+std::vector<std::string> splitLines(const std::string& text)
+{
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);)
+    lines.push_back(line);
+  return lines;
+}
+
+/// Switches a forked child to the server user; returns 0 or the errno. Async-signal-safe calls
+/// only: the parent may have other threads (OpenMP) whose locks a fork child must not touch.
+int dropPrivileges(const ServerUser& su)
+{
+  if (!su.Switch)
+    return 0;
+  if (setgroups(su.Groups.size(), su.Groups.data()) != 0 || setgid(su.Gid) != 0 ||
+      setuid(su.Uid) != 0)
+    return errno;
+  return 0;
+}
+
+struct Command
+{
+  std::vector<std::string> Argv;
+  std::string PgData;  ///< PGDATA for the child when not empty
+  std::string LogPath; ///< when set, stdout and stderr append here; else they are captured
+  int TimeoutSeconds = 120;
+};
+
+struct Outcome
+{
+  int ExitCode = 0;
+  std::string Output;
+};
+
+/// Runs a PostgreSQL program with an argument vector (never through a shell: paths may hold
+/// spaces and quotes), as the server user, from "/", with PG* variables removed from its
+/// environment so that a user's PGHOST or PGPORT cannot redirect it.
+Outcome runCommand(const ServerUser& su, const Command& cmd)
+{
+  std::vector<std::string> envStrings;
+  for (char** e = environ; e && *e; ++e)
+  {
+    const std::string kv = *e;
+    const std::string key = kv.substr(0, kv.find('='));
+    if (key.rfind("PG", 0) == 0 || key == "LC_ALL" || key == "LC_MESSAGES")
+      continue;
+    if (su.Switch && (key == "HOME" || key == "USER" || key == "LOGNAME"))
+      continue;
+    envStrings.push_back(kv);
+  }
+  // Server messages in English, so that errors read the same everywhere and tests can match them.
+  envStrings.push_back("LC_MESSAGES=C");
+  if (!cmd.PgData.empty())
+    envStrings.push_back("PGDATA=" + cmd.PgData);
+  if (su.Switch)
+  {
+    envStrings.push_back("HOME=" + su.Home);
+    envStrings.push_back("USER=" + su.Name);
+    envStrings.push_back("LOGNAME=" + su.Name);
+  }
+  std::vector<char*> argv, envp;
+  for (const std::string& a : cmd.Argv)
+    argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  for (const std::string& e : envStrings)
+    envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+
+  rlimit lim{};
+  const int maxFd =
+    (getrlimit(RLIMIT_NOFILE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY && lim.rlim_cur < 65536)
+      ? static_cast<int>(lim.rlim_cur)
+      : 65536;
+
+  int errPipe[2];
+  if (pipe2(errPipe, O_CLOEXEC) != 0)
+    throw std::runtime_error("pipe: " + errnoText(errno));
+  int outPipe[2] = { -1, -1 };
+  if (cmd.LogPath.empty() && pipe2(outPipe, O_CLOEXEC) != 0)
+  {
+    const int err = errno;
+    close(errPipe[0]);
+    close(errPipe[1]);
+    throw std::runtime_error("pipe: " + errnoText(err));
+  }
+
+  const pid_t pid = fork();
+  if (pid == 0)
+  {
+    struct
+    {
+      int Stage;
+      int Err;
+    } report{ 0, 0 };
+    auto fail = [&](int stage)
+    {
+      report.Stage = stage;
+      report.Err = errno;
+      if (write(errPipe[1], &report, sizeof report) < 0)
+      {
+      }
+      _exit(127);
+    };
+    const int devNull = open("/dev/null", O_RDONLY);
+    if (devNull < 0 || dup2(devNull, 0) < 0)
+      fail(1);
+    if (const int err = dropPrivileges(su))
+    {
+      errno = err;
+      fail(2);
+    }
+    if (chdir("/") != 0)
+      fail(3);
+    if (outPipe[1] >= 0)
+    {
+      if (dup2(outPipe[1], 1) < 0 || dup2(outPipe[1], 2) < 0)
+        fail(4);
+    }
+    else
+    {
+      // Opened after dropping privileges, so the log belongs to the server user.
+      const int log =
+        open(cmd.LogPath.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0600);
+      if (log < 0 || dup2(log, 1) < 0 || dup2(log, 2) < 0)
+        fail(5);
+    }
+    // Inherited descriptors (our lock file above all) must not live on in the postmaster.
+#ifdef CLOSE_RANGE_CLOEXEC
+    if (close_range(3, ~0u, CLOSE_RANGE_CLOEXEC) != 0)
+#endif
+      for (int fd = 3; fd < maxFd; ++fd)
+        fcntl(fd, F_SETFD, FD_CLOEXEC);
+    execve(argv[0], argv.data(), envp.data());
+    fail(6);
+  }
+  const int forkErr = errno;
+  close(errPipe[1]);
+  if (outPipe[1] >= 0)
+    close(outPipe[1]);
+  if (pid < 0)
+  {
+    close(errPipe[0]);
+    if (outPipe[0] >= 0)
+      close(outPipe[0]);
+    throw std::runtime_error("fork: " + errnoText(forkErr));
+  }
+
+  struct
+  {
+    int Stage;
+    int Err;
+  } report{ 0, 0 };
+  ssize_t got;
+  do
+    got = read(errPipe[0], &report, sizeof report);
+  while (got < 0 && errno == EINTR);
+  close(errPipe[0]);
+
+  Outcome result;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(cmd.TimeoutSeconds);
+  int status = 0;
+  bool exited = false;
+  bool eof = outPipe[0] < 0;
+  while (!exited || !eof)
+  {
+    if (!eof)
+    {
+      pollfd p{ outPipe[0], POLLIN, 0 };
+      if (poll(&p, 1, 50) > 0)
+      {
+        char buf[4096];
+        const ssize_t n = read(outPipe[0], buf, sizeof buf);
+        if (n > 0)
+          result.Output.append(buf, static_cast<std::size_t>(n));
+        else if (n == 0 || errno != EINTR)
+          eof = true;
+      }
+    }
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!exited)
+    {
+      const pid_t w = waitpid(pid, &status, WNOHANG);
+      exited = w == pid || (w < 0 && errno != EINTR);
+    }
+    if (std::chrono::steady_clock::now() > deadline)
+    {
+      if (!exited)
+      {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+      }
+      if (outPipe[0] >= 0)
+        close(outPipe[0]);
+      throw std::runtime_error(cmd.Argv[0] + " did not finish within " +
+                               std::to_string(cmd.TimeoutSeconds) + " s" +
+                               (result.Output.empty() ? "" : ":\n" + result.Output));
+    }
+  }
+  if (outPipe[0] >= 0)
+    close(outPipe[0]);
+
+  if (got == static_cast<ssize_t>(sizeof report))
+  {
+    static const char* const stages[] = { "start",   "open /dev/null",  "switch user",
+                                          "chdir /", "redirect output", "open the log file",
+                                          "execute" };
+    const std::string what = report.Stage == 2   ? "switch to user " + su.Name
+                             : report.Stage == 5 ? "open the log file " + cmd.LogPath
+                             : (report.Stage > 0 && report.Stage < 7) ? stages[report.Stage]
+                                                                      : stages[0];
+    throw std::runtime_error("could not run " + cmd.Argv[0] + ": " + what +
+                             " failed: " + errnoText(report.Err));
+  }
+  result.ExitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return result;
+}
+
+/// Whether a forked child running as the server user can use the directory: a parent directory
+/// that only root may search (a home of mode 0700) would stop initdb with a cryptic error.
+bool serverCanReach(const ServerUser& su, const std::string& dir, int mode)
+{
+  if (!su.Switch)
+    return access(dir.c_str(), mode) == 0;
+  const pid_t pid = fork();
+  if (pid == 0)
+  {
+    if (dropPrivileges(su) != 0)
+      _exit(2);
+    _exit(access(dir.c_str(), mode) == 0 ? 0 : 1);
+  }
+  if (pid < 0)
+    throw std::runtime_error("fork: " + errnoText(errno));
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+  {
+  }
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+/// An exclusive flock on <dataDir>.lock, held for the lifetime of the object. The lock file is
+/// next to the directory, not in it, because initdb wants an empty directory.
+class DirectoryLock
+{
+public:
+  explicit DirectoryLock(std::string path)
+    : Path(std::move(path))
+  {
+    const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::seconds(LockTimeoutSeconds);
+    for (;;)
+    {
+      Fd = open(Path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0600);
+      if (Fd < 0)
+        throw std::runtime_error("cannot open the lock file " + Path + ": " + errnoText(errno));
+      while (flock(Fd, LOCK_EX | LOCK_NB) != 0)
+      {
+        if (errno != EWOULDBLOCK && errno != EINTR)
+        {
+          const int err = errno;
+          close(Fd);
+          throw std::runtime_error("cannot lock " + Path + ": " + errnoText(err));
+        }
+        if (std::chrono::steady_clock::now() > deadline)
+        {
+          close(Fd);
+          throw std::runtime_error("timed out after " + std::to_string(LockTimeoutSeconds) +
+                                   " s waiting for another process holding " + Path);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      // destroy() unlinks the lock file while holding it: a waiter that then gets the lock on
+      // the unlinked file must start over, or two processes would each hold "the" lock.
+      struct stat held
+      {
+      }, named{};
+      if (fstat(Fd, &held) == 0 && stat(Path.c_str(), &named) == 0 && held.st_dev == named.st_dev &&
+          held.st_ino == named.st_ino)
+        return;
+      close(Fd);
+    }
+  }
+  ~DirectoryLock() { close(Fd); }
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+  void unlinkFile() { unlink(Path.c_str()); }
+
+private:
+  std::string Path;
+  int Fd = -1;
+};
+
+enum class DirState
+{
+  Missing,
+  Empty,
+  Cluster,
+  NotDirectory,
+  Foreign
+};
+
+DirState classify(const std::string& dir)
+{
+  struct stat st
+  {
+  };
+  if (lstat(dir.c_str(), &st) != 0)
+  {
+    if (errno == ENOENT)
+      return DirState::Missing;
+    throw std::runtime_error("cannot examine " + dir + ": " + errnoText(errno));
+  }
+  if (!S_ISDIR(st.st_mode))
+    return DirState::NotDirectory;
+  struct stat version
+  {
+  };
+  if (stat((dir + "/PG_VERSION").c_str(), &version) == 0)
+    return DirState::Cluster;
+  std::error_code ec;
+  fs::directory_iterator it(dir, ec);
+  if (ec)
+    throw std::runtime_error("cannot list " + dir + ": " + ec.message());
+  return it == fs::directory_iterator() ? DirState::Empty : DirState::Foreign;
+}
+
+std::string notAClusterMessage(const std::string& dir)
+{
+  return "the data directory " + dir +
+         " is neither a PostgreSQL cluster nor empty: refusing to touch it (choose an empty or new "
+         "directory with --dir or ASRT_DB_DIR)";
+}
+
+/// Writes a file in the (server-owned) data directory without following a symlink there, and
+/// gives it to the server user.
+void writeServerFile(const ServerUser& su, const std::string& path, const std::string& text,
+                     bool append)
+{
+  const int fd =
+    open(path.c_str(), O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC | (append ? O_APPEND : O_TRUNC),
+         0600);
+  if (fd < 0)
+    throw std::runtime_error("cannot write " + path + ": " + errnoText(errno));
+  const bool ok = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
+                  (!su.Switch || fchown(fd, su.Uid, su.Gid) == 0);
+  const int err = errno;
+  close(fd);
+  if (!ok)
+    throw std::runtime_error("cannot write " + path + ": " + errnoText(err));
+}
+
+struct PidFile
+{
+  long Pid = 0;
+  int Port = 0;
+  std::string SocketDir;
+  std::string Status;
+};
+
+/// postmaster.pid: pid, data directory, start time, port, first socket directory, listen
+/// address, shared memory key, status.
+bool readPidFile(const std::string& dir, PidFile& out)
+{
+  const std::vector<std::string> lines = splitLines(readTail(dir + "/postmaster.pid", 1 << 16));
+  if (lines.empty())
+    return false;
+  out.Pid = std::atol(lines[0].c_str());
+  if (lines.size() > 3)
+    out.Port = std::atoi(lines[3].c_str());
+  if (lines.size() > 4)
+    out.SocketDir = lines[4];
+  if (lines.size() > 7)
+  {
+    out.Status = lines[7];
+    out.Status.erase(out.Status.find_last_not_of(' ') + 1);
+  }
+  return out.Pid > 0;
+}
+
+bool postmasterAlive(const std::string& dir, long pid)
+{
+  if (pid <= 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM))
+    return false;
+  // A stale postmaster.pid may name a pid that now belongs to something else.
+  std::string comm = readTail("/proc/" + std::to_string(pid) + "/comm", 256);
+  comm.erase(comm.find_last_not_of('\n') + 1);
+  if (!comm.empty() && comm != "postgres" && comm != "postmaster")
+    return false;
+  // The postmaster's working directory is its data directory (readable for our own processes
+  // and for root).
+  char cwd[4096];
+  const ssize_t n =
+    readlink(("/proc/" + std::to_string(pid) + "/cwd").c_str(), cwd, sizeof cwd - 1);
+  if (n > 0)
+  {
+    std::error_code ec;
+    const fs::path canon = fs::canonical(dir, ec);
+    if (!ec && std::string(cwd, static_cast<std::size_t>(n)) != canon.string())
+      return false;
+  }
+  return true;
+}
+
+struct PgConnDeleter
+{
+  void operator()(PGconn* c) const { PQfinish(c); }
+};
+struct PgResultDeleter
+{
+  void operator()(PGresult* r) const { PQclear(r); }
+};
+using Connection = std::unique_ptr<PGconn, PgConnDeleter>;
+using Result = std::unique_ptr<PGresult, PgResultDeleter>;
+
+std::string trimmed(const char* s)
+{
+  std::string t = s ? s : "";
+  t.erase(t.find_last_not_of(" \n") + 1);
+  return t;
+}
+}
+
+std::string EmbeddedPostgres::defaultDataDirectory()
+{
+  if (const char* dir = std::getenv("ASRT_DB_DIR"); dir && *dir)
+    return dir;
+  if (geteuid() == 0)
+    return "/var/lib/asrt/postgres";
+  if (const char* xdg = std::getenv("XDG_DATA_HOME"); xdg && xdg[0] == '/')
+    return std::string(xdg) + "/asrt/postgres";
+  std::string home;
+  if (const char* h = std::getenv("HOME"); h && *h)
+    home = h;
+  else if (const passwd* pw = getpwuid(geteuid()); pw && pw->pw_dir)
+    home = pw->pw_dir;
+  if (home.empty())
+    throw std::runtime_error(
+      "cannot choose a database directory: neither HOME nor ASRT_DB_DIR is set");
+  return home + "/.local/share/asrt/postgres";
+}
+
+EmbeddedPostgres::EmbeddedPostgres(std::string dataDir)
+{
+  if (dataDir.empty())
+    throw InvalidParameter("the database directory must not be empty");
+  if (std::any_of(dataDir.begin(), dataDir.end(), [](unsigned char c) { return c < 0x20; }))
+    throw InvalidParameter("the database directory must not contain control characters (newlines "
+                           "would corrupt postmaster.pid): '" +
+                           dataDir + "'");
+  fs::path p = fs::absolute(dataDir).lexically_normal();
+  std::string s = p.string();
+  while (s.size() > 1 && s.back() == '/')
+    s.pop_back();
+  if (s == "/")
+    throw InvalidParameter("the database directory must not be the root directory /");
+  DataDir = s;
+}
+
+std::string EmbeddedPostgres::socketDirectory() const
+{
+  const std::string socketFile = "/.s.PGSQL." + std::to_string(port());
+  if (DataDir.size() + socketFile.size() < MaxSocketPath && plainPath(DataDir))
+    return DataDir;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx",
+                static_cast<unsigned long long>(fnv1a(identity(DataDir))));
+  return std::string("/tmp/asrt-pg-") + hex;
+}
+
+int EmbeddedPostgres::port() const
+{
+  // TCP is off, so the number only names the socket file; deriving it from the directory keeps
+  // two clusters that share the fallback socket directory of a hash collision apart too.
+  return 20000 + static_cast<int>(fnv1a(identity(DataDir) + "#port") % 20000);
+}
+
+std::string EmbeddedPostgres::user() const
+{
+  return serverUser().Name;
+}
+
+std::string EmbeddedPostgres::logFile() const
+{
+  return DataDir + "/server.log";
+}
+
+bool EmbeddedPostgres::running() const
+{
+  PidFile pf;
+  return readPidFile(DataDir, pf) && postmasterAlive(DataDir, pf.Pid);
+}
+
+std::string EmbeddedPostgres::conninfo(const std::string& database) const
+{
+  std::string host = socketDirectory();
+  int p = port();
+  PidFile pf;
+  if (readPidFile(DataDir, pf) && !pf.SocketDir.empty() && pf.Port > 0 &&
+      postmasterAlive(DataDir, pf.Pid))
+  {
+    host = pf.SocketDir;
+    p = pf.Port;
+  }
+  return "host=" + conninfoValue(host) + " port=" + std::to_string(p) +
+         " dbname=" + conninfoValue(database) + " user=" + conninfoValue(user());
+}
+
+void EmbeddedPostgres::ensureDatabase(const std::string& name) const
+{
+  if (name.empty() || name.size() > 63)
+    throw InvalidParameter("a database name must have 1 to 63 bytes, got '" + name + "'");
+  Connection conn(PQconnectdb((conninfo("postgres") + " connect_timeout=10").c_str()));
+  if (!conn || PQstatus(conn.get()) != CONNECTION_OK)
+    throw std::runtime_error("cannot connect to the PostgreSQL server of " + DataDir + ": " +
+                             trimmed(conn ? PQerrorMessage(conn.get()) : "out of memory"));
+  auto exists = [&]
+  {
+    const char* params[] = { name.c_str() };
+    Result r(PQexecParams(conn.get(), "SELECT 1 FROM pg_database WHERE datname = $1", 1, nullptr,
+                          params, nullptr, nullptr, 0));
+    if (PQresultStatus(r.get()) != PGRES_TUPLES_OK)
+      throw std::runtime_error("cannot list databases: " + trimmed(PQerrorMessage(conn.get())));
+    return PQntuples(r.get()) > 0;
+  };
+  if (exists())
+    return;
+  char* ident = PQescapeIdentifier(conn.get(), name.c_str(), name.size());
+  if (!ident)
+    throw InvalidParameter("bad database name '" + name +
+                           "': " + trimmed(PQerrorMessage(conn.get())));
+  const std::string sql = std::string("CREATE DATABASE ") + ident;
+  PQfreemem(ident);
+  Result r(PQexec(conn.get(), sql.c_str()));
+  // Another client may have created it in between (duplicate_database, or a unique violation on
+  // pg_database): what matters is that it exists now.
+  if (PQresultStatus(r.get()) != PGRES_COMMAND_OK && !exists())
+    throw std::runtime_error("cannot create database '" + name +
+                             "': " + trimmed(PQerrorMessage(conn.get())));
+}
+
+std::string EmbeddedPostgres::ensureRunning()
+{
+  const ServerUser su = serverUser();
+  const Binaries bin = findBinaries();
+  const fs::path parent = fs::path(DataDir).parent_path();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec)
+    throw std::runtime_error("cannot create " + parent.string() + ": " + ec.message());
+
+  DirectoryLock lock(DataDir + ".lock");
+  const DirState state = classify(DataDir);
+  if (state == DirState::NotDirectory)
+    throw InvalidParameter("the data directory " + DataDir + " exists but is not a directory");
+  if (state == DirState::Foreign)
+    throw InvalidParameter(notAClusterMessage(DataDir));
+
+  const std::string unreachable =
+    "the PostgreSQL server runs as user '" + su.Name + "', which cannot use " + DataDir +
+    " (a parent directory is not searchable by it, or the directory belongs to someone else): "
+    "choose another directory with --dir or ASRT_DB_DIR";
+  // Checked before anything is created, so that a refused directory leaves nothing behind.
+  if (!serverCanReach(su, parent.string(), X_OK))
+    throw InvalidParameter(unreachable);
+  if (state == DirState::Missing && mkdir(DataDir.c_str(), 0700) != 0)
+    throw std::runtime_error("cannot create " + DataDir + ": " + errnoText(errno));
+  if (state != DirState::Cluster)
+  {
+    // initdb wants a directory the server user owns, and PostgreSQL insists on mode 0700.
+    if (su.Switch && chown(DataDir.c_str(), su.Uid, su.Gid) != 0)
+      throw std::runtime_error("cannot give " + DataDir + " to user " + su.Name + ": " +
+                               errnoText(errno));
+    if (chmod(DataDir.c_str(), 0700) != 0)
+      throw std::runtime_error("cannot chmod " + DataDir + ": " + errnoText(errno));
+  }
+  if (!serverCanReach(su, DataDir, R_OK | W_OK | X_OK))
+    throw InvalidParameter(unreachable);
+
+  if (state == DirState::Cluster)
+  {
+    std::string version = readTail(DataDir + "/PG_VERSION", 64);
+    version.erase(version.find_last_not_of(" \n") + 1);
+    if (version != "15")
+      throw InvalidParameter("the data directory " + DataDir + " holds a PostgreSQL " + version +
+                             " cluster; ASRT runs PostgreSQL 15");
+    struct stat st
+    {
+    };
+    if (stat(DataDir.c_str(), &st) == 0 && st.st_uid != su.Uid)
+      throw InvalidParameter("the cluster in " + DataDir + " belongs to uid " +
+                             std::to_string(st.st_uid) + ", but its server would run as " +
+                             su.Name + " (uid " + std::to_string(su.Uid) + ")");
+  }
+  else
+  {
+    Command initdb;
+    initdb.Argv = { bin.InitDb,
+                    "-D",
+                    DataDir,
+                    "-U",
+                    su.Name,
+                    "-E",
+                    "UTF8",
+                    "--locale=C",
+                    "--auth-local=trust",
+                    "--auth-host=reject" };
+    if (!Durable)
+      initdb.Argv.push_back("--no-sync");
+    const Outcome out = runCommand(su, initdb);
+    if (out.ExitCode != 0)
+      throw std::runtime_error("initdb failed for " + DataDir + " (exit code " +
+                               std::to_string(out.ExitCode) + "):\n" + lastLines(out.Output, 30));
+    writeServerFile(su, DataDir + "/postgresql.conf",
+                    "\n# Written once by ASRT: settings that follow the directory, rewritten at "
+                    "each start.\ninclude_if_exists = 'asrt.conf'\n",
+                    true);
+  }
+
+  PidFile pf;
+  if (readPidFile(DataDir, pf) && postmasterAlive(DataDir, pf.Pid))
+  {
+    // Started by someone else (pg_ctl by hand) and maybe still starting: wait until it accepts
+    // connections, as pg_ctl -w would.
+    const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::seconds(PgCtlTimeoutSeconds);
+    while (pf.Status != "ready" && std::chrono::steady_clock::now() < deadline &&
+           postmasterAlive(DataDir, pf.Pid))
+    {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      readPidFile(DataDir, pf);
+    }
+    if (pf.Status != "ready")
+      throw std::runtime_error("the PostgreSQL server of " + DataDir + " (pid " +
+                               std::to_string(pf.Pid) + ") is running but not ready (" + pf.Status +
+                               ")");
+  }
+  else
+  {
+    const std::string socketDir = socketDirectory();
+    if (socketDir != DataDir)
+    {
+      struct stat st
+      {
+      };
+      if (lstat(socketDir.c_str(), &st) != 0)
+      {
+        if (mkdir(socketDir.c_str(), 0700) != 0 ||
+            (su.Switch && chown(socketDir.c_str(), su.Uid, su.Gid) != 0))
+          throw std::runtime_error("cannot create the socket directory " + socketDir + ": " +
+                                   errnoText(errno));
+      }
+      else if (!S_ISDIR(st.st_mode) || st.st_uid != su.Uid)
+        throw std::runtime_error("the socket directory " + socketDir +
+                                 " exists but is not a directory owned by " + su.Name +
+                                 ": remove it");
+      chmod(socketDir.c_str(), 0700);
+    }
+    std::string conf =
+      "# Written by ASRT at each start (the socket follows the directory).\n"
+      "listen_addresses = ''\n"
+      "port = " +
+      std::to_string(port()) + "\nunix_socket_directories = '" + socketDir +
+      "'\n"
+      // Trust authentication is safe only because nobody else can reach the socket.
+      "unix_socket_permissions = 0700\n";
+    if (!Durable)
+      conf += "fsync = off\nsynchronous_commit = off\nfull_page_writes = off\n";
+    writeServerFile(su, DataDir + "/asrt.conf", conf, false);
+
+    Command start;
+    // PGDATA rather than -D: pg_ctl pastes -D into a shell command line, which would break on a
+    // directory name with quotes in it.
+    start.Argv = { bin.PgCtl, "start", "-w", "-s", "-t", std::to_string(PgCtlTimeoutSeconds) };
+    start.PgData = DataDir;
+    start.LogPath = logFile();
+    start.TimeoutSeconds = PgCtlTimeoutSeconds + 30;
+    // Only this attempt's lines go into the error, not the history of earlier runs.
+    struct stat before
+    {
+    };
+    const off_t logStart = stat(logFile().c_str(), &before) == 0 ? before.st_size : 0;
+    const Outcome out = runCommand(su, start);
+    if (out.ExitCode != 0 || !running())
+      throw std::runtime_error("the PostgreSQL server in " + DataDir +
+                               " failed to start (pg_ctl exit code " +
+                               std::to_string(out.ExitCode) + "); the end of " + logFile() + ":\n" +
+                               lastLines(readTail(logFile(), 1 << 16, logStart), 25));
+  }
+  ensureDatabase("asrt");
+  return conninfo();
+}
+
+namespace
+{
+void stopServer(const std::string& dataDir, bool immediate)
+{
+  const ServerUser su = serverUser();
+  const Binaries bin = findBinaries();
+  Command stop;
+  stop.Argv = { bin.PgCtl, "stop",
+                "-w",      "-s",
+                "-t",      std::to_string(PgCtlTimeoutSeconds),
+                "-m",      immediate ? "immediate" : "fast" };
+  stop.PgData = dataDir;
+  stop.TimeoutSeconds = PgCtlTimeoutSeconds + 30;
+  const Outcome out = runCommand(su, stop);
+  if (out.ExitCode != 0)
+    throw std::runtime_error("could not stop the PostgreSQL server in " + dataDir +
+                             " (pg_ctl exit code " + std::to_string(out.ExitCode) + "):\n" +
+                             lastLines(out.Output, 20));
+}
+}
+
+void EmbeddedPostgres::stop(bool immediate)
+{
+  if (!running())
+    return;
+  DirectoryLock lock(DataDir + ".lock");
+  if (running())
+    stopServer(DataDir, immediate);
+}
+
+void EmbeddedPostgres::destroy()
+{
+  const fs::path parent = fs::path(DataDir).parent_path();
+  struct stat st
+  {
+  };
+  if (lstat(parent.c_str(), &st) != 0)
+    return; // nothing was ever made here
+  DirectoryLock lock(DataDir + ".lock");
+  const DirState state = classify(DataDir);
+  if (state == DirState::NotDirectory)
+    throw InvalidParameter("refusing to destroy " + DataDir + ": it is not a directory");
+  if (state == DirState::Foreign)
+    throw InvalidParameter("refusing to destroy " + DataDir +
+                           ": it is not a PostgreSQL cluster and not empty");
+  if (state == DirState::Cluster && running())
+    stopServer(DataDir, true);
+  const std::string socketDir = socketDirectory();
+  std::error_code ec;
+  if (state != DirState::Missing)
+  {
+    fs::remove_all(DataDir, ec);
+    if (ec)
+      throw std::runtime_error("cannot remove " + DataDir + ": " + ec.message());
+  }
+  if (socketDir != DataDir && lstat(socketDir.c_str(), &st) == 0 && S_ISDIR(st.st_mode) &&
+      st.st_uid == serverUser().Uid)
+    fs::remove_all(socketDir, ec);
+  lock.unlinkFile();
+}
+}
