@@ -1,6 +1,7 @@
 #include "vtkGeodesicSource.h"
 
 #include "FrameTracer.h"
+#include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
 
 #include "vtkCellArray.h"
@@ -201,6 +202,10 @@ struct vtkGeodesicSource::Internals
       d.integrator.method = self->IntegrationMethod;
     if (isSet(self->IntegrationStep))
       d.integrator.step = self->IntegrationStep;
+    // The frame records the method actually used, so that stored frames stay identified by what
+    // traced them even if the default changes.
+    if (d.integrator.method == "auto")
+      d.integrator.method = asrt::defaultMethod(*asrt::makeSpacetime(d.mass, d.spin, d.charge));
     if (d.camera.width <= 0 || d.camera.height <= 0)
     {
       std::ostringstream os;
@@ -335,129 +340,10 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       return 1;
     }
 
-    // Port 0: the frame.
-    int ext[6] = { 0, W - 1, rowBegin, rowEnd - 1, 0, 0 };
-    image->SetExtent(ext);
-    image->SetSpacing(1, 1, 1);
-    image->SetOrigin(0, 0, 0);
-    const vtkIdType n = image->GetNumberOfPoints();
-    auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
-    auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
-    auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
-    auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
-    auto termination = makeArray<vtkIntArray>("Termination", 1, n);
-    colors->Fill(0);
-    objectId->Fill(-1);
-    order->Fill(0);
-    pathLength->Fill(0);
-    termination->Fill(0);
-    for (const asrt::RayRecord& r : records)
-    {
-      if (r.termination == asrt::Termination::Running)
-        continue; // not traced (aborted subset)
-      const vtkIdType k = static_cast<vtkIdType>(r.j - rowBegin) * W + r.i;
-      for (int c = 0; c < 3; ++c)
-        colors->SetTypedComponent(
-          k, c, static_cast<unsigned char>(std::lround(255.0 * std::clamp(r.color[c], 0.0, 1.0))));
-      objectId->SetValue(k, r.objectId);
-      order->SetValue(k, r.imageOrder);
-      pathLength->SetValue(k, r.affineLength);
-      termination->SetValue(k, static_cast<int>(r.termination));
-    }
-    vtkPointData* pd = image->GetPointData();
-    pd->Initialize();
-    pd->SetScalars(colors);
-    pd->AddArray(objectId);
-    pd->AddArray(order);
-    pd->AddArray(pathLength);
-    pd->AddArray(termination);
-
-    // Port 1: the records, one vertex each at the hit.
-    const vtkIdType m = static_cast<vtkIdType>(records.size());
-    auto points = vtkSmartPointer<vtkPoints>::New();
-    points->SetDataTypeToDouble();
-    points->SetNumberOfPoints(m);
-    auto pixel = makeArray<vtkIntArray>("Pixel", 2, m);
-    auto origin = makeArray<vtkDoubleArray>("Origin", 3, m);
-    auto direction = makeArray<vtkDoubleArray>("Direction", 3, m);
-    auto momentum = makeArray<vtkDoubleArray>("Momentum", 4, m);
-    auto term = makeArray<vtkIntArray>("Termination", 1, m);
-    auto object = makeArray<vtkIntArray>("ObjectId", 1, m);
-    auto normal = makeArray<vtkDoubleArray>("HitNormal", 3, m);
-    auto uv = makeArray<vtkDoubleArray>("UV", 2, m);
-    auto chord = makeArray<vtkDoubleArray>("ChordError", 1, m);
-    auto length = makeArray<vtkDoubleArray>("PathLength", 1, m);
-    auto winding = makeArray<vtkDoubleArray>("Winding", 1, m);
-    auto imageOrder = makeArray<vtkIntArray>("ImageOrder", 1, m);
-    auto steps = makeArray<vtkLongLongArray>("Steps", 1, m);
-    auto maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
-    auto color = makeArray<vtkDoubleArray>("Color", 3, m);
-    auto jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
-    auto verts = vtkSmartPointer<vtkCellArray>::New();
-    for (vtkIdType k = 0; k < m; ++k)
-    {
-      const asrt::RayRecord& r = records[k];
-      points->SetPoint(k, r.hitPoint.data());
-      pixel->SetTypedComponent(k, 0, r.i);
-      pixel->SetTypedComponent(k, 1, r.j);
-      origin->SetTuple(k, r.origin.data());
-      direction->SetTuple(k, r.direction.data());
-      momentum->SetTuple(k, r.momentum.data());
-      term->SetValue(k, static_cast<int>(r.termination));
-      object->SetValue(k, r.objectId);
-      normal->SetTuple(k, r.hitNormal.data());
-      uv->SetTypedComponent(k, 0, r.u);
-      uv->SetTypedComponent(k, 1, r.v);
-      chord->SetValue(k, r.chordError);
-      length->SetValue(k, r.affineLength);
-      winding->SetValue(k, r.winding);
-      imageOrder->SetValue(k, r.imageOrder);
-      steps->SetValue(k, r.steps);
-      maxH->SetValue(k, r.maxAbsH);
-      color->SetTuple(k, r.color.data());
-      const double jac[4] = { r.dudi, r.dudj, r.dvdi, r.dvdj };
-      jacobian->SetTuple(k, jac);
-      verts->InsertNextCell(1, &k);
-    }
-    hits->Initialize();
-    hits->SetPoints(points);
-    hits->SetVerts(verts);
-    for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{
-           pixel, origin, direction, momentum, term, object, normal, uv, chord, length, winding,
-           imageOrder, steps, maxH, color, jacobian })
-      hits->GetPointData()->AddArray(a);
-
+    asrt::recordsToImage(records, W, rowBegin, rowEnd, image);
+    asrt::recordsToPolyData(records, hits);
     // The frame's parameters travel with the hits, for the writer and for readers of the data.
-    vtkFieldData* fd = hits->GetFieldData();
-    auto sceneText = vtkSmartPointer<vtkStringArray>::New();
-    sceneText->SetName("SceneJSON");
-    sceneText->InsertNextValue(asrt::effectiveSceneText(d));
-    fd->AddArray(sceneText);
-    auto method = vtkSmartPointer<vtkStringArray>::New();
-    method->SetName("IntegrationMethod");
-    method->InsertNextValue(d.integrator.method == "auto" ? asrt::defaultMethod(tracer.spacetime())
-                                                          : d.integrator.method);
-    fd->AddArray(method);
-    auto addScalar = [fd](const char* name, std::initializer_list<double> values)
-    {
-      auto a = vtkSmartPointer<vtkDoubleArray>::New();
-      a->SetName(name);
-      a->SetNumberOfComponents(static_cast<int>(values.size()));
-      a->InsertNextTuple(values.begin());
-      fd->AddArray(a);
-    };
-    addScalar("Mass", { d.mass });
-    addScalar("Spin", { d.spin });
-    addScalar("Charge", { d.charge });
-    addScalar("CameraPosition",
-              { d.camera.position.x(), d.camera.position.y(), d.camera.position.z() });
-    addScalar("FocalPoint",
-              { d.camera.focalPoint.x(), d.camera.focalPoint.y(), d.camera.focalPoint.z() });
-    addScalar("ViewUp", { d.camera.viewUp.x(), d.camera.viewUp.y(), d.camera.viewUp.z() });
-    addScalar("ViewAngle", { d.camera.viewAngle });
-    addScalar("Resolution", { double(W), double(H) });
-    addScalar("IntegrationStep", { d.integrator.step });
-    addScalar("Tolerances", { d.integrator.relativeTolerance, d.integrator.absoluteTolerance });
+    asrt::setFrameFieldData(d, hits->GetFieldData());
 
     // Port 2: polylines of chosen rays.
     lines->Initialize();

@@ -796,4 +796,15 @@ std::string effectiveSceneText(const SceneDescription& d)
                    { "maxHamiltonianError", t.maxHamiltonianError } };
   return j.dump();
 }
+SceneDescription parseSceneWithoutImages(const std::string& jsonText)
+{
+  const ImageLoader neutral = [](const std::string&)
+  {
+    ImagePixels px;
+    px.width = px.height = 1;
+    px.rgb = { 128, 128, 128 };
+    return px;
+  };
+  return parseScene(jsonText, ".", neutral);
+}
 }

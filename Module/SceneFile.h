@@ -64,6 +64,11 @@ ASRTCORE_EXPORT SceneDescription parseScene(const std::string& jsonText, const s
 /// exactly as it is traced, for storage, hashing and re-tracing.
 ASRTCORE_EXPORT std::string effectiveSceneText(const SceneDescription& d);
 
+/// Parses a scene for what identifies and parameterises its frames (storage, hashing, re-reading),
+/// without reading image textures: they become a neutral grey. Everything else is validated as by
+/// parseScene. Not for rendering.
+ASRTCORE_EXPORT SceneDescription parseSceneWithoutImages(const std::string& jsonText);
+
 /// Reads and parses a scene file; its directory is the base for relative texture paths. Error
 /// messages are prefixed with the file's path.
 ASRTCORE_EXPORT SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader);

@@ -13,7 +13,8 @@ namespace testing
 class ThrowawayPostgres
 {
 public:
-  ThrowawayPostgres();  ///< initdb + start; throws std::runtime_error with the server's log on failure
+  ThrowawayPostgres();  ///< initdb + start; throws std::runtime_error with the server's log on
+                        ///< failure
   ~ThrowawayPostgres(); ///< stop (immediate) and remove the directory
   ThrowawayPostgres(const ThrowawayPostgres&) = delete;
   ThrowawayPostgres& operator=(const ThrowawayPostgres&) = delete;

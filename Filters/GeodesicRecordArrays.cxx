@@ -1,0 +1,243 @@
+#include "GeodesicRecordArrays.h"
+
+#include "vtkCellArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkIntArray.h"
+#include "vtkLongLongArray.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkStringArray.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace asrt
+{
+namespace
+{
+template<class A>
+vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
+{
+  auto a = vtkSmartPointer<A>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(tuples);
+  return a;
+}
+
+vtkDataArray* requireArray(vtkPolyData* hits, const char* name, int components)
+{
+  vtkDataArray* a = hits->GetPointData()->GetArray(name);
+  if (!a || a->GetNumberOfComponents() != components ||
+      a->GetNumberOfTuples() != hits->GetNumberOfPoints())
+    throw InvalidParameter(std::string("hit points lack a valid \"") + name + "\" array (" +
+                           std::to_string(components) + " components, one tuple per point)");
+  return a;
+}
+
+std::string requireString(vtkFieldData* fd, const char* name)
+{
+  auto* a = vtkStringArray::SafeDownCast(fd->GetAbstractArray(name));
+  if (!a || a->GetNumberOfValues() < 1)
+    throw InvalidParameter(std::string("frame field data lack \"") + name + "\"");
+  return a->GetValue(0);
+}
+}
+
+void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
+                    vtkImageData* image)
+{
+  int ext[6] = { 0, width - 1, rowBegin, rowEnd - 1, 0, 0 };
+  image->Initialize();
+  image->SetExtent(ext);
+  image->SetSpacing(1, 1, 1);
+  image->SetOrigin(0, 0, 0);
+  const vtkIdType n = image->GetNumberOfPoints();
+  auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
+  auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
+  auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
+  auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
+  auto termination = makeArray<vtkIntArray>("Termination", 1, n);
+  colors->Fill(0);
+  objectId->Fill(-1);
+  order->Fill(0);
+  pathLength->Fill(0);
+  termination->Fill(0);
+  for (const RayRecord& r : records)
+  {
+    if (r.termination == Termination::Running || r.j < rowBegin || r.j >= rowEnd || r.i < 0 ||
+        r.i >= width)
+      continue; // not traced, or outside these rows
+    const vtkIdType k = static_cast<vtkIdType>(r.j - rowBegin) * width + r.i;
+    for (int c = 0; c < 3; ++c)
+      colors->SetTypedComponent(
+        k, c, static_cast<unsigned char>(std::lround(255.0 * std::clamp(r.color[c], 0.0, 1.0))));
+    objectId->SetValue(k, r.objectId);
+    order->SetValue(k, r.imageOrder);
+    pathLength->SetValue(k, r.affineLength);
+    termination->SetValue(k, static_cast<int>(r.termination));
+  }
+  vtkPointData* pd = image->GetPointData();
+  pd->SetScalars(colors);
+  pd->AddArray(objectId);
+  pd->AddArray(order);
+  pd->AddArray(pathLength);
+  pd->AddArray(termination);
+}
+
+void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits)
+{
+  const vtkIdType m = static_cast<vtkIdType>(records.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(m);
+  auto pixel = makeArray<vtkIntArray>("Pixel", 2, m);
+  auto origin = makeArray<vtkDoubleArray>("Origin", 3, m);
+  auto direction = makeArray<vtkDoubleArray>("Direction", 3, m);
+  auto momentum = makeArray<vtkDoubleArray>("Momentum", 4, m);
+  auto term = makeArray<vtkIntArray>("Termination", 1, m);
+  auto object = makeArray<vtkIntArray>("ObjectId", 1, m);
+  auto normal = makeArray<vtkDoubleArray>("HitNormal", 3, m);
+  auto uv = makeArray<vtkDoubleArray>("UV", 2, m);
+  auto chord = makeArray<vtkDoubleArray>("ChordError", 1, m);
+  auto length = makeArray<vtkDoubleArray>("PathLength", 1, m);
+  auto winding = makeArray<vtkDoubleArray>("Winding", 1, m);
+  auto imageOrder = makeArray<vtkIntArray>("ImageOrder", 1, m);
+  auto steps = makeArray<vtkLongLongArray>("Steps", 1, m);
+  auto maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
+  auto color = makeArray<vtkDoubleArray>("Color", 3, m);
+  auto jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  for (vtkIdType k = 0; k < m; ++k)
+  {
+    const RayRecord& r = records[k];
+    points->SetPoint(k, r.hitPoint.data());
+    pixel->SetTypedComponent(k, 0, r.i);
+    pixel->SetTypedComponent(k, 1, r.j);
+    origin->SetTuple(k, r.origin.data());
+    direction->SetTuple(k, r.direction.data());
+    momentum->SetTuple(k, r.momentum.data());
+    term->SetValue(k, static_cast<int>(r.termination));
+    object->SetValue(k, r.objectId);
+    normal->SetTuple(k, r.hitNormal.data());
+    uv->SetTypedComponent(k, 0, r.u);
+    uv->SetTypedComponent(k, 1, r.v);
+    chord->SetValue(k, r.chordError);
+    length->SetValue(k, r.affineLength);
+    winding->SetValue(k, r.winding);
+    imageOrder->SetValue(k, r.imageOrder);
+    steps->SetValue(k, r.steps);
+    maxH->SetValue(k, r.maxAbsH);
+    color->SetTuple(k, r.color.data());
+    const double jac[4] = { r.dudi, r.dudj, r.dvdi, r.dvdj };
+    jacobian->SetTuple(k, jac);
+    verts->InsertNextCell(1, &k);
+  }
+  hits->Initialize();
+  hits->SetPoints(points);
+  hits->SetVerts(verts);
+  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{
+         pixel, origin, direction, momentum, term, object, normal, uv, chord, length, winding,
+         imageOrder, steps, maxH, color, jacobian })
+    hits->GetPointData()->AddArray(a);
+}
+
+std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
+{
+  const vtkIdType m = hits->GetNumberOfPoints();
+  vtkDataArray* pixel = requireArray(hits, "Pixel", 2);
+  vtkDataArray* origin = requireArray(hits, "Origin", 3);
+  vtkDataArray* direction = requireArray(hits, "Direction", 3);
+  vtkDataArray* momentum = requireArray(hits, "Momentum", 4);
+  vtkDataArray* term = requireArray(hits, "Termination", 1);
+  vtkDataArray* object = requireArray(hits, "ObjectId", 1);
+  vtkDataArray* normal = requireArray(hits, "HitNormal", 3);
+  vtkDataArray* uv = requireArray(hits, "UV", 2);
+  vtkDataArray* chord = requireArray(hits, "ChordError", 1);
+  vtkDataArray* length = requireArray(hits, "PathLength", 1);
+  vtkDataArray* winding = requireArray(hits, "Winding", 1);
+  vtkDataArray* imageOrder = requireArray(hits, "ImageOrder", 1);
+  vtkDataArray* steps = requireArray(hits, "Steps", 1);
+  vtkDataArray* maxH = requireArray(hits, "MaxAbsH", 1);
+  vtkDataArray* color = requireArray(hits, "Color", 3);
+  vtkDataArray* jacobian = requireArray(hits, "Jacobian", 4);
+  std::vector<RayRecord> records(static_cast<size_t>(m));
+  for (vtkIdType k = 0; k < m; ++k)
+  {
+    RayRecord& r = records[static_cast<size_t>(k)];
+    hits->GetPoint(k, r.hitPoint.data());
+    r.i = static_cast<std::int32_t>(pixel->GetComponent(k, 0));
+    r.j = static_cast<std::int32_t>(pixel->GetComponent(k, 1));
+    origin->GetTuple(k, r.origin.data());
+    direction->GetTuple(k, r.direction.data());
+    momentum->GetTuple(k, r.momentum.data());
+    const int t = static_cast<int>(term->GetComponent(k, 0));
+    if (t < 0 || t > static_cast<int>(Termination::HitObject))
+      throw InvalidParameter("hit point " + std::to_string(k) + " has an unknown termination " +
+                             std::to_string(t));
+    r.termination = static_cast<Termination>(t);
+    r.objectId = static_cast<std::int32_t>(object->GetComponent(k, 0));
+    normal->GetTuple(k, r.hitNormal.data());
+    r.u = uv->GetComponent(k, 0);
+    r.v = uv->GetComponent(k, 1);
+    r.chordError = chord->GetComponent(k, 0);
+    r.affineLength = length->GetComponent(k, 0);
+    r.winding = winding->GetComponent(k, 0);
+    r.imageOrder = static_cast<std::int32_t>(imageOrder->GetComponent(k, 0));
+    r.steps = static_cast<std::int64_t>(steps->GetComponent(k, 0));
+    r.maxAbsH = maxH->GetComponent(k, 0);
+    color->GetTuple(k, r.color.data());
+    double jac[4];
+    jacobian->GetTuple(k, jac);
+    r.dudi = jac[0];
+    r.dudj = jac[1];
+    r.dvdi = jac[2];
+    r.dvdj = jac[3];
+  }
+  return records;
+}
+
+void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd)
+{
+  auto addString = [fd](const char* name, const std::string& value)
+  {
+    auto a = vtkSmartPointer<vtkStringArray>::New();
+    a->SetName(name);
+    a->InsertNextValue(value);
+    fd->AddArray(a);
+  };
+  addString("SceneJSON", effectiveSceneText(d));
+  addString("IntegrationMethod", d.integrator.method);
+  auto addScalar = [fd](const char* name, std::initializer_list<double> values)
+  {
+    auto a = vtkSmartPointer<vtkDoubleArray>::New();
+    a->SetName(name);
+    a->SetNumberOfComponents(static_cast<int>(values.size()));
+    a->InsertNextTuple(values.begin());
+    fd->AddArray(a);
+  };
+  const CameraParameters& c = d.camera;
+  addScalar("Mass", { d.mass });
+  addScalar("Spin", { d.spin });
+  addScalar("Charge", { d.charge });
+  addScalar("CameraPosition", { c.position.x(), c.position.y(), c.position.z() });
+  addScalar("FocalPoint", { c.focalPoint.x(), c.focalPoint.y(), c.focalPoint.z() });
+  addScalar("ViewUp", { c.viewUp.x(), c.viewUp.y(), c.viewUp.z() });
+  addScalar("ViewAngle", { c.viewAngle });
+  addScalar("Resolution", { double(c.width), double(c.height) });
+  addScalar("IntegrationStep", { d.integrator.step });
+  addScalar("Tolerances", { d.integrator.relativeTolerance, d.integrator.absoluteTolerance });
+}
+
+SceneDescription frameFromFieldData(vtkFieldData* fd)
+{
+  // SceneJSON is the effective scene (overrides included): it alone defines the frame.
+  return parseSceneWithoutImages(requireString(fd, "SceneJSON"));
+}
+}

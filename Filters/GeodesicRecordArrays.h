@@ -1,0 +1,31 @@
+// Ray records as VTK data, both ways: the source's outputs, the writer's input, the reader's
+// outputs. One place defines the array names, so that the three always agree.
+#ifndef asrt_GeodesicRecordArrays_h
+#define asrt_GeodesicRecordArrays_h
+
+#include "FrameTracer.h"
+
+#include <vector>
+
+class vtkFieldData;
+class vtkImageData;
+class vtkPolyData;
+
+namespace asrt
+{
+/// The frame rows [rowBegin, rowEnd) as an image: RGB "Colors" and "ObjectId", "ImageOrder",
+/// "PathLength", "Termination"; pixels without a record stay black, id −1, termination 0.
+void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
+                    vtkImageData* image);
+/// One vertex per record at its hit point, every record field as point data.
+void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits);
+/// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
+std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
+/// The frame's scene and parameters as field data ("SceneJSON", "Mass", ..., "Resolution").
+void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd);
+/// The frame's description back from its "SceneJSON", without image textures (nothing the store
+/// or an interpolator needs). Throws InvalidParameter if it is missing or invalid.
+SceneDescription frameFromFieldData(vtkFieldData* fd);
+}
+
+#endif

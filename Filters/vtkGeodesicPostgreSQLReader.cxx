@@ -1,0 +1,139 @@
+#include "vtkGeodesicPostgreSQLReader.h"
+
+#include "GeodesicRecordArrays.h"
+#include "GeodesicStoreConnection.h"
+#include "RayStore.h"
+
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkObjectFactory.h"
+#include "vtkPolyData.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+
+#include <sstream>
+
+vtkStandardNewMacro(vtkGeodesicPostgreSQLReader);
+
+vtkGeodesicPostgreSQLReader::vtkGeodesicPostgreSQLReader()
+{
+  this->SetNumberOfInputPorts(0);
+  this->SetNumberOfOutputPorts(2);
+}
+
+vtkGeodesicPostgreSQLReader::~vtkGeodesicPostgreSQLReader()
+{
+  this->SetConnectionString(nullptr);
+  this->SetPredicate(nullptr);
+}
+
+vtkImageData* vtkGeodesicPostgreSQLReader::GetImageOutput()
+{
+  return vtkImageData::SafeDownCast(this->GetOutputDataObject(0));
+}
+
+vtkPolyData* vtkGeodesicPostgreSQLReader::GetHitsOutput()
+{
+  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(1));
+}
+
+int vtkGeodesicPostgreSQLReader::FillOutputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkImageData" : "vtkPolyData");
+  return 1;
+}
+
+int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformationVector**,
+                                                    vtkInformationVector* outputVector)
+{
+  this->FrameIds.clear();
+  this->FrameDescriptions.clear();
+  this->ResolvedFrame = -1;
+  try
+  {
+    asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    store.migrate();
+    const std::vector<asrt::FrameInfo> frames = store.listFrames();
+    for (const asrt::FrameInfo& f : frames)
+    {
+      this->FrameIds.push_back(static_cast<vtkIdType>(f.id));
+      std::ostringstream os;
+      os << "frame " << f.id << ": " << f.name << " [" << f.label << "] M=" << f.key.mass
+         << " a=" << f.key.spin << " " << f.key.width << "x" << f.key.height << " " << f.key.method
+         << ", " << f.rayCount << " rays, " << f.createdAt;
+      this->FrameDescriptions.push_back(os.str());
+    }
+    if (frames.empty())
+      throw asrt::InvalidParameter("the database holds no frames");
+    const asrt::FrameInfo* chosen = &frames.back(); // the most recent
+    if (this->FrameId >= 0)
+    {
+      chosen = nullptr;
+      for (const asrt::FrameInfo& f : frames)
+        if (f.id == this->FrameId)
+          chosen = &f;
+      if (!chosen)
+      {
+        std::ostringstream os;
+        os << "no stored frame " << this->FrameId << " (" << frames.size() << " frames listed)";
+        throw asrt::InvalidParameter(os.str());
+      }
+    }
+    this->ResolvedFrame = static_cast<vtkIdType>(chosen->id);
+    this->Width = chosen->key.width;
+    this->Height = chosen->key.height;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    for (int port = 0; port < 2; ++port)
+      if (vtkDataObject* out = vtkDataObject::GetData(outputVector, port))
+        out->Initialize();
+    return 0;
+  }
+  const int ext[6] = { 0, this->Width - 1, 0, this->Height - 1, 0, 0 };
+  vtkInformation* image = outputVector->GetInformationObject(0);
+  image->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  image->Set(vtkDataObject::SPACING(), spacing, 3);
+  image->Set(vtkDataObject::ORIGIN(), origin, 3);
+  vtkDataObject::SetPointDataActiveScalarInfo(image, VTK_UNSIGNED_CHAR, 3);
+  return 1;
+}
+
+int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVector**,
+                                             vtkInformationVector* outputVector)
+{
+  vtkImageData* image = vtkImageData::GetData(outputVector, 0);
+  vtkPolyData* hits = vtkPolyData::GetData(outputVector, 1);
+  try
+  {
+    asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    const std::vector<asrt::RayRecord> records =
+      store.readFrame(this->ResolvedFrame, this->Predicate ? this->Predicate : "");
+    this->UpdateProgress(0.8);
+    asrt::recordsToImage(records, this->Width, 0, this->Height, image);
+    asrt::recordsToPolyData(records, hits);
+    auto frame = asrt::parseSceneWithoutImages(store.frameSceneText(this->ResolvedFrame));
+    asrt::setFrameFieldData(frame, hits->GetFieldData());
+    this->UpdateProgress(1.0);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    image->Initialize();
+    hits->Initialize();
+    return 0;
+  }
+  return 1;
+}
+
+void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "ConnectionString: "
+     << (this->ConnectionString && *this->ConnectionString ? "(set)" : "(default)") << "\n";
+  os << indent << "FrameId: " << this->FrameId << "\n";
+  os << indent << "Predicate: " << (this->Predicate ? this->Predicate : "") << "\n";
+  os << indent << "Frames listed: " << this->FrameIds.size() << "\n";
+}

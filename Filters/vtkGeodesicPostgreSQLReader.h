@@ -1,0 +1,77 @@
+/**
+ * @class   vtkGeodesicPostgreSQLReader
+ * @brief   reads an accumulated frame back from PostgreSQL
+ *
+ * RequestInformation lists the stored frames (GetNumberOfFrames, GetFrameIdAt,
+ * GetFrameDescription). RequestData reads the frame FrameId back as vtkGeodesicSource's outputs:
+ * port 0 the image, shaded again from the stored colours, port 1 the hit points with every record
+ * field, bit-exact for doubles, and the frame's scene as field data. An optional SQL Predicate over
+ * the columns of the view rays_v (e.g. "object_id = 2 AND image_order = 1") selects a subset of
+ * rays; it runs in a read-only transaction. Connection as for vtkGeodesicPostgreSQLWriter.
+ */
+#ifndef vtkGeodesicPostgreSQLReader_h
+#define vtkGeodesicPostgreSQLReader_h
+
+#include "asrtFiltersModule.h" // for export macro
+#include "vtkImageAlgorithm.h"
+
+#include <cstdint> // for std::int64_t
+#include <string>  // for std::string
+#include <vector>  // for std::vector
+
+class vtkImageData;
+class vtkPolyData;
+
+class ASRTFILTERS_EXPORT vtkGeodesicPostgreSQLReader : public vtkImageAlgorithm
+{
+public:
+  static vtkGeodesicPostgreSQLReader* New();
+  vtkTypeMacro(vtkGeodesicPostgreSQLReader, vtkImageAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  vtkSetStringMacro(ConnectionString);
+  vtkGetStringMacro(ConnectionString);
+  ///@}
+
+  ///@{
+  /// The frame to read; −1 (default) reads the most recently stored one.
+  vtkSetMacro(FrameId, vtkIdType);
+  vtkGetMacro(FrameId, vtkIdType);
+  ///@}
+
+  ///@{
+  /// SQL boolean expression over rays_v selecting the rays to read; empty reads them all.
+  vtkSetStringMacro(Predicate);
+  vtkGetStringMacro(Predicate);
+  ///@}
+
+  /// The frames listed by the last RequestInformation (call UpdateInformation()).
+  int GetNumberOfFrames() const { return static_cast<int>(this->FrameIds.size()); }
+  vtkIdType GetFrameIdAt(int k) const { return this->FrameIds.at(k); }
+  const char* GetFrameDescription(int k) const { return this->FrameDescriptions.at(k).c_str(); }
+
+  vtkImageData* GetImageOutput();
+  vtkPolyData* GetHitsOutput();
+
+protected:
+  vtkGeodesicPostgreSQLReader();
+  ~vtkGeodesicPostgreSQLReader() override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  char* ConnectionString = nullptr;
+  char* Predicate = nullptr;
+  vtkIdType FrameId = -1;
+  std::vector<vtkIdType> FrameIds;
+  std::vector<std::string> FrameDescriptions;
+  vtkIdType ResolvedFrame = -1;
+  int Width = 0, Height = 0;
+
+private:
+  vtkGeodesicPostgreSQLReader(const vtkGeodesicPostgreSQLReader&) = delete;
+  void operator=(const vtkGeodesicPostgreSQLReader&) = delete;
+};
+
+#endif

@@ -1,0 +1,66 @@
+/**
+ * @class   vtkGeodesicPostgreSQLWriter
+ * @brief   accumulates a traced frame in PostgreSQL
+ *
+ * Input: the hit points of vtkGeodesicSource (its port 1): one vertex per ray with the ray records
+ * as point data and the frame's effective scene as field data. The frame is written in one
+ * transaction with binary COPY (asrt::RayStore): it is wholly stored or not at all. The same scene
+ * with the same parameters is the same frame; writing it again is an error unless
+ * ReplaceExisting is on.
+ *
+ * Connection: a libpq conninfo string or URI in ConnectionString; empty uses the standard PG*
+ * environment variables when any is set, and otherwise starts (or reuses) the private embedded
+ * server (asrt::EmbeddedPostgres), so that nothing needs setting up.
+ */
+#ifndef vtkGeodesicPostgreSQLWriter_h
+#define vtkGeodesicPostgreSQLWriter_h
+
+#include "asrtFiltersModule.h" // for export macro
+#include "vtkWriter.h"
+
+class ASRTFILTERS_EXPORT vtkGeodesicPostgreSQLWriter : public vtkWriter
+{
+public:
+  static vtkGeodesicPostgreSQLWriter* New();
+  vtkTypeMacro(vtkGeodesicPostgreSQLWriter, vtkWriter);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /// libpq conninfo or URI; empty: PG* variables if set, else the embedded server.
+  vtkSetStringMacro(ConnectionString);
+  vtkGetStringMacro(ConnectionString);
+  ///@}
+
+  ///@{
+  /// A free-form label stored with the frame (bound as a parameter: any valid UTF-8 is safe).
+  vtkSetStringMacro(Label);
+  vtkGetStringMacro(Label);
+  ///@}
+
+  ///@{
+  /// Replace a stored frame of the same scene and parameters instead of refusing.
+  vtkSetMacro(ReplaceExisting, bool);
+  vtkGetMacro(ReplaceExisting, bool);
+  vtkBooleanMacro(ReplaceExisting, bool);
+  ///@}
+
+  /// Id of the frame the last successful Write() stored, −1 before.
+  vtkGetMacro(FrameId, vtkIdType);
+
+protected:
+  vtkGeodesicPostgreSQLWriter();
+  ~vtkGeodesicPostgreSQLWriter() override;
+  void WriteData() override;
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+
+  char* ConnectionString = nullptr;
+  char* Label = nullptr;
+  bool ReplaceExisting = false;
+  vtkIdType FrameId = -1;
+
+private:
+  vtkGeodesicPostgreSQLWriter(const vtkGeodesicPostgreSQLWriter&) = delete;
+  void operator=(const vtkGeodesicPostgreSQLWriter&) = delete;
+};
+
+#endif

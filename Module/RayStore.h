@@ -1,0 +1,148 @@
+// Accumulation of traced frames in PostgreSQL: scenes, frames and their rays, written in one
+// transaction each with binary COPY and read back bit-exact.
+//
+// Layout (chosen by measurement, see Testing/Store/TestRayStore.cxx): the rays of a frame are
+// stored in blocks of consecutive records (kBlockSize, in the order written), one row per block,
+// each field a bytea column holding the block's values as big-endian 32/64-bit words. One row
+// per ray was 3-4x slower to write and 4x slower to read, per-block float8[] arrays (which SQL
+// could unnest natively) 2-3x slower both ways. SQL still sees one row per ray through the view
+// rays_v, which decodes the words (big-endian so that SQL can decode them with bit(n)
+// casts); a predicate given to readFrame is evaluated there.
+//
+// Plain C++: no VTK types, no libpq types in this header.
+#ifndef asrt_RayStore_h
+#define asrt_RayStore_h
+
+#include "FrameTracer.h"
+#include "SceneFile.h"
+#include "asrtCoreModule.h"
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace asrt
+{
+/// Every failure of the store: the message says what failed (connecting, schema version, a
+/// duplicate frame, the server's error with its SQLSTATE, ...).
+class ASRTCORE_EXPORT StoreError : public std::runtime_error
+{
+public:
+  explicit StoreError(const std::string& what, std::string sqlState = std::string())
+    : std::runtime_error(what)
+    , State(std::move(sqlState))
+  {
+  }
+  /// The server's SQLSTATE when the server reported the error ("23505", ...), else empty.
+  const std::string& sqlState() const { return this->State; }
+
+private:
+  std::string State;
+};
+
+/// The parameters that vary between the frames of one scene (e.g. along a movie). Together with
+/// the rest of the scene they identify a frame.
+struct FrameKey
+{
+  double mass = 0, spin = 0, charge = 0;
+  Vec3 cameraPosition = Vec3::Zero();
+  Vec3 focalPoint = Vec3::Zero();
+  Vec3 viewUp = Vec3::Zero();
+  double viewAngle = 0;
+  int width = 0, height = 0;
+  std::string method;
+  double step = 0;
+  double relativeTolerance = 0, absoluteTolerance = 0;
+};
+
+struct FrameInfo
+{
+  std::int64_t id = 0;
+  std::int64_t sceneId = 0;
+  std::string sceneHash; ///< SHA-256 (hex) of the scene without its varying parameters
+  std::string frameHash; ///< SHA-256 (hex) of effectiveSceneText(): the frame's identity
+  std::string name;      ///< the scene's name
+  std::string label;
+  FrameKey key;
+  std::string status; ///< "complete" (a frame being written is visible to nobody else)
+  double writeSeconds = 0;
+  double traceSeconds = 0; ///< NaN when the writer did not say
+  std::string createdAt;   ///< ISO 8601, UTC
+  std::int64_t rayCount = 0;
+};
+
+class ASRTCORE_EXPORT RayStore
+{
+public:
+  /// The schema version this build creates and understands.
+  static constexpr int kSchemaVersion = 1;
+  /// Rays per stored block.
+  static constexpr int kBlockSize = 4096;
+
+  /// Connects. `conninfo` is a libpq connection string or URI; empty means libpq's defaults and
+  /// the PG* environment variables. A connect_timeout of 10 s applies unless the conninfo or
+  /// PGCONNECT_TIMEOUT sets one. Throws StoreError with libpq's reason (no server, wrong
+  /// credentials, ...).
+  explicit RayStore(const std::string& conninfo);
+  ~RayStore();
+  RayStore(const RayStore&) = delete;
+  RayStore& operator=(const RayStore&) = delete;
+
+  /// Creates or upgrades the schema in one transaction (serialised against concurrent migrators).
+  /// Refuses a database whose schema is newer than this build's. Idempotent.
+  void migrate();
+  /// The database's schema version; 0 if it has none yet.
+  int schemaVersion();
+
+  /// Stores a frame in one transaction. Its identity is effectiveSceneText(scene): storing the
+  /// same scene with the same parameters again throws a StoreError ("duplicate frame") unless
+  /// `replace`, which replaces the old frame in the same transaction. Labels and names must be
+  /// valid UTF-8 without NUL bytes (anything else is refused before touching the database); they
+  /// are bound as parameters, never spliced into SQL. Returns the frame's id.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          const std::vector<RayRecord>& records, bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+  /// As above, with the records produced one at a time by `next(index, record)` for index in
+  /// [0, count), e.g. straight from a tracer. If it throws, the transaction is rolled back (no
+  /// trace of the frame remains) and the exception propagates.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          std::size_t count,
+                          const std::function<void(std::size_t, RayRecord&)>& next,
+                          bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+
+  /// Complete frames, by id.
+  std::vector<FrameInfo> listFrames();
+  /// Throws StoreError if there is no complete frame `id`.
+  FrameInfo frameInfo(std::int64_t id);
+  /// The records of frame `id` in the order written, bit-exact. `predicate`, if not empty, is an
+  /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
+  /// image_order = 1"). It is the one piece of caller text spliced into SQL, deliberately: it is
+  /// evaluated in a READ ONLY transaction that is rolled back, with predicateTimeout as
+  /// statement_timeout, restricted to the frame's rays, so it can select but not write.
+  std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
+  /// Deletes a frame and its rays; throws StoreError if there is none.
+  void deleteFrame(std::int64_t id);
+  /// The effective scene text of frame `id` (what effectiveSceneText() gave when it was written):
+  /// enough to describe, re-trace or interpolate the frame. Throws StoreError if there is none.
+  std::string frameSceneText(std::int64_t id);
+  /// The complete frame stored for this scene with these parameters, if any.
+  std::optional<std::int64_t> findFrame(const SceneDescription& scene);
+
+  void setPredicateTimeout(std::chrono::milliseconds t) { this->PredicateTimeout = t; }
+  /// The server process of this connection (for tests that break it).
+  int backendPid() const;
+
+private:
+  struct Impl;
+  Impl* P;
+  std::chrono::milliseconds PredicateTimeout{ 60000 };
+};
+}
+
+#endif
