@@ -1,7 +1,7 @@
 #include "vtkGeodesicPostgreSQLReader.h"
 
 #include "GeodesicRecordArrays.h"
-#include "GeodesicStoreConnection.h"
+#include "StoreConnection.h"
 #include "RayStore.h"
 
 #include "vtkImageData.h"

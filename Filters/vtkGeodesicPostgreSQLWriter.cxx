@@ -1,7 +1,7 @@
 #include "vtkGeodesicPostgreSQLWriter.h"
 
 #include "GeodesicRecordArrays.h"
-#include "GeodesicStoreConnection.h"
+#include "StoreConnection.h"
 #include "RayStore.h"
 
 #include "vtkInformation.h"

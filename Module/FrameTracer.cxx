@@ -26,6 +26,9 @@ FrameTracer::FrameTracer(const SceneDescription& scene)
   , Tracing(scene.tracing)
 {
   this->Cam = std::make_unique<Camera>(*this->St, scene.camera);
+  // The description says which method actually traces: stored frames are identified by it.
+  if (this->Desc.integrator.method == "auto")
+    this->Desc.integrator.method = defaultMethod(*this->St);
   makePropagator(*this->St, scene.integrator); // validates method and step before any tracing
   if (!scene.scene)
     throw InvalidParameter("scene has no objects container");

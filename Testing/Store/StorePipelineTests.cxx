@@ -1,6 +1,8 @@
 // The VTK side of accumulation: vtkGeodesicSource → vtkGeodesicPostgreSQLWriter → a real
 // throwaway server → vtkGeodesicPostgreSQLReader gives back the same frame, bit for bit.
+#include "SceneFile.h"
 #include "ThrowawayPostgres.h"
+#include "TraceAndStore.h"
 #include "vtkGeodesicPostgreSQLReader.h"
 #include "vtkGeodesicPostgreSQLWriter.h"
 #include "vtkGeodesicSource.h"
@@ -15,7 +17,9 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -169,4 +173,70 @@ TEST(StorePipeline, UnreachableServerIsAClearErrorNotACrash)
   ASSERT_FALSE(log->Messages.empty());
   EXPECT_EQ(reader->GetNumberOfFrames(), 0);
   EXPECT_EQ(reader->GetHitsOutput()->GetNumberOfPoints(), 0);
+}
+
+namespace
+{
+asrt::SceneDescription fig1Description(int w, int h)
+{
+  std::ifstream in(scene("fig1-cylinders.json"));
+  std::stringstream text;
+  text << in.rdbuf();
+  asrt::SceneDescription d = asrt::parseSceneWithoutImages(text.str());
+  d.camera.width = w;
+  d.camera.height = h;
+  return d;
+}
+
+bool sameRecord(const asrt::RayRecord& a, const asrt::RayRecord& b)
+{
+  auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+  auto same3 = [&](const asrt::Vec3& x, const asrt::Vec3& y)
+  { return same(x[0], y[0]) && same(x[1], y[1]) && same(x[2], y[2]); };
+  return a.i == b.i && a.j == b.j && a.termination == b.termination && a.objectId == b.objectId &&
+         same3(a.hitPoint, b.hitPoint) && same3(a.hitNormal, b.hitNormal) && same(a.u, b.u) &&
+         same(a.v, b.v) && same(a.affineLength, b.affineLength) && same(a.winding, b.winding) &&
+         a.imageOrder == b.imageOrder && a.steps == b.steps && same(a.maxAbsH, b.maxAbsH) &&
+         same3(a.color, b.color) && same(a.dudi, b.dudi) && same(a.dudj, b.dudj) &&
+         same(a.dvdi, b.dvdi) && same(a.dvdj, b.dvdj) && same3(a.origin, b.origin) &&
+         same3(a.direction, b.direction) && same(a.momentum[0], b.momentum[0]) &&
+         same(a.momentum[3], b.momentum[3]);
+}
+}
+
+TEST(StorePipeline, StreamedTraceAndStoreStoresExactlyTheTracedFrame)
+{
+  // Bands traced on one thread while the COPY streams the previous ones must give the very
+  // records of a whole-frame trace: the halo rows keep the Jacobians of band edges.
+  const asrt::SceneDescription d = fig1Description(21, 17);
+  const asrt::FrameTracer tracer(d);
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  asrt::TraceAndStoreOptions options;
+  options.rowsPerChunk = 4;
+  options.label = "streamed";
+  const std::int64_t id = asrt::traceAndStore(tracer, store, options);
+  const std::vector<asrt::RayRecord> stored = store.readFrame(id);
+  const std::vector<asrt::RayRecord> traced = tracer.traceRows(0, 17);
+  ASSERT_EQ(stored.size(), traced.size());
+  for (size_t k = 0; k < stored.size(); ++k)
+    ASSERT_TRUE(sameRecord(stored[k], traced[k])) << "record " << k;
+}
+
+TEST(StorePipeline, AbortedTraceAndStoreLeavesNothing)
+{
+  const asrt::SceneDescription d = fig1Description(16, 16);
+  const asrt::FrameTracer tracer(d);
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  const size_t before = store.listFrames().size();
+  asrt::TraceAndStoreOptions options;
+  options.rowsPerChunk = 2;
+  options.progress = [](double f) { return f < 0.5; };
+  EXPECT_THROW(asrt::traceAndStore(tracer, store, options), std::runtime_error);
+  EXPECT_EQ(store.listFrames().size(), before);
+  EXPECT_FALSE(store.findFrame(d).has_value());
+  // And the same frame stores fine afterwards.
+  options.progress = nullptr;
+  EXPECT_GE(asrt::traceAndStore(tracer, store, options), 0);
 }

@@ -1,6 +1,8 @@
-// Which PostgreSQL the VTK filters talk to when the user names none.
-#ifndef asrt_GeodesicStoreConnection_h
-#define asrt_GeodesicStoreConnection_h
+// Which PostgreSQL the tools talk to when the user names none.
+#ifndef asrt_StoreConnection_h
+#define asrt_StoreConnection_h
+
+#include "asrtCoreModule.h"
 
 #include <string>
 
@@ -8,7 +10,7 @@ namespace asrt
 {
 /// `given` if not empty; else "" (libpq's defaults) when any standard PG* connection variable is
 /// set; else the conninfo of the private embedded server, started or reused.
-std::string storeConnection(const char* given);
+ASRTCORE_EXPORT std::string storeConnection(const char* given);
 }
 
 #endif

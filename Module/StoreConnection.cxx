@@ -1,4 +1,4 @@
-#include "GeodesicStoreConnection.h"
+#include "StoreConnection.h"
 
 #include "EmbeddedPostgres.h"
 
