@@ -434,6 +434,10 @@ SceneTexts sceneTexts(const SceneDescription& d)
     throw StoreError(std::string("cannot serialise the scene description: ") + e.what());
   }
   requireText(t.frame, "the scene description");
+  // JSON may escape a NUL as \u0000, which the text check cannot see and jsonb refuses: refuse it
+  // here, before the database, like a NUL anywhere else.
+  if (t.frame.find("\\u0000") != std::string::npos)
+    throw StoreError("the scene description contains a NUL character (\\u0000); it was not stored");
   return t;
 }
 
@@ -761,19 +765,34 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
   const SceneTexts texts = sceneTexts(scene);
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
+  // The scene row is shared by every frame of the scene (a movie's frames differ only in their
+  // parameters). It is created in its own short transaction and never locked by a frame's write:
+  // an upsert inside the frame's transaction would hold its row lock for the whole COPY and
+  // serialise every other writer of the scene. A failed frame may leave an unused scene row.
+  const std::int64_t sceneId = this->P->transaction(
+    "BEGIN",
+    [&]
+    {
+      Params()
+        .bytes(texts.scene)
+        .text(texts.scene)
+        .exec(conn,
+              "INSERT INTO scenes (content_hash, description, description_text) "
+              "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
+              "storing the scene failed");
+      Result found = Params()
+                       .bytes(texts.scene)
+                       .exec(conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
+                             "finding the scene failed");
+      const std::int64_t id = getI64(found.get(), 0, 0);
+      exec(conn, "COMMIT", "committing the scene failed");
+      return id;
+    });
   return this->P->transaction(
     "BEGIN",
     [&]
     {
-      Result r = Params()
-                   .bytes(texts.scene)
-                   .text(texts.scene)
-                   .exec(conn,
-                         "INSERT INTO scenes (content_hash, description, description_text) "
-                         "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) "
-                         "DO UPDATE SET content_hash = EXCLUDED.content_hash RETURNING id",
-                         "storing the scene failed");
-      const std::int64_t sceneId = getI64(r.get(), 0, 0);
+      Result r;
 
       r = Params()
             .bytes(texts.frame)

@@ -829,7 +829,10 @@ std::pair<double, double> measureAlternative(PGconn* c, bool arrays,
 }
 }
 
-TEST(RayStoreLayout, MeasureLayouts)
+// A measurement, not a test: it asserts nothing, so it is not part of the suite. It is how the
+// block layout was chosen; run it with --gtest_also_run_disabled_tests
+// --gtest_filter='*MeasureLayouts'. bench/REPORT.md carries the store's figures.
+TEST(RayStoreLayout, DISABLED_MeasureLayouts)
 {
   const std::string ci = freshDatabase();
   RayStore store(ci);
