@@ -143,6 +143,47 @@ std::string float8Expr(const std::string& w)
          " + 4503599627370496)::float8 * (2::float8 ^ (" + expo + " - 1075)::float8) END";
 }
 
+// One row per ray. Each block's values are detoasted once (the OFFSET 0 sub-select) rather than
+// once per ray; columns a query does not use are neither detoasted nor decoded. Version 1 is kept
+// exactly as it was created, since migration 2 starts from it.
+std::string raysView(int version)
+{
+  std::string s;
+  if (version == 1)
+  {
+    s += "CREATE VIEW rays_v AS SELECT b.frame_id, b.block, b.first_ray + k AS ray";
+  }
+  else
+  {
+    // first_ray counts within the tile (a rank does not know the sizes of the other tiles); ray
+    // numbers the frame as readFrame() returns it, tile after tile. Only complete frames are
+    // shown: the committed tiles of a frame still being written are nobody's business.
+    s += "CREATE VIEW rays_v AS SELECT b.frame_id, b.tile, b.block, o.base + b.first_ray + k AS "
+         "ray, b.first_ray + k AS tile_ray";
+  }
+  for (const Column& c : Columns)
+  {
+    const std::string w = wordExpr("d." + std::string(c.name), wordSize(c.kind));
+    s += ",\n  " + (c.kind == Kind::F64 ? float8Expr(w) : w) + " AS " + c.name;
+  }
+  s += "\nFROM ray_blocks b\n";
+  if (version >= 2)
+  {
+    s += "JOIN frames f ON f.id = b.frame_id AND f.status = 'complete'\n"
+         "CROSS JOIN LATERAL (SELECT coalesce(sum(t.ray_count), 0)::bigint AS base FROM "
+         "frame_tiles t WHERE t.frame_id = b.frame_id AND t.tile < b.tile) o\n";
+  }
+  s += "CROSS JOIN LATERAL (SELECT ";
+  bool first = true;
+  for (const Column& c : Columns)
+  {
+    s += std::string(first ? "" : ", ") + "b." + c.name + " || ''::bytea AS " + c.name;
+    first = false;
+  }
+  s += " OFFSET 0) d\nCROSS JOIN LATERAL generate_series(0, b.n - 1) AS k;\n";
+  return s;
+}
+
 std::string migration1()
 {
   std::string s = R"SQL(
@@ -196,23 +237,29 @@ CREATE TABLE ray_blocks (
   {
     s += "ALTER TABLE ray_blocks ALTER COLUMN " + std::string(c.name) + " SET STORAGE EXTERNAL;\n";
   }
-  // One row per ray. Each block's values are detoasted once (the OFFSET 0 sub-select) rather than
-  // once per ray; columns a query does not use are neither detoasted nor decoded.
-  s += "CREATE VIEW rays_v AS SELECT b.frame_id, b.block, b.first_ray + k AS ray";
-  for (const Column& c : Columns)
-  {
-    const std::string w = wordExpr("d." + std::string(c.name), wordSize(c.kind));
-    s += ",\n  " + (c.kind == Kind::F64 ? float8Expr(w) : w) + " AS " + c.name;
-  }
-  s += "\nFROM ray_blocks b\nCROSS JOIN LATERAL (SELECT ";
-  bool first = true;
-  for (const Column& c : Columns)
-  {
-    s += std::string(first ? "" : ", ") + "b." + c.name + " || ''::bytea AS " + c.name;
-    first = false;
-  }
-  s += " OFFSET 0) d\nCROSS JOIN LATERAL generate_series(0, b.n - 1) AS k;\n";
+  s += raysView(1);
   return s;
+}
+
+// Version 2: tiled frames. Existing frames become frames of one tile (tile 0), so that their
+// blocks, ray numbers and readFrame() are unchanged.
+std::string migration2()
+{
+  return R"SQL(
+ALTER TABLE frames ADD COLUMN tile_count integer NOT NULL DEFAULT 1 CHECK (tile_count > 0);
+CREATE TABLE frame_tiles (
+  frame_id bigint NOT NULL REFERENCES frames (id) ON DELETE CASCADE,
+  tile integer NOT NULL CHECK (tile >= 0),
+  ray_count bigint NOT NULL CHECK (ray_count >= 0),
+  written_at timestamptz NOT NULL DEFAULT now(),
+  PRIMARY KEY (frame_id, tile));
+INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at)
+  SELECT id, 0, ray_count, coalesce(completed_at, created_at) FROM frames WHERE status = 'complete';
+DROP VIEW rays_v;
+ALTER TABLE ray_blocks ADD COLUMN tile integer NOT NULL DEFAULT 0 CHECK (tile >= 0);
+ALTER TABLE ray_blocks DROP CONSTRAINT ray_blocks_pkey;
+ALTER TABLE ray_blocks ADD PRIMARY KEY (frame_id, tile, block);
+)SQL" + raysView(2);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -364,7 +411,8 @@ const char* const FrameColumns =
   "f.up_x, f.up_y, f.up_z, f.view_angle, f.width, f.height, f.method, f.step, "
   "f.relative_tolerance, f.absolute_tolerance, f.status, coalesce(f.write_seconds, 'NaN'), "
   "coalesce(f.trace_seconds, 'NaN'), "
-  "to_char(f.created_at AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS.US\"Z\"'), f.ray_count "
+  "to_char(f.created_at AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS.US\"Z\"'), f.ray_count, "
+  "f.tile_count "
   "FROM frames f JOIN scenes s ON s.id = f.scene_id WHERE f.status = 'complete'";
 
 FrameInfo frameFromRow(const PGresult* r, int row)
@@ -400,6 +448,7 @@ FrameInfo frameFromRow(const PGresult* r, int row)
   f.traceSeconds = getF64(r, row, c++);
   f.createdAt = getText(r, row, c++);
   f.rayCount = getI64(r, row, c++);
+  f.tileCount = getI32(r, row, c++);
   return f;
 }
 
@@ -464,12 +513,14 @@ public:
     }
     this->Buf.append(b, size);
   }
-  void block(std::int64_t frameId, std::int32_t block, std::int64_t firstRay, const RayRecord* r,
-             int n)
+  void block(std::int64_t frameId, std::int32_t tile, std::int32_t block, std::int64_t firstRay,
+             const RayRecord* r, int n)
   {
-    this->u16(4 + NumColumns);
+    this->u16(5 + NumColumns);
     this->u32(8);
     this->be(std::uint64_t(frameId), 8);
+    this->u32(4);
+    this->be(std::uint32_t(tile), 4);
     this->u32(4);
     this->be(std::uint32_t(block), 4);
     this->u32(8);
@@ -578,6 +629,62 @@ void rollback(PGconn* conn)
     PQclear(PQexec(conn, "ROLLBACK"));
   }
 }
+
+/// Streams the records of one tile (a whole frame is tile 0) into ray_blocks in one COPY.
+void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t count,
+              const std::function<void(std::size_t, RayRecord&)>& next)
+{
+  // Tests find a writer's backend by this statement's beginning ("COPY ray_blocks").
+  Result copy(PQexec(conn, ("COPY ray_blocks (frame_id, tile, block, first_ray, n" +
+                            columnList("") + ") FROM STDIN (FORMAT binary)")
+                             .c_str()));
+  if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_IN)
+  {
+    fail("starting to write the rays failed", conn, copy.get());
+  }
+  constexpr std::size_t blockSize = RayStore::kBlockSize;
+  CopyWriter writer(conn);
+  std::vector<RayRecord> block(std::min(count, blockSize));
+  for (std::size_t first = 0, b = 0; first < count; first += blockSize, ++b)
+  {
+    const int n = int(std::min(blockSize, count - first));
+    for (int m = 0; m < n; ++m)
+    {
+      next(first + std::size_t(m), block[std::size_t(m)]);
+    }
+    writer.block(frameId, tile, std::int32_t(b), std::int64_t(first), block.data(), n);
+  }
+  writer.finish();
+}
+
+/// Inserts the row of a frame being written. With `ifAbsent`, a frame of the same identity makes
+/// the result empty instead of an error (the caller then looks at that frame).
+Result insertFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
+                   const SceneDescription& scene, const std::string& label, int tileCount,
+                   bool ifAbsent)
+{
+  const CameraParameters& cam = scene.camera;
+  const IntegratorConfig& ic = scene.integrator;
+  Params ins;
+  ins.i64(sceneId).bytes(texts.frame).text(texts.frame).text(scene.name).text(label);
+  ins.f64(scene.mass).f64(scene.spin).f64(scene.charge);
+  for (const Vec3* v : { &cam.position, &cam.focalPoint, &cam.viewUp })
+  {
+    ins.f64(v->x()).f64(v->y()).f64(v->z());
+  }
+  ins.f64(cam.viewAngle).i32(cam.width).i32(cam.height).text(ic.method).f64(ic.step);
+  ins.f64(ic.relativeTolerance).f64(ic.absoluteTolerance).i32(tileCount);
+  return ins.exec(conn,
+                  std::string("INSERT INTO frames (scene_id, frame_hash, effective_text, name, "
+                              "label, mass, spin, charge, camera_x, camera_y, camera_z, focal_x, "
+                              "focal_y, focal_z, up_x, up_y, up_z, view_angle, width, height, "
+                              "method, step, relative_tolerance, absolute_tolerance, tile_count, "
+                              "status) VALUES ($1, sha256($2), $3, $4, $5, $6, $7, $8, $9, $10, "
+                              "$11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23, "
+                              "$24, $25, 'writing')") +
+                    (ifAbsent ? " ON CONFLICT (frame_hash) DO NOTHING" : "") + " RETURNING id",
+                  "creating the frame failed");
+}
 }
 
 // -----------------------------------------------------------------------------------------------
@@ -653,6 +760,34 @@ struct RayStore::Impl
       throw;
     }
   }
+
+  /// The id of the scene row, created if missing. The scene row is shared by every frame of the
+  /// scene (a movie's frames differ only in their parameters). It is created in its own short
+  /// transaction and never locked by a frame's write: an upsert inside the frame's transaction
+  /// would hold its row lock for the whole COPY and serialise every other writer of the scene. A
+  /// failed frame may leave an unused scene row.
+  std::int64_t sceneRow(const SceneTexts& texts)
+  {
+    return this->transaction(
+      "BEGIN",
+      [&]
+      {
+        Params()
+          .bytes(texts.scene)
+          .text(texts.scene)
+          .exec(this->Conn,
+                "INSERT INTO scenes (content_hash, description, description_text) "
+                "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
+                "storing the scene failed");
+        Result found = Params()
+                         .bytes(texts.scene)
+                         .exec(this->Conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
+                               "finding the scene failed");
+        const std::int64_t id = getI64(found.get(), 0, 0);
+        exec(this->Conn, "COMMIT", "committing the scene failed");
+        return id;
+      });
+  }
 };
 
 RayStore::RayStore(const std::string& conninfo)
@@ -723,7 +858,7 @@ void RayStore::migrate()
                          ", this build knows " + std::to_string(kSchemaVersion) +
                          "; refusing to touch a database written by a newer ASRT");
       }
-      const std::vector<std::string> migrations = { migration1() };
+      const std::vector<std::string> migrations = { migration1(), migration2() };
       for (int m = v; m < kSchemaVersion; ++m)
       {
         Result r(PQexec(this->P->Conn, migrations[std::size_t(m)].c_str()));
@@ -765,29 +900,7 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
   const SceneTexts texts = sceneTexts(scene);
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
-  // The scene row is shared by every frame of the scene (a movie's frames differ only in their
-  // parameters). It is created in its own short transaction and never locked by a frame's write:
-  // an upsert inside the frame's transaction would hold its row lock for the whole COPY and
-  // serialise every other writer of the scene. A failed frame may leave an unused scene row.
-  const std::int64_t sceneId = this->P->transaction(
-    "BEGIN",
-    [&]
-    {
-      Params()
-        .bytes(texts.scene)
-        .text(texts.scene)
-        .exec(conn,
-              "INSERT INTO scenes (content_hash, description, description_text) "
-              "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
-              "storing the scene failed");
-      Result found = Params()
-                       .bytes(texts.scene)
-                       .exec(conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
-                             "finding the scene failed");
-      const std::int64_t id = getI64(found.get(), 0, 0);
-      exec(conn, "COMMIT", "committing the scene failed");
-      return id;
-    });
+  const std::int64_t sceneId = this->P->sceneRow(texts);
   return this->P->transaction(
     "BEGIN",
     [&]
@@ -796,11 +909,20 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
 
       r = Params()
             .bytes(texts.frame)
-            .exec(conn, "SELECT id, label FROM frames WHERE frame_hash = sha256($1) FOR UPDATE",
+            .exec(conn,
+                  "SELECT id, label, status FROM frames WHERE frame_hash = sha256($1) FOR UPDATE",
                   "looking for an existing frame failed");
       if (PQntuples(r.get()) > 0)
       {
         const std::int64_t old = getI64(r.get(), 0, 0);
+        if (getText(r.get(), 0, 2) != "complete")
+        {
+          // Replacing it would pull the frame from under the ranks writing its tiles.
+          throw StoreError("duplicate frame: this scene with these parameters is being written "
+                           "as tiled frame " +
+                           std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
+                           "\"); delete it first if its writers are gone");
+        }
         if (!replace)
         {
           throw StoreError("duplicate frame: this scene with these parameters is already stored as "
@@ -812,28 +934,9 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
                                "deleting the frame to be replaced failed");
       }
 
-      const CameraParameters& cam = scene.camera;
-      const IntegratorConfig& ic = scene.integrator;
-      Params ins;
-      ins.i64(sceneId).bytes(texts.frame).text(texts.frame).text(scene.name).text(label);
-      ins.f64(scene.mass).f64(scene.spin).f64(scene.charge);
-      for (const Vec3* v : { &cam.position, &cam.focalPoint, &cam.viewUp })
-      {
-        ins.f64(v->x()).f64(v->y()).f64(v->z());
-      }
-      ins.f64(cam.viewAngle).i32(cam.width).i32(cam.height).text(ic.method).f64(ic.step);
-      ins.f64(ic.relativeTolerance).f64(ic.absoluteTolerance);
       try
       {
-        r = ins.exec(
-          conn,
-          "INSERT INTO frames (scene_id, frame_hash, effective_text, name, label, mass, spin, "
-          "charge, camera_x, camera_y, camera_z, focal_x, focal_y, focal_z, up_x, up_y, "
-          "up_z, view_angle, width, height, method, step, relative_tolerance, "
-          "absolute_tolerance, status) VALUES ($1, sha256($2), $3, $4, $5, $6, $7, $8, "
-          "$9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23, "
-          "$24, 'writing') RETURNING id",
-          "creating the frame failed");
+        r = insertFrame(conn, sceneId, texts, scene, label, 1, false);
       }
       catch (const StoreError& e)
       {
@@ -848,25 +951,14 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
       }
       const std::int64_t frameId = getI64(r.get(), 0, 0);
 
-      Result copy(PQexec(conn, ("COPY ray_blocks (frame_id, block, first_ray, n" + columnList("") +
-                                ") FROM STDIN (FORMAT binary)")
-                                 .c_str()));
-      if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_IN)
-      {
-        fail("starting to write the rays failed", conn, copy.get());
-      }
-      CopyWriter writer(conn);
-      std::vector<RayRecord> block(std::min<std::size_t>(count, kBlockSize));
-      for (std::size_t first = 0, b = 0; first < count; first += kBlockSize, ++b)
-      {
-        const int n = int(std::min<std::size_t>(kBlockSize, count - first));
-        for (int m = 0; m < n; ++m)
-        {
-          next(first + std::size_t(m), block[std::size_t(m)]);
-        }
-        writer.block(frameId, std::int32_t(b), std::int64_t(first), block.data(), n);
-      }
-      writer.finish();
+      copyTile(conn, frameId, 0, count, next);
+      Params()
+        .i64(frameId)
+        .i64(std::int64_t(count))
+        .exec(conn,
+              "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, 0, $2, "
+              "clock_timestamp())",
+              "recording the frame's rays failed");
 
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -882,6 +974,191 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
       exec(conn, "COMMIT", "committing the frame failed");
       return frameId;
     });
+}
+
+std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std::string& label,
+                                       int tileCount, bool replace)
+{
+  if (tileCount < 1)
+  {
+    throw StoreError("a tiled frame needs at least one tile (got " + std::to_string(tileCount) +
+                     ")");
+  }
+  requireText(label, "the label");
+  requireText(scene.name, "the scene name");
+  const SceneTexts texts = sceneTexts(scene);
+  this->P->requireSchema();
+  PGconn* conn = this->P->Conn;
+  const std::int64_t sceneId = this->P->sceneRow(texts);
+  // Every rank runs this at about the same time. INSERT ... ON CONFLICT DO NOTHING waits for a
+  // concurrent inserter of the same identity and then yields to it, so that all agree on its row.
+  // The row can still vanish between that and the SELECT (a concurrent replace or delete):
+  // then try again.
+  for (int attempt = 0; attempt < 10; ++attempt)
+  {
+    const std::optional<std::int64_t> id = this->P->transaction(
+      "BEGIN",
+      [&]() -> std::optional<std::int64_t>
+      {
+        Result r = insertFrame(conn, sceneId, texts, scene, label, tileCount, true);
+        if (PQntuples(r.get()) == 0)
+        {
+          r = Params()
+                .bytes(texts.frame)
+                .exec(conn,
+                      "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = "
+                      "sha256($1) FOR UPDATE",
+                      "looking for the frame failed");
+          if (PQntuples(r.get()) == 0)
+          {
+            exec(conn, "ROLLBACK", "ending the transaction failed");
+            return std::nullopt;
+          }
+          const std::int64_t old = getI64(r.get(), 0, 0);
+          const std::string status = getText(r.get(), 0, 1);
+          const int oldTiles = getI32(r.get(), 0, 2);
+          if (status == "writing")
+          {
+            if (oldTiles != tileCount)
+            {
+              throw StoreError("frame " + std::to_string(old) +
+                               " of this scene is being written as " + std::to_string(oldTiles) +
+                               " tiles, not " + std::to_string(tileCount));
+            }
+            exec(conn, "COMMIT", "committing the frame failed");
+            return old;
+          }
+          if (!replace)
+          {
+            throw StoreError("duplicate frame: this scene with these parameters is already stored "
+                             "as frame " +
+                             std::to_string(old) + " (label \"" + getText(r.get(), 0, 3) +
+                             "\"); pass replace = true to replace it");
+          }
+          Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
+                                 "deleting the frame to be replaced failed");
+          // No conflict is possible any more: the old row is deleted and locked by us.
+          r = insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
+        }
+        const std::int64_t frameId = getI64(r.get(), 0, 0);
+        exec(conn, "COMMIT", "committing the frame failed");
+        return frameId;
+      });
+    if (id)
+    {
+      return *id;
+    }
+  }
+  throw StoreError("starting the tiled frame failed: its row kept disappearing under concurrent "
+                   "replacements or deletions");
+}
+
+void RayStore::writeTile(std::int64_t frameId, int tile, const std::vector<RayRecord>& records)
+{
+  this->writeTile(frameId, tile, records.size(),
+                  [&records](std::size_t k, RayRecord& r) { r = records[k]; });
+}
+
+void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
+                         const std::function<void(std::size_t, RayRecord&)>& next)
+{
+  this->P->requireSchema();
+  PGconn* conn = this->P->Conn;
+  const std::string which = "tile " + std::to_string(tile) + " of frame " + std::to_string(frameId);
+  this->P->transaction(
+    "BEGIN",
+    [&]
+    {
+      // FOR KEY SHARE keeps the frame from being deleted under the COPY without blocking the
+      // other tiles' writers (the foreign keys take the same lock anyway).
+      Result r = Params().i64(frameId).i32(tile).exec(
+        conn,
+        "SELECT f.status, f.tile_count, EXISTS (SELECT 1 FROM frame_tiles t WHERE t.frame_id = "
+        "f.id AND t.tile = $2) FROM frames f WHERE f.id = $1 FOR KEY SHARE OF f",
+        "looking for the frame failed");
+      if (PQntuples(r.get()) == 0)
+      {
+        throw StoreError("writing " + which + " failed: there is no such frame");
+      }
+      const int tileCount = getI32(r.get(), 0, 1);
+      if (PQgetvalue(r.get(), 0, 2)[0] != 0)
+      {
+        throw StoreError("writing " + which + " failed: the tile is already written");
+      }
+      if (getText(r.get(), 0, 0) != "writing")
+      {
+        throw StoreError("writing " + which + " failed: the frame is complete");
+      }
+      if (tile < 0 || tile >= tileCount)
+      {
+        throw StoreError("writing " + which + " failed: the frame has tiles 0 to " +
+                         std::to_string(tileCount - 1));
+      }
+      try
+      {
+        copyTile(conn, frameId, tile, count, next);
+        Params()
+          .i64(frameId)
+          .i32(tile)
+          .i64(std::int64_t(count))
+          .exec(conn,
+                "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, $2, "
+                "$3, clock_timestamp())",
+                "recording the tile failed");
+      }
+      catch (const StoreError& e)
+      {
+        if (e.sqlState() == "23505")
+        {
+          // A concurrent writer of the same tile committed first.
+          throw StoreError("writing " + which + " failed: the tile is already written",
+                           e.sqlState());
+        }
+        throw;
+      }
+      // Only now, after the COPY, is the frame row locked, so tiles are written in parallel and
+      // only this short step is serialised. Under the lock, the count (a fresh snapshot) sees
+      // every tile committed before and this one: of two last tiles committing together, the
+      // second to get the lock sees the first's row and completes the frame. FOR NO KEY UPDATE,
+      // not FOR UPDATE, which would conflict with the other writers' key-share locks and
+      // deadlock two of them.
+      Params().i64(frameId).exec(conn, "SELECT 1 FROM frames WHERE id = $1 FOR NO KEY UPDATE",
+                                 "locking the frame failed");
+      r = Params().i64(frameId).exec(
+        conn,
+        "SELECT count(*), coalesce(sum(ray_count), 0)::bigint FROM frame_tiles WHERE frame_id = $1",
+        "counting the tiles failed");
+      if (getI64(r.get(), 0, 0) == tileCount)
+      {
+        Params()
+          .i64(frameId)
+          .i64(getI64(r.get(), 0, 1))
+          .exec(conn,
+                "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = "
+                "extract(epoch FROM clock_timestamp() - created_at), completed_at = "
+                "clock_timestamp() WHERE id = $1",
+                "completing the frame failed");
+      }
+      exec(conn, "COMMIT", "committing the tile failed");
+    });
+}
+
+std::vector<std::int64_t> RayStore::abandonedFrames(std::chrono::seconds olderThan)
+{
+  this->P->requireSchema();
+  Result r = Params()
+               .i64(std::int64_t(olderThan.count()))
+               .exec(this->P->Conn,
+                     "SELECT f.id FROM frames f WHERE f.status = 'writing' AND coalesce((SELECT "
+                     "max(t.written_at) FROM frame_tiles t WHERE t.frame_id = f.id), f.created_at) "
+                     "< clock_timestamp() - $1::float8 * interval '1 second' ORDER BY f.id",
+                     "looking for abandoned frames failed");
+  std::vector<std::int64_t> ids;
+  for (int row = 0; row < PQntuples(r.get()); ++row)
+  {
+    ids.push_back(getI64(r.get(), row, 0));
+  }
+  return ids;
 }
 
 std::vector<FrameInfo> RayStore::listFrames()
@@ -976,7 +1253,7 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
         .exec(conn, "SELECT set_config('asrt.frame', $1, true)", "reading the frame failed");
       Result copy(PQexec(conn, ("COPY (SELECT n" + columnList("") +
                                 " FROM ray_blocks WHERE frame_id = "
-                                "current_setting('asrt.frame')::bigint ORDER BY block) "
+                                "current_setting('asrt.frame')::bigint ORDER BY tile, block) "
                                 "TO STDOUT (FORMAT binary)")
                                  .c_str()));
       if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_OUT)

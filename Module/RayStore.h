@@ -9,6 +9,13 @@
 // rays_v, which decodes the words (big-endian so that SQL can decode them with bit(n)
 // casts); a predicate given to readFrame is evaluated there.
 //
+// Tiled frames (issue 7): several processes (ranks) write the tiles of one frame concurrently,
+// each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
+// on, with status 'writing'; the transaction of the tile that brings the count of written tiles
+// to the frame's tile count also makes it 'complete'. Everything that reads frames (listFrames,
+// findFrame, readFrame, rays_v) shows complete frames only, so a frame whose writer died is never
+// seen half-written; abandonedFrames() finds such frames for deleteFrame().
+//
 // Plain C++: no VTK types, no libpq types in this header.
 #ifndef asrt_RayStore_h
 #define asrt_RayStore_h
@@ -74,13 +81,14 @@ struct FrameInfo
   double traceSeconds = 0; ///< NaN when the writer did not say
   std::string createdAt;   ///< ISO 8601, UTC
   std::int64_t rayCount = 0;
+  int tileCount = 1; ///< tiles it was written in (1 for writeFrame)
 };
 
 class ASRTCORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 1;
+  static constexpr int kSchemaVersion = 2;
   /// Rays per stored block.
   static constexpr int kBlockSize = 4096;
 
@@ -116,17 +124,42 @@ public:
                           bool replace = false,
                           double traceSeconds = std::numeric_limits<double>::quiet_NaN());
 
+  /// Starts (or joins) a frame written as `tileCount` tiles by writeTile(), possibly from several
+  /// processes at once: the frame row is created and committed with status 'writing'. Every rank
+  /// may call this with the same arguments; concurrent and later calls return the id of the same
+  /// 'writing' frame as long as it is not complete (a different tile count is an error). A
+  /// complete frame of the same identity is a duplicate (StoreError "duplicate frame") unless
+  /// `replace`, which deletes it and starts a new one; `replace` never touches a 'writing' frame,
+  /// since that is how the ranks of one write find each other (delete an abandoned one first).
+  std::int64_t beginTiledFrame(const SceneDescription& scene, const std::string& label,
+                               int tileCount, bool replace = false);
+  /// Writes tile `tile` (0 <= tile < tileCount) of a frame begun by beginTiledFrame(), in one
+  /// transaction; the transaction that writes the last missing tile also completes the frame.
+  /// readFrame() returns the tiles in tile order, each in the order written. Writing a tile that
+  /// is already written (or being written) throws a StoreError ("already written"). Tiles may be
+  /// empty.
+  void writeTile(std::int64_t frameId, int tile, const std::vector<RayRecord>& records);
+  /// As above, with the records produced one at a time (see the streaming writeFrame()).
+  void writeTile(std::int64_t frameId, int tile, std::size_t count,
+                 const std::function<void(std::size_t, RayRecord&)>& next);
+  /// Frames still 'writing' whose last tile (or, with none, whose start) is older than
+  /// `olderThan`: most likely their writers died. Choose `olderThan` longer than the longest tile
+  /// write, since a tile only counts once committed. deleteFrame() removes them.
+  std::vector<std::int64_t> abandonedFrames(std::chrono::seconds olderThan);
+
   /// Complete frames, by id.
   std::vector<FrameInfo> listFrames();
   /// Throws StoreError if there is no complete frame `id`.
   FrameInfo frameInfo(std::int64_t id);
-  /// The records of frame `id` in the order written, bit-exact. `predicate`, if not empty, is an
+  /// The records of frame `id` in the order written (a tiled frame's tiles in tile order),
+  /// bit-exact. `predicate`, if not empty, is an
   /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
   /// image_order = 1"). It is the one piece of caller text spliced into SQL, deliberately: it is
   /// evaluated in a READ ONLY transaction that is rolled back, with predicateTimeout as
   /// statement_timeout, restricted to the frame's rays, so it can select but not write.
   std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
-  /// Deletes a frame and its rays; throws StoreError if there is none.
+  /// Deletes a frame and its rays, complete or not (e.g. abandoned); throws StoreError if there
+  /// is none.
   void deleteFrame(std::int64_t id);
   /// The effective scene text of frame `id` (what effectiveSceneText() gave when it was written):
   /// enough to describe, re-trace or interpolate the frame. Throws StoreError if there is none.

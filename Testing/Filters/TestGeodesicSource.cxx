@@ -58,13 +58,16 @@ class AbortAtFirstProgress : public vtkCommand
 {
 public:
   static AbortAtFirstProgress* New() { return new AbortAtFirstProgress; }
-  void Execute(vtkObject* caller, unsigned long, void*) override
+  void Execute(vtkObject* caller, unsigned long, void* data) override
   {
     ++this->Events;
+    if (data)
+      this->Largest = std::max(this->Largest, *static_cast<double*>(data));
     if (this->Events == 1)
       vtkAlgorithm::SafeDownCast(caller)->SetAbortExecute(1);
   }
   int Events = 0;
+  double Largest = 0; ///< the largest fraction done that was reported
 };
 
 /// A deep copy of one run's ports 0 and 1, with what was reported during the run.
@@ -738,8 +741,6 @@ TEST(GeodesicSource, ProgressIncreasesToOne)
 
 TEST(GeodesicSource, AbortStopsEarlyAndALaterUpdateWorks)
 {
-  // 96 × 96: every Update loads the scene (textures included) twice, a fixed cost that at
-  // 32 × 32 is most of a full run; here tracing dominates, so an early stop is measurable.
   const int w = 96, h = 96;
   vtkNew<vtkGeodesicSource> s;
   vtkNew<MessageCatcher> catcher;
@@ -748,10 +749,11 @@ TEST(GeodesicSource, AbortStopsEarlyAndALaterUpdateWorks)
   s->SetResolution(w, h);
   vtkNew<AbortAtFirstProgress> abort;
   const unsigned long tag = s->AddObserver(vtkCommand::ProgressEvent, abort);
-  auto t0 = std::chrono::steady_clock::now();
   s->Update();
-  const double aborted = secondsSince(t0);
   EXPECT_GE(abort->Events, 1);
+  // Stopping early is judged by the work reported done, not by wall-clock time (this machine is
+  // shared): the tracer reports its fraction of pixels done, and must stop far short of all.
+  EXPECT_LT(abort->Largest, 0.5) << "the aborted run went on to " << abort->Largest;
   EXPECT_EQ(s->GetImageOutput()->GetNumberOfPoints(), 0);
   EXPECT_EQ(s->GetHitsOutput()->GetNumberOfPoints(), 0);
   EXPECT_EQ(s->GetPolylinesOutput()->GetNumberOfPoints(), 0);
@@ -759,9 +761,7 @@ TEST(GeodesicSource, AbortStopsEarlyAndALaterUpdateWorks)
 
   s->RemoveObserver(tag);
   s->SetAbortExecute(0);
-  t0 = std::chrono::steady_clock::now();
   s->Update();
-  const double full = secondsSince(t0);
   EXPECT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
   ASSERT_EQ(s->GetImageOutput()->GetNumberOfPoints(), w * h);
   const auto records = recordsByPixel(s->GetHitsOutput());
@@ -772,7 +772,6 @@ TEST(GeodesicSource, AbortStopsEarlyAndALaterUpdateWorks)
     if (term->GetComponent(p, 0) == 0.0)
       ++untraced;
   EXPECT_EQ(untraced, 0) << "pixels left Running after the repeated Update";
-  EXPECT_LT(aborted, 0.25 * full) << "aborted run " << aborted << " s vs full " << full << " s";
 
   // Back at the reference resolution the records are the reference's: nothing of the aborted
   // run lingers.
@@ -801,7 +800,7 @@ std::string sceneWithObjects(const std::string& objects)
 /// it works again.
 void expectCleanError(const std::function<void(vtkGeodesicSource*)>& breakIt,
                       const std::function<void(vtkGeodesicSource*)>& repair,
-                      const std::vector<std::string>& mentions, double maxSeconds = 5.0)
+                      const std::vector<std::string>& mentions, double maxSeconds = 30.0)
 {
   vtkNew<vtkGeodesicSource> s;
   vtkNew<MessageCatcher> filterErrors;
@@ -820,7 +819,8 @@ void expectCleanError(const std::function<void(vtkGeodesicSource*)>& breakIt,
   const auto t0 = std::chrono::steady_clock::now();
   s->Update();
   const double seconds = secondsSince(t0);
-  EXPECT_LT(seconds, maxSeconds);
+  EXPECT_LT(seconds,
+            maxSeconds); // a guard against hangs (and allocating first), not a speed target
   ASSERT_FALSE(filterErrors->Errors.empty()) << "no error reported by the filter itself";
   for (const std::string& m : mentions)
     EXPECT_TRUE(filterErrors->Mentions(m))

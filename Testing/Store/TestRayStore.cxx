@@ -309,10 +309,14 @@ TEST(RayStoreSchema, NewerSchemaVersionIsRefused)
   RayStore store(ci);
   EXPECT_EQ(store.schemaVersion(), 99);
   const std::string m = errorOf([&] { store.migrate(); });
-  EXPECT_NE(m.find("schema version mismatch: found 99, this build knows 1"), std::string::npos)
+  EXPECT_NE(m.find("schema version mismatch: found 99, this build knows " +
+                   std::to_string(RayStore::kSchemaVersion)),
+            std::string::npos)
     << m;
   const std::string l = errorOf([&] { store.listFrames(); });
-  EXPECT_NE(l.find("found 99, this build knows 1"), std::string::npos) << l;
+  EXPECT_NE(l.find("found 99, this build knows " + std::to_string(RayStore::kSchemaVersion)),
+            std::string::npos)
+    << l;
   EXPECT_EQ(db.value("SELECT version FROM schema_version"), "99");
 }
 
