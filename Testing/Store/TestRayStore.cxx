@@ -2,6 +2,7 @@
 // frame identity, predicates, hostile input, connection failures, interrupted writers, and the
 // measurement behind the storage layout.
 #include "RayStore.h"
+#include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
@@ -23,6 +24,7 @@
 using asrt::RayRecord;
 using asrt::RayStore;
 using asrt::StoreError;
+using namespace asrt::testing;
 
 namespace
 {
@@ -61,35 +63,6 @@ std::string freshDatabase()
   return server().conninfo(name);
 }
 
-/// Plain libpq access, for checking what the store left in the database.
-struct Db
-{
-  explicit Db(const std::string& conninfo)
-    : Conn(PQconnectdb(conninfo.c_str()))
-  {
-    if (PQstatus(this->Conn) != CONNECTION_OK)
-    {
-      throw std::runtime_error(PQerrorMessage(this->Conn));
-    }
-  }
-  ~Db() { PQfinish(this->Conn); }
-  std::string value(const std::string& sql)
-  {
-    PGresult* r = PQexec(this->Conn, sql.c_str());
-    const ExecStatusType st = PQresultStatus(r);
-    if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
-    {
-      const std::string msg = PQresultErrorMessage(r);
-      PQclear(r);
-      throw std::runtime_error(sql + ": " + msg);
-    }
-    std::string v = (st == PGRES_TUPLES_OK && PQntuples(r) > 0) ? PQgetvalue(r, 0, 0) : "";
-    PQclear(r);
-    return v;
-  }
-  PGconn* Conn;
-};
-
 asrt::SceneDescription scene(double mass = 1.0)
 {
   asrt::SceneDescription d;
@@ -98,19 +71,6 @@ asrt::SceneDescription scene(double mass = 1.0)
   d.spin = 0.25;
   d.camera.width = 64;
   d.camera.height = 48;
-  return d;
-}
-
-std::uint64_t bits(double d)
-{
-  std::uint64_t w;
-  std::memcpy(&w, &d, 8);
-  return w;
-}
-double fromBits(std::uint64_t w)
-{
-  double d;
-  std::memcpy(&d, &w, 8);
   return d;
 }
 
@@ -174,78 +134,12 @@ std::vector<RayRecord> synthetic(std::size_t count, int width, std::uint64_t see
 /// Every field, compared bit for bit.
 ::testing::AssertionResult sameBits(const RayRecord& a, const RayRecord& b)
 {
-  const double da[] = { a.origin.x(),
-                        a.origin.y(),
-                        a.origin.z(),
-                        a.direction.x(),
-                        a.direction.y(),
-                        a.direction.z(),
-                        a.momentum[0],
-                        a.momentum[1],
-                        a.momentum[2],
-                        a.momentum[3],
-                        a.hitPoint.x(),
-                        a.hitPoint.y(),
-                        a.hitPoint.z(),
-                        a.hitNormal.x(),
-                        a.hitNormal.y(),
-                        a.hitNormal.z(),
-                        a.u,
-                        a.v,
-                        a.chordError,
-                        a.affineLength,
-                        a.winding,
-                        a.maxAbsH,
-                        a.color.x(),
-                        a.color.y(),
-                        a.color.z(),
-                        a.dudi,
-                        a.dudj,
-                        a.dvdi,
-                        a.dvdj };
-  const double db[] = { b.origin.x(),
-                        b.origin.y(),
-                        b.origin.z(),
-                        b.direction.x(),
-                        b.direction.y(),
-                        b.direction.z(),
-                        b.momentum[0],
-                        b.momentum[1],
-                        b.momentum[2],
-                        b.momentum[3],
-                        b.hitPoint.x(),
-                        b.hitPoint.y(),
-                        b.hitPoint.z(),
-                        b.hitNormal.x(),
-                        b.hitNormal.y(),
-                        b.hitNormal.z(),
-                        b.u,
-                        b.v,
-                        b.chordError,
-                        b.affineLength,
-                        b.winding,
-                        b.maxAbsH,
-                        b.color.x(),
-                        b.color.y(),
-                        b.color.z(),
-                        b.dudi,
-                        b.dudj,
-                        b.dvdi,
-                        b.dvdj };
-  for (std::size_t k = 0; k < sizeof(da) / sizeof(da[0]); ++k)
-  {
-    if (bits(da[k]) != bits(db[k]))
-    {
+  const std::vector<std::uint64_t> x = recordBits(a), y = recordBits(b);
+  for (std::size_t k = 0; k < x.size(); ++k)
+    if (x[k] != y[k])
       return ::testing::AssertionFailure()
-             << "double field " << k << " differs: " << da[k] << " vs " << db[k];
-    }
-  }
-  if (a.i != b.i || a.j != b.j || a.termination != b.termination || a.objectId != b.objectId ||
-      a.imageOrder != b.imageOrder || a.steps != b.steps)
-  {
-    return ::testing::AssertionFailure()
-           << "an integer field differs at pixel (" << a.i << ", " << a.j << ")";
-  }
+             << "field " << k << " (integers first, then doubles) differs at pixel (" << a.i << ", "
+             << a.j << ")";
   return ::testing::AssertionSuccess();
 }
 
@@ -258,24 +152,6 @@ void expectSame(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b
   }
 }
 
-template<typename F>
-std::string errorOf(F&& f)
-{
-  try
-  {
-    f();
-  }
-  catch (const StoreError& e)
-  {
-    return e.what();
-  }
-  return "(no StoreError)";
-}
-
-double secondsSince(std::chrono::steady_clock::time_point t0)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 }
 
 TEST(RayStoreSchema, MigrateCreatesTheSchemaAndIsIdempotent)
@@ -338,11 +214,11 @@ TEST(RayStoreFrames, RoundTripIsBitExact)
   EXPECT_EQ(f.rayCount, std::int64_t(records.size()));
   EXPECT_EQ(f.label, "round trip");
   EXPECT_EQ(f.name, "three cylinders");
-  EXPECT_EQ(bits(f.key.mass), bits(1.0));
-  EXPECT_EQ(bits(f.key.spin), bits(0.25));
-  EXPECT_EQ(bits(f.key.cameraPosition.y()), bits(-30.000000000000004));
-  EXPECT_EQ(bits(f.key.cameraPosition.z()), bits(1e-300));
-  EXPECT_EQ(bits(f.key.relativeTolerance), bits(1.2345678901234567e-9));
+  EXPECT_EQ(bitsOf(f.key.mass), bitsOf(1.0));
+  EXPECT_EQ(bitsOf(f.key.spin), bitsOf(0.25));
+  EXPECT_EQ(bitsOf(f.key.cameraPosition.y()), bitsOf(-30.000000000000004));
+  EXPECT_EQ(bitsOf(f.key.cameraPosition.z()), bitsOf(1e-300));
+  EXPECT_EQ(bitsOf(f.key.relativeTolerance), bitsOf(1.2345678901234567e-9));
   EXPECT_EQ(f.key.width, 64);
   EXPECT_EQ(f.key.height, 48);
   EXPECT_EQ(f.key.method, "auto");
@@ -406,7 +282,7 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
       }
       else
       {
-        ASSERT_EQ(bits(got), bits(expected[c])) << "row " << row << " column " << c;
+        ASSERT_EQ(bitsOf(got), bitsOf(expected[c])) << "row " << row << " column " << c;
       }
     }
   }
@@ -673,7 +549,7 @@ struct Field
 #define ASRT_D(e)                                                                                  \
   Field                                                                                            \
   {                                                                                                \
-    "float8", 8, [](const RayRecord& r) { return bits(e); }                                        \
+    "float8", 8, [](const RayRecord& r) { return bitsOf(e); }                                      \
   }
 #define ASRT_I(e)                                                                                  \
   Field                                                                                            \

@@ -9,6 +9,7 @@
 // instead of hanging it.
 #include "RayStore.h"
 #include "SceneFile.h"
+#include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
@@ -32,34 +33,13 @@ using asrt::RayRecord;
 using asrt::RayStore;
 using asrt::StoreError;
 using asrt::testing::ThrowawayPostgres;
-using Clock = std::chrono::steady_clock;
+using namespace asrt::testing;
 
 namespace
 {
 // ---------------------------------------------------------------------------------------------
 // Deterministic synthetic records: record k of a seed is a pure function of (seed, k), so that a
 // child can stream it and the parent can regenerate it for a bit-exact comparison.
-
-std::uint64_t splitmix(std::uint64_t& s)
-{
-  std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-double fromBits(std::uint64_t w)
-{
-  double d;
-  std::memcpy(&d, &w, 8);
-  return d;
-}
-std::uint64_t bitsOf(double d)
-{
-  std::uint64_t w;
-  std::memcpy(&w, &d, 8);
-  return w;
-}
 
 RayRecord syntheticRecord(std::uint64_t seed, std::size_t k, int width)
 {
@@ -120,84 +100,10 @@ long firstDifference(const std::vector<RayRecord>& got, std::uint64_t seed, std:
                      int width = 97)
 {
   if (got.size() != count)
-  {
     return long(std::min(got.size(), count));
-  }
   for (std::size_t k = 0; k < count; ++k)
-  {
-    const RayRecord e = syntheticRecord(seed, k, width);
-    const RayRecord& a = got[k];
-    const double da[] = { a.origin.x(),
-                          a.origin.y(),
-                          a.origin.z(),
-                          a.direction.x(),
-                          a.direction.y(),
-                          a.direction.z(),
-                          a.momentum[0],
-                          a.momentum[1],
-                          a.momentum[2],
-                          a.momentum[3],
-                          a.hitPoint.x(),
-                          a.hitPoint.y(),
-                          a.hitPoint.z(),
-                          a.hitNormal.x(),
-                          a.hitNormal.y(),
-                          a.hitNormal.z(),
-                          a.u,
-                          a.v,
-                          a.chordError,
-                          a.affineLength,
-                          a.winding,
-                          a.maxAbsH,
-                          a.color.x(),
-                          a.color.y(),
-                          a.color.z(),
-                          a.dudi,
-                          a.dudj,
-                          a.dvdi,
-                          a.dvdj };
-    const double de[] = { e.origin.x(),
-                          e.origin.y(),
-                          e.origin.z(),
-                          e.direction.x(),
-                          e.direction.y(),
-                          e.direction.z(),
-                          e.momentum[0],
-                          e.momentum[1],
-                          e.momentum[2],
-                          e.momentum[3],
-                          e.hitPoint.x(),
-                          e.hitPoint.y(),
-                          e.hitPoint.z(),
-                          e.hitNormal.x(),
-                          e.hitNormal.y(),
-                          e.hitNormal.z(),
-                          e.u,
-                          e.v,
-                          e.chordError,
-                          e.affineLength,
-                          e.winding,
-                          e.maxAbsH,
-                          e.color.x(),
-                          e.color.y(),
-                          e.color.z(),
-                          e.dudi,
-                          e.dudj,
-                          e.dvdi,
-                          e.dvdj };
-    for (std::size_t m = 0; m < sizeof(da) / sizeof(da[0]); ++m)
-    {
-      if (bitsOf(da[m]) != bitsOf(de[m]))
-      {
-        return long(k);
-      }
-    }
-    if (a.i != e.i || a.j != e.j || a.termination != e.termination || a.objectId != e.objectId ||
-        a.imageOrder != e.imageOrder || a.steps != e.steps)
-    {
+    if (recordBits(got[k]) != recordBits(syntheticRecord(seed, k, width)))
       return long(k);
-    }
-  }
   return -1;
 }
 
@@ -219,186 +125,14 @@ asrt::SceneDescription scene(double mass)
   return d;
 }
 
-/// Plain libpq access, for looking at the database behind the store's back.
-struct Db
-{
-  explicit Db(const std::string& conninfo)
-    : Conn(PQconnectdb((conninfo + " connect_timeout=5").c_str()))
-  {
-    if (PQstatus(this->Conn) != CONNECTION_OK)
-    {
-      const std::string msg = PQerrorMessage(this->Conn);
-      PQfinish(this->Conn);
-      throw std::runtime_error(msg);
-    }
-  }
-  ~Db() { PQfinish(this->Conn); }
-  Db(const Db&) = delete;
-  Db& operator=(const Db&) = delete;
-  std::string value(const std::string& sql)
-  {
-    PGresult* r = PQexec(this->Conn, sql.c_str());
-    const ExecStatusType st = PQresultStatus(r);
-    if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
-    {
-      const std::string msg = PQresultErrorMessage(r);
-      PQclear(r);
-      throw std::runtime_error(sql + ": " + msg);
-    }
-    std::string v = (st == PGRES_TUPLES_OK && PQntuples(r) > 0) ? PQgetvalue(r, 0, 0) : "";
-    PQclear(r);
-    return v;
-  }
-  PGconn* Conn;
-};
+/// Children: a duplicate-frame error is the one these tests expect.
+constexpr int Duplicate = ExpectedError;
 
-template<typename F>
-std::string errorOf(F&& f)
-{
-  try
-  {
-    f();
-  }
-  catch (const StoreError& e)
-  {
-    return e.what();
-  }
-  catch (const std::exception& e)
-  {
-    return std::string("(not a StoreError) ") + e.what();
-  }
-  return "(no error)";
-}
-
-double secondsSince(Clock::time_point t0)
-{
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-/// Polls `sql` (one value) until `done(value)` or the timeout; returns the last value.
-template<typename P>
-std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSeconds)
-{
-  const auto t0 = Clock::now();
-  std::string v = db.value(sql);
-  while (!done(v) && secondsSince(t0) < timeoutSeconds)
-  {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    v = db.value(sql);
-  }
-  return v;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Child processes.
-
-/// Exit codes of the children.
-enum ChildCode
-{
-  Ok = 0,
-  Duplicate = 10,
-  OtherStoreError = 11,
-  OtherException = 12,
-  BadReadBack = 13,
-};
-
-/// Forks a child that runs `body` (returning its exit code) under an alarm; a deadlocked child
-/// dies of SIGALRM, which the parent sees as 128 + 14.
 template<typename F>
 pid_t spawn(unsigned alarmSeconds, F&& body)
 {
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  if (pid != 0)
-  {
-    return pid;
-  }
-  alarm(alarmSeconds);
-  int code = OtherException;
-  try
-  {
-    code = body();
-  }
-  catch (const StoreError& e)
-  {
-    std::fprintf(stderr, "[child %d] StoreError: %s\n", int(getpid()), e.what());
-    code = std::string(e.what()).find("duplicate frame") != std::string::npos ? Duplicate
-                                                                              : OtherStoreError;
-  }
-  catch (const std::exception& e)
-  {
-    std::fprintf(stderr, "[child %d] exception: %s\n", int(getpid()), e.what());
-  }
-  catch (...)
-  {
-  }
-  std::fflush(nullptr);
-  _exit(code);
+  return spawnChild(alarmSeconds, "duplicate frame", std::forward<F>(body));
 }
-
-/// The child's exit code, 128 + signal if a signal ended it, or -1 if it was still running at the
-/// deadline (it is then killed).
-int waitChild(pid_t pid, Clock::time_point deadline)
-{
-  int status = 0;
-  for (;;)
-  {
-    const pid_t w = waitpid(pid, &status, WNOHANG);
-    if (w == pid)
-    {
-      break;
-    }
-    if (w < 0)
-    {
-      return -2;
-    }
-    if (Clock::now() > deadline)
-    {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-/// Makes every child wait on a pipe until the parent closes it, so that they start together.
-struct StartGate
-{
-  int Fd[2] = { -1, -1 };
-  StartGate()
-  {
-    if (pipe(this->Fd) != 0)
-    {
-      throw std::runtime_error("pipe failed");
-    }
-  }
-  ~StartGate() { this->open(); }
-  StartGate(const StartGate&) = delete;
-  StartGate& operator=(const StartGate&) = delete;
-  /// In a child: blocks until the parent opens the gate.
-  void wait()
-  {
-    close(this->Fd[1]);
-    char c;
-    while (read(this->Fd[0], &c, 1) < 0 && errno == EINTR)
-    {
-    }
-  }
-  /// In the parent.
-  void open()
-  {
-    for (int& fd : this->Fd)
-    {
-      if (fd >= 0)
-      {
-        close(fd);
-        fd = -1;
-      }
-    }
-  }
-};
 
 std::string countsOf(Db& db)
 {

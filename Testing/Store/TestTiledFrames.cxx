@@ -6,6 +6,7 @@
 // leave with _exit; each has an alarm() and the parent a deadline.
 #include "RayStore.h"
 #include "SceneFile.h"
+#include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
@@ -28,26 +29,11 @@ using asrt::RayRecord;
 using asrt::RayStore;
 using asrt::StoreError;
 using asrt::testing::ThrowawayPostgres;
-using Clock = std::chrono::steady_clock;
+using namespace asrt::testing;
 
 namespace
 {
 constexpr int Width = 101;
-
-std::uint64_t splitmix(std::uint64_t& s)
-{
-  std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-double fromBits(std::uint64_t w)
-{
-  double d;
-  std::memcpy(&d, &w, 8);
-  return d;
-}
 
 /// Record k of the frame (pixel k in row order), a pure function of (seed, k) so that children
 /// and parent agree without talking. Includes values that careless storage loses.
@@ -95,60 +81,13 @@ RayRecord record(std::uint64_t seed, std::size_t k)
   return r;
 }
 
-/// Every stored bit of a record, for exact comparison (NaN payloads included).
-std::vector<std::uint64_t> bits(const RayRecord& r)
-{
-  std::vector<std::uint64_t> b = { std::uint64_t(std::uint32_t(r.i)),
-                                   std::uint64_t(std::uint32_t(r.j)),
-                                   std::uint64_t(r.termination),
-                                   std::uint64_t(std::uint32_t(r.objectId)),
-                                   std::uint64_t(std::uint32_t(r.imageOrder)),
-                                   std::uint64_t(r.steps) };
-  const double d[] = { r.origin.x(),
-                       r.origin.y(),
-                       r.origin.z(),
-                       r.direction.x(),
-                       r.direction.y(),
-                       r.direction.z(),
-                       r.momentum[0],
-                       r.momentum[1],
-                       r.momentum[2],
-                       r.momentum[3],
-                       r.hitPoint.x(),
-                       r.hitPoint.y(),
-                       r.hitPoint.z(),
-                       r.hitNormal.x(),
-                       r.hitNormal.y(),
-                       r.hitNormal.z(),
-                       r.u,
-                       r.v,
-                       r.chordError,
-                       r.affineLength,
-                       r.winding,
-                       r.maxAbsH,
-                       r.color.x(),
-                       r.color.y(),
-                       r.color.z(),
-                       r.dudi,
-                       r.dudj,
-                       r.dvdi,
-                       r.dvdj };
-  for (double x : d)
-  {
-    std::uint64_t w;
-    std::memcpy(&w, &x, 8);
-    b.push_back(w);
-  }
-  return b;
-}
-
 /// The first index at which `got` differs from records [first, first + count) of `seed`, or -1.
 long firstDifference(const std::vector<RayRecord>& got, std::uint64_t seed, std::size_t first,
                      std::size_t count)
 {
   for (std::size_t k = 0; k < std::min(got.size(), count); ++k)
   {
-    if (bits(got[k]) != bits(record(seed, first + k)))
+    if (recordBits(got[k]) != recordBits(record(seed, first + k)))
     {
       return long(k);
     }
@@ -183,174 +122,13 @@ asrt::SceneDescription scene(double mass)
   return d;
 }
 
-/// Plain libpq access, for looking behind the store's back.
-struct Db
-{
-  explicit Db(const std::string& conninfo)
-    : Conn(PQconnectdb((conninfo + " connect_timeout=5").c_str()))
-  {
-    if (PQstatus(this->Conn) != CONNECTION_OK)
-    {
-      const std::string msg = PQerrorMessage(this->Conn);
-      PQfinish(this->Conn);
-      throw std::runtime_error(msg);
-    }
-  }
-  ~Db() { PQfinish(this->Conn); }
-  Db(const Db&) = delete;
-  Db& operator=(const Db&) = delete;
-  std::string value(const std::string& sql)
-  {
-    PGresult* r = PQexec(this->Conn, sql.c_str());
-    const ExecStatusType st = PQresultStatus(r);
-    if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
-    {
-      const std::string msg = PQresultErrorMessage(r);
-      PQclear(r);
-      throw std::runtime_error(sql + ": " + msg);
-    }
-    std::string v = (st == PGRES_TUPLES_OK && PQntuples(r) > 0) ? PQgetvalue(r, 0, 0) : "";
-    PQclear(r);
-    return v;
-  }
-  PGconn* Conn;
-};
-
-template<typename F>
-std::string errorOf(F&& f)
-{
-  try
-  {
-    f();
-  }
-  catch (const StoreError& e)
-  {
-    return e.what();
-  }
-  catch (const std::exception& e)
-  {
-    return std::string("(not a StoreError) ") + e.what();
-  }
-  return "(no error)";
-}
-
-double secondsSince(Clock::time_point t0)
-{
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-enum ChildCode
-{
-  Ok = 0,
-  AlreadyWritten = 10,
-  OtherStoreError = 11,
-  OtherException = 12,
-};
+/// Children: writing a tile that is already written is the error these tests expect.
+constexpr int AlreadyWritten = ExpectedError;
 
 template<typename F>
 pid_t spawn(unsigned alarmSeconds, F&& body)
 {
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  if (pid != 0)
-  {
-    return pid;
-  }
-  alarm(alarmSeconds);
-  int code = OtherException;
-  try
-  {
-    code = body();
-  }
-  catch (const StoreError& e)
-  {
-    std::fprintf(stderr, "[child %d] StoreError: %s\n", int(getpid()), e.what());
-    code = std::string(e.what()).find("already written") != std::string::npos ? AlreadyWritten
-                                                                              : OtherStoreError;
-  }
-  catch (const std::exception& e)
-  {
-    std::fprintf(stderr, "[child %d] exception: %s\n", int(getpid()), e.what());
-  }
-  catch (...)
-  {
-  }
-  std::fflush(nullptr);
-  _exit(code);
-}
-
-/// Exit code, 128 + signal, or -1 if still running at the deadline (then killed).
-int waitChild(pid_t pid, Clock::time_point deadline)
-{
-  int status = 0;
-  for (;;)
-  {
-    const pid_t w = waitpid(pid, &status, WNOHANG);
-    if (w == pid)
-    {
-      break;
-    }
-    if (w < 0)
-    {
-      return -2;
-    }
-    if (Clock::now() > deadline)
-    {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-/// Children block on a pipe until the parent closes it.
-struct Gate
-{
-  int Fd[2] = { -1, -1 };
-  Gate()
-  {
-    if (pipe(this->Fd) != 0)
-    {
-      throw std::runtime_error("pipe failed");
-    }
-  }
-  ~Gate() { this->open(); }
-  Gate(const Gate&) = delete;
-  Gate& operator=(const Gate&) = delete;
-  void wait()
-  {
-    close(this->Fd[1]);
-    char c;
-    while (read(this->Fd[0], &c, 1) < 0 && errno == EINTR)
-    {
-    }
-  }
-  void open()
-  {
-    for (int& fd : this->Fd)
-    {
-      if (fd >= 0)
-      {
-        close(fd);
-        fd = -1;
-      }
-    }
-  }
-};
-
-template<typename P>
-std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSeconds)
-{
-  const auto t0 = Clock::now();
-  std::string v = db.value(sql);
-  while (!done(v) && secondsSince(t0) < timeoutSeconds)
-  {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    v = db.value(sql);
-  }
-  return v;
+  return spawnChild(alarmSeconds, "already written", std::forward<F>(body));
 }
 
 void writeTileOf(RayStore& s, std::int64_t id, int tile, const Tiling& t, std::uint64_t seed)
@@ -375,7 +153,7 @@ TEST(TiledFramesConcurrent, FourRanksWriteOneFrameVisibleOnlyWhenComplete)
   const Tiling tiling({ 101 * 90, 101 * 120 + 7, 101 * 60, 101 * 150 - 7 });
   const int tiles = 4;
 
-  Gate start, last;
+  StartGate start, last;
   std::vector<pid_t> children;
   for (int tile = 0; tile < tiles; ++tile)
   {
@@ -465,7 +243,7 @@ TEST(TiledFramesConcurrent, SimultaneousLastTilesAlwaysCompleteTheFrame)
   const int rounds = 8;
   for (int round = 0; round < rounds; ++round)
   {
-    Gate start;
+    StartGate start;
     std::vector<pid_t> children;
     for (int tile = 0; tile < 4; ++tile)
     {
@@ -610,7 +388,7 @@ TEST(TiledFramesErrors, TileWrittenTwiceAndOtherMisusesAreRefused)
     std::string::npos);
 
   // Two processes write tile 0 at once: one wins, the other is told, nothing is doubled.
-  Gate start;
+  StartGate start;
   std::vector<pid_t> children;
   for (int c = 0; c < 2; ++c)
   {

@@ -1,0 +1,271 @@
+// Helpers shared by the store's tests: deterministic synthetic values, bit-exact record
+// comparison, plain libpq access behind the store's back, and forked writer processes.
+#ifndef asrt_StoreTestSupport_h
+#define asrt_StoreTestSupport_h
+
+#include "FrameTracer.h"
+#include "RayStore.h"
+
+#include <libpq-fe.h>
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace asrt
+{
+namespace testing
+{
+using Clock = std::chrono::steady_clock;
+
+/// SplitMix64: a tiny, well-mixed generator, so that a record is a pure function of its seed.
+inline std::uint64_t splitmix(std::uint64_t& s)
+{
+  std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+inline double fromBits(std::uint64_t w)
+{
+  double d;
+  std::memcpy(&d, &w, 8);
+  return d;
+}
+
+inline std::uint64_t bitsOf(double d)
+{
+  std::uint64_t w;
+  std::memcpy(&w, &d, 8);
+  return w;
+}
+
+/// Every stored field of a record as bits (NaN payloads and −0 included), integers first.
+inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
+{
+  std::vector<std::uint64_t> b = { std::uint64_t(std::uint32_t(r.i)),
+                                   std::uint64_t(std::uint32_t(r.j)),
+                                   std::uint64_t(r.termination),
+                                   std::uint64_t(std::uint32_t(r.objectId)),
+                                   std::uint64_t(std::uint32_t(r.imageOrder)),
+                                   std::uint64_t(r.steps) };
+  const double d[] = { r.origin.x(),
+                       r.origin.y(),
+                       r.origin.z(),
+                       r.direction.x(),
+                       r.direction.y(),
+                       r.direction.z(),
+                       r.momentum[0],
+                       r.momentum[1],
+                       r.momentum[2],
+                       r.momentum[3],
+                       r.hitPoint.x(),
+                       r.hitPoint.y(),
+                       r.hitPoint.z(),
+                       r.hitNormal.x(),
+                       r.hitNormal.y(),
+                       r.hitNormal.z(),
+                       r.u,
+                       r.v,
+                       r.chordError,
+                       r.affineLength,
+                       r.winding,
+                       r.maxAbsH,
+                       r.color.x(),
+                       r.color.y(),
+                       r.color.z(),
+                       r.dudi,
+                       r.dudj,
+                       r.dvdi,
+                       r.dvdj };
+  for (double x : d)
+    b.push_back(bitsOf(x));
+  return b;
+}
+
+inline double secondsSince(Clock::time_point t0)
+{
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// What a call throws, as text ("(no error)" if nothing).
+template<typename F>
+std::string errorOf(F&& f)
+{
+  try
+  {
+    f();
+  }
+  catch (const StoreError& e)
+  {
+    return e.what();
+  }
+  catch (const std::exception& e)
+  {
+    return std::string("(not a StoreError) ") + e.what();
+  }
+  return "(no error)";
+}
+
+/// Plain libpq access, for looking at the database behind the store's back.
+struct Db
+{
+  explicit Db(const std::string& conninfo)
+    : Conn(PQconnectdb((conninfo + " connect_timeout=5").c_str()))
+  {
+    if (PQstatus(this->Conn) != CONNECTION_OK)
+    {
+      const std::string msg = PQerrorMessage(this->Conn);
+      PQfinish(this->Conn);
+      throw std::runtime_error(msg);
+    }
+  }
+  ~Db() { PQfinish(this->Conn); }
+  Db(const Db&) = delete;
+  Db& operator=(const Db&) = delete;
+  /// The first value of the first row ("" if none); throws with the server's message.
+  std::string value(const std::string& sql)
+  {
+    PGresult* r = PQexec(this->Conn, sql.c_str());
+    const ExecStatusType st = PQresultStatus(r);
+    if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
+    {
+      const std::string msg = PQresultErrorMessage(r);
+      PQclear(r);
+      throw std::runtime_error(sql + ": " + msg);
+    }
+    std::string v = (st == PGRES_TUPLES_OK && PQntuples(r) > 0) ? PQgetvalue(r, 0, 0) : "";
+    PQclear(r);
+    return v;
+  }
+  PGconn* Conn;
+};
+
+/// Polls `sql` (one value) until `done(value)` or the timeout; returns the last value.
+template<typename P>
+std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSeconds)
+{
+  const auto t0 = Clock::now();
+  std::string v = db.value(sql);
+  while (!done(v) && secondsSince(t0) < timeoutSeconds)
+  {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    v = db.value(sql);
+  }
+  return v;
+}
+
+/// Exit codes of forked children (they must not use gtest assertions).
+enum ChildCode
+{
+  Ok = 0,
+  ExpectedError = 10, ///< a StoreError whose message holds the text the test expects
+  OtherStoreError = 11,
+  OtherException = 12,
+  BadReadBack = 13,
+};
+
+/// Forks a child that runs `body` (returning its exit code) under an alarm, so that a deadlocked
+/// child dies of SIGALRM (128 + 14 to the parent) instead of hanging the test.
+template<typename F>
+pid_t spawnChild(unsigned alarmSeconds, const char* expectedError, F&& body)
+{
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid != 0)
+    return pid;
+  alarm(alarmSeconds);
+  int code = OtherException;
+  try
+  {
+    code = body();
+  }
+  catch (const StoreError& e)
+  {
+    std::fprintf(stderr, "[child %d] StoreError: %s\n", int(getpid()), e.what());
+    code = std::string(e.what()).find(expectedError) != std::string::npos ? ExpectedError
+                                                                          : OtherStoreError;
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "[child %d] exception: %s\n", int(getpid()), e.what());
+  }
+  catch (...)
+  {
+  }
+  std::fflush(nullptr);
+  _exit(code);
+}
+
+/// The child's exit code, 128 + signal if a signal ended it, or -1 if it was still running at the
+/// deadline (it is then killed).
+inline int waitChild(pid_t pid, Clock::time_point deadline)
+{
+  int status = 0;
+  for (;;)
+  {
+    const pid_t w = waitpid(pid, &status, WNOHANG);
+    if (w == pid)
+      break;
+    if (w < 0)
+      return -2;
+    if (Clock::now() > deadline)
+    {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// Makes every child wait on a pipe until the parent closes it, so that they start together.
+struct StartGate
+{
+  int Fd[2] = { -1, -1 };
+  StartGate()
+  {
+    if (pipe(this->Fd) != 0)
+      throw std::runtime_error("pipe failed");
+  }
+  ~StartGate() { this->open(); }
+  StartGate(const StartGate&) = delete;
+  StartGate& operator=(const StartGate&) = delete;
+  /// In a child: blocks until the parent opens the gate.
+  void wait()
+  {
+    close(this->Fd[1]);
+    char c;
+    while (read(this->Fd[0], &c, 1) < 0 && errno == EINTR)
+    {
+    }
+  }
+  /// In the parent.
+  void open()
+  {
+    for (int& fd : this->Fd)
+    {
+      if (fd >= 0)
+      {
+        close(fd);
+        fd = -1;
+      }
+    }
+  }
+};
+}
+}
+
+#endif
