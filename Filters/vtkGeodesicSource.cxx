@@ -96,6 +96,7 @@ vtkGeodesicSource::~vtkGeodesicSource()
   this->SetSceneFileName(nullptr);
   this->SetSceneText(nullptr);
   this->SetIntegrationMethod(nullptr);
+  this->SetIntegrationPreset(nullptr);
 }
 
 vtkImageData* vtkGeodesicSource::GetImageOutput()
@@ -198,6 +199,8 @@ struct vtkGeodesicSource::Internals
       d.camera.width = self->Resolution[0];
       d.camera.height = self->Resolution[1];
     }
+    if (self->IntegrationPreset && *self->IntegrationPreset)
+      d.integrator = asrt::integratorPreset(self->IntegrationPreset);
     if (self->IntegrationMethod && *self->IntegrationMethod)
       d.integrator.method = self->IntegrationMethod;
     if (isSet(self->IntegrationStep))
@@ -441,6 +444,9 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
   os << indent
      << "IntegrationMethod: " << (this->IntegrationMethod ? this->IntegrationMethod : "(scene)")
+     << "\n";
+  os << indent
+     << "IntegrationPreset: " << (this->IntegrationPreset ? this->IntegrationPreset : "(scene)")
      << "\n";
   os << indent << "IntegrationStep: " << this->IntegrationStep << "\n";
   os << indent << "PixelSubset: " << (this->PixelSubset ? "set" : "(none)") << "\n";

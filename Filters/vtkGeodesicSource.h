@@ -84,6 +84,14 @@ public:
   ///@}
 
   ///@{
+  /// A speed/accuracy preset ("fast", "balanced", "accurate"; asrt::integratorPreset) replacing
+  /// the scene's whole integrator; IntegrationMethod and IntegrationStep then refine it, as
+  /// fields given beside a preset do in a scene file. Empty (default) keeps the scene's.
+  vtkSetStringMacro(IntegrationPreset);
+  vtkGetStringMacro(IntegrationPreset);
+  ///@}
+
+  ///@{
   /// Trace only these pixels: a 2-component array of (i, j). Null traces the whole frame.
   /// Untraced pixels of the image are black with Termination 0 ("running").
   void SetPixelSubset(vtkIntArray* ij);
@@ -138,6 +146,7 @@ protected:
   double IntegrationStep;
   int Resolution[2] = { 0, 0 };
   char* IntegrationMethod = nullptr;
+  char* IntegrationPreset = nullptr;
   bool GeneratePolylines = false;
   int PolylineStride = 10;
   double MemoryLimit = 0.0;

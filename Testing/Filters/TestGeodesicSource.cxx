@@ -422,6 +422,44 @@ TEST(GeodesicSource, FieldDataReflectEveryOverride)
     EXPECT_EQ(origin->GetComponent(0, c), position[c]);
 }
 
+TEST(GeodesicSource, PresetReplacesTheIntegratorAndMethodStepRefineIt)
+{
+  // Presets are documented (Data/scenes/README.md) as Dormand-Prince at rtol 1e-6, 1e-8, 1e-10
+  // with atol = 1e-2 rtol; a method or step given beside one refines it.
+  const std::pair<const char*, double> presets[] = { { "fast", 1e-6 },
+                                                     { "balanced", 1e-8 },
+                                                     { "accurate", 1e-10 } };
+  for (const auto& [name, rtol] : presets)
+  {
+    const Frame f = traceFrame(
+      [name = name](vtkGeodesicSource* s)
+      {
+        s->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+        s->SetResolution(8, 8);
+        s->SetPixelSubset(pixelList({ { 4, 4 } }));
+        s->SetIntegrationPreset(name);
+      });
+    ASSERT_TRUE(f.errors.empty()) << f.errors.front();
+    EXPECT_EQ(fieldString(f.hits, "IntegrationMethod"), "DormandPrince54") << name;
+    EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 0), rtol) << name;
+    EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 1), 1e-2 * rtol) << name;
+  }
+  const Frame refined = traceFrame(
+    [](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+      s->SetResolution(8, 8);
+      s->SetPixelSubset(pixelList({ { 4, 4 } }));
+      s->SetIntegrationPreset("fast");
+      s->SetIntegrationMethod("GaussLegendre4");
+      s->SetIntegrationStep(0.2);
+    });
+  ASSERT_TRUE(refined.errors.empty()) << refined.errors.front();
+  EXPECT_EQ(fieldString(refined.hits, "IntegrationMethod"), "GaussLegendre4");
+  EXPECT_EQ(fieldValue(refined.hits, "IntegrationStep"), 0.2);
+  EXPECT_DOUBLE_EQ(fieldValue(refined.hits, "Tolerances", 0), 1e-6);
+}
+
 TEST(GeodesicSource, ZeroResolutionKeepsTheScenes)
 {
   vtkNew<vtkGeodesicSource> s;
@@ -956,6 +994,12 @@ TEST(GeodesicSourceErrors, UnknownIntegrationMethod)
   expectCleanError([](vtkGeodesicSource* s) { s->SetIntegrationMethod("RungeKuttaNonsense"); },
                    [](vtkGeodesicSource* s) { s->SetIntegrationMethod(""); },
                    { "RungeKuttaNonsense" });
+}
+
+TEST(GeodesicSourceErrors, UnknownPreset)
+{
+  expectCleanError([](vtkGeodesicSource* s) { s->SetIntegrationPreset("fastest"); },
+                   [](vtkGeodesicSource* s) { s->SetIntegrationPreset(nullptr); }, { "fastest" });
 }
 
 TEST(GeodesicSourceErrors, MissingSceneFile)
