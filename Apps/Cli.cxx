@@ -1,0 +1,364 @@
+#include "Cli.h"
+
+#include "Progress.h"
+#include "Propagator.h"
+#include "StoreConnection.h"
+#include "VtkMessages.h"
+#include "vtkGeodesicSource.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace asrt
+{
+namespace cli
+{
+const char* const kExitCodeHelp = R"(Exit codes:
+  0    success
+  1    the work failed (a file could not be written, rendering failed, ...)
+  2    usage error (unknown option, missing or malformed value)
+  3    database error (unreachable, refused, no such frame, frame already stored)
+  4    bad input (scene file, texture, parameters: e.g. camera inside the horizon)
+  130  interrupted with Ctrl-C (nothing half-written is left behind)
+)";
+
+const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's values otherwise):
+  --mass M              the hole's mass (0: flat space)
+  --spin A              Kerr spin a, |a| <= M
+  --charge Q            Reissner-Nordstrom charge, |Q| <= M
+  --camera X,Y,Z        the eye (in M, Kerr-Schild chart, the hole at the origin)
+  --focal X,Y,Z         the point looked at
+  --view-up X,Y,Z       the camera's up direction
+  --view-angle DEG      vertical field of view, in degrees
+  -r, --resolution WxH  image size in pixels, e.g. 200x200
+  --preset NAME         fast, balanced or accurate (Dormand-Prince at rtol 1e-6, 1e-8,
+                        1e-10; measured in bench/REPORT.md)
+  --method NAME         an integrator ("asrt bench" and bench/REPORT.md compare them)
+  --step H              the integrator's step
+)";
+
+const char* const kDatabaseHelp = R"(Database:
+  --db CONNINFO         libpq connection string or URI, e.g. "host=/tmp dbname=asrt"; else
+                        $ASRT_DB, else the standard PG* variables if any is set, else the
+                        private server of "asrt db" (started when needed)
+)";
+
+std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b)
+{
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+Options::Options(const std::vector<OptionSpec>& specs, const std::vector<std::string>& args)
+{
+  bool optionsEnded = false;
+  for (std::size_t k = 0; k < args.size(); ++k)
+  {
+    const std::string& arg = args[k];
+    if (optionsEnded || arg.size() < 2 || arg[0] != '-' ||
+        (arg[1] != '-' && !std::isalpha(static_cast<unsigned char>(arg[1]))))
+    {
+      this->Positional.push_back(arg); // includes negative numbers such as -3
+      continue;
+    }
+    if (arg == "--")
+    {
+      optionsEnded = true;
+      continue;
+    }
+    if (arg == "-h" || arg == "--help")
+    {
+      this->Help = true;
+      continue;
+    }
+    std::string name, value;
+    bool hasValue = false;
+    const OptionSpec* spec = nullptr;
+    if (arg[1] == '-')
+    {
+      const std::size_t eq = arg.find('=');
+      name = arg.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
+      if (eq != std::string::npos)
+      {
+        value = arg.substr(eq + 1);
+        hasValue = true;
+      }
+      for (const OptionSpec& s : specs)
+        if (s.name == name)
+          spec = &s;
+    }
+    else
+    {
+      if (arg.size() != 2)
+        throw UsageError("unknown option '" + arg + "'");
+      for (const OptionSpec& s : specs)
+        if (s.shortName == arg[1])
+          spec = &s;
+      if (spec)
+        name = spec->name;
+    }
+    if (!spec)
+      throw UsageError("unknown option '" + arg + "'");
+    switch (spec->kind)
+    {
+      case OptionSpec::Flag:
+        if (hasValue)
+          throw UsageError("--" + name + " takes no value");
+        break;
+      case OptionSpec::Value:
+        if (!hasValue)
+        {
+          if (k + 1 >= args.size())
+            throw UsageError("--" + name + " needs a value");
+          value = args[++k];
+        }
+        break;
+      case OptionSpec::OptionalValue:
+        break;
+    }
+    this->Values[name] = value;
+  }
+}
+
+std::string Options::get(const std::string& name, const std::string& fallback) const
+{
+  auto it = this->Values.find(name);
+  return it == this->Values.end() ? fallback : it->second;
+}
+
+void Options::expectPositional(std::size_t min, std::size_t max, const char* what) const
+{
+  const std::size_t n = this->Positional.size();
+  if (n < min)
+    throw UsageError(std::string("missing ") + what);
+  if (n > max)
+    throw UsageError("unexpected argument '" + this->Positional[max] + "'");
+}
+
+double parseNumber(const std::string& option, const std::string& text)
+{
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size())
+    throw UsageError(option + ": '" + text + "' is not a number");
+  if (!std::isfinite(v))
+    throw UsageError(option + ": must be finite, got '" + text + "'");
+  return v;
+}
+
+int parsePositiveInteger(const std::string& option, const std::string& text)
+{
+  char* end = nullptr;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || end != text.c_str() + text.size() || v < 1 || v > 1000000000)
+    throw UsageError(option + ": '" + text + "' is not a positive integer");
+  return static_cast<int>(v);
+}
+
+std::vector<double> parseNumbers(const std::string& option, const std::string& text,
+                                 std::size_t count, char separator)
+{
+  std::vector<double> values;
+  std::size_t begin = 0;
+  while (true)
+  {
+    const std::size_t end = text.find(separator, begin);
+    values.push_back(parseNumber(option, text.substr(begin, end - begin)));
+    if (end == std::string::npos)
+      break;
+    begin = end + 1;
+  }
+  if (values.size() != count)
+    throw UsageError(option + ": expected " + std::to_string(count) + " numbers separated by '" +
+                     separator + "', got '" + text + "'");
+  return values;
+}
+
+std::pair<int, int> parseSize(const std::string& option, const std::string& text)
+{
+  const std::size_t x = text.find_first_of("xX");
+  if (x == std::string::npos)
+    throw UsageError(option + ": expected WIDTHxHEIGHT, e.g. 200x200, got '" + text + "'");
+  return { parsePositiveInteger(option, text.substr(0, x)),
+           parsePositiveInteger(option, text.substr(x + 1)) };
+}
+
+std::optional<double> Options::number(const std::string& name) const
+{
+  if (!this->has(name))
+    return std::nullopt;
+  return parseNumber("--" + name, this->get(name));
+}
+
+std::optional<int> Options::positiveInteger(const std::string& name) const
+{
+  if (!this->has(name))
+    return std::nullopt;
+  return parsePositiveInteger("--" + name, this->get(name));
+}
+
+std::optional<std::vector<double>> Options::vector3(const std::string& name) const
+{
+  if (!this->has(name))
+    return std::nullopt;
+  return parseNumbers("--" + name, this->get(name), 3, ',');
+}
+
+std::optional<std::pair<int, int>> Options::size(const std::string& name) const
+{
+  if (!this->has(name))
+    return std::nullopt;
+  return parseSize("--" + name, this->get(name));
+}
+
+const std::vector<OptionSpec>& sceneOverrideSpecs()
+{
+  static const std::vector<OptionSpec> specs = {
+    { "mass", OptionSpec::Value },       { "spin", OptionSpec::Value },
+    { "charge", OptionSpec::Value },     { "camera", OptionSpec::Value },
+    { "focal", OptionSpec::Value },      { "view-up", OptionSpec::Value },
+    { "view-angle", OptionSpec::Value }, { "resolution", OptionSpec::Value, 'r' },
+    { "preset", OptionSpec::Value },     { "method", OptionSpec::Value },
+    { "step", OptionSpec::Value }
+  };
+  return specs;
+}
+
+void applySceneOverrides(const Options& options, vtkGeodesicSource* source)
+{
+  if (auto m = options.number("mass"))
+    source->SetMass(*m);
+  if (auto a = options.number("spin"))
+    source->SetSpin(*a);
+  if (auto q = options.number("charge"))
+    source->SetCharge(*q);
+  if (auto p = options.vector3("camera"))
+    source->SetCameraPosition(p->data());
+  if (auto f = options.vector3("focal"))
+    source->SetFocalPoint(f->data());
+  if (auto u = options.vector3("view-up"))
+    source->SetViewUp(u->data());
+  if (auto angle = options.number("view-angle"))
+    source->SetViewAngle(*angle);
+  if (auto wh = options.size("resolution"))
+    source->SetResolution(wh->first, wh->second);
+  if (options.has("preset"))
+  {
+    const std::string preset = options.get("preset");
+    try
+    {
+      asrt::integratorPreset(preset);
+    }
+    catch (const std::exception& e)
+    {
+      throw UsageError("--preset: " + std::string(e.what()));
+    }
+    source->SetIntegrationPreset(preset.c_str());
+  }
+  if (options.has("method"))
+  {
+    const std::string method = options.get("method");
+    if (method != "auto")
+    {
+      try
+      {
+        asrt::findMethod(method);
+      }
+      catch (const std::exception& e)
+      {
+        throw UsageError("--method: " + std::string(e.what()));
+      }
+    }
+    source->SetIntegrationMethod(method.c_str());
+  }
+  if (auto h = options.number("step"))
+  {
+    if (!(*h > 0.0))
+      throw UsageError("--step: must be positive");
+    source->SetIntegrationStep(*h);
+  }
+}
+
+const std::vector<OptionSpec>& databaseSpecs()
+{
+  static const std::vector<OptionSpec> specs = { { "db", OptionSpec::Value } };
+  return specs;
+}
+
+std::string databaseConnection(const Options& options)
+{
+  std::string given = options.get("db");
+  if (given.empty())
+    if (const char* env = std::getenv("ASRT_DB"))
+      given = env;
+  try
+  {
+    return asrt::storeConnection(given.c_str());
+  }
+  catch (const std::exception& e)
+  {
+    throw DatabaseError(std::string("cannot start the private PostgreSQL server: ") + e.what());
+  }
+}
+
+std::string outputPath(const Options& options, const std::string& scenePath,
+                       const std::string& suffix)
+{
+  namespace fs = vtksys;
+  const std::string name = fs::SystemTools::GetFilenameWithoutLastExtension(scenePath) + suffix;
+  std::string out = options.get("output");
+  if (out.empty())
+    out = name;
+  else if (out.back() == '/' || fs::SystemTools::FileIsDirectory(out))
+    out = (out.back() == '/' ? out : out + "/") + name;
+  const std::string dir = fs::SystemTools::GetFilenamePath(out);
+  if (!dir.empty() && !fs::SystemTools::MakeDirectory(dir).IsSuccess())
+    throw std::runtime_error("cannot create the directory \"" + dir + "\"");
+  return out;
+}
+
+void traceFrame(vtkGeodesicSource* source, const std::string& label, bool quiet)
+{
+  tools::VtkMessageCatcher messages;
+  messages.watchAlgorithm(source);
+  tools::ProgressBar bar(label, quiet ? tools::ProgressBar::Style::Silent
+                                      : tools::ProgressBar::Style::Automatic);
+  bar.watch(source);
+  source->Update();
+  if (tools::interruptRequested())
+    throw Interrupted();
+  if (messages.failed())
+    throw InputError(messages.firstError());
+  bar.finish();
+}
+
+std::string printable(const std::string& text)
+{
+  std::string out;
+  for (unsigned char c : text)
+  {
+    if (c < 0x20 || c == 0x7f)
+    {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
+      out += escaped;
+    }
+    else
+      out += static_cast<char>(c);
+  }
+  return out;
+}
+
+std::string scenesDirectory()
+{
+  if (const char* dir = std::getenv("ASRT_DATA_DIR"))
+    if (*dir)
+      return std::string(dir) + "/scenes";
+  return std::string(ASRT_SOURCE_DATA_DIR) + "/scenes";
+}
+}
+}

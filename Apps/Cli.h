@@ -1,0 +1,147 @@
+// The pieces every `asrt` subcommand shares: exit codes and the errors that choose them, the
+// option parser, the scene overrides and the database connection.
+#ifndef asrt_cli_Cli_h
+#define asrt_cli_Cli_h
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+class vtkGeodesicSource;
+
+namespace asrt
+{
+namespace cli
+{
+/// Exit codes, as `asrt --help` documents them.
+enum ExitCode : int
+{
+  kOk = 0,
+  kFailure = 1,      ///< the work failed: a file could not be written, rendering failed, ...
+  kUsage = 2,        ///< the command line is wrong: unknown option, missing or malformed value
+  kDatabase = 3,     ///< the database: unreachable, refused, no such frame, duplicate frame
+  kBadInput = 4,     ///< the scene or parameters: bad scene file, missing texture, camera inside
+                     ///< the horizon, spin above the mass, ...
+  kInterrupted = 130 ///< stopped by Ctrl-C (nothing half-written is left)
+};
+extern const char* const kExitCodeHelp;
+
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+struct InputError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+struct DatabaseError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+struct Interrupted : std::runtime_error
+{
+  Interrupted()
+    : std::runtime_error("interrupted")
+  {
+  }
+};
+
+/// One option a subcommand accepts.
+struct OptionSpec
+{
+  enum Kind
+  {
+    Flag,         ///< --name
+    Value,        ///< --name VALUE or --name=VALUE (VALUE may start with '-')
+    OptionalValue ///< --name or --name=VALUE
+  };
+  std::string name; ///< without the dashes
+  Kind kind;
+  char shortName = 0;
+};
+
+/// The parsed command line of one subcommand. Throws UsageError for an unknown option, a missing
+/// value, or a value given to a flag.
+class Options
+{
+public:
+  Options(const std::vector<OptionSpec>& specs, const std::vector<std::string>& args);
+
+  bool has(const std::string& name) const { return this->Values.count(name) > 0; }
+  /// The value given last (an OptionalValue given bare has "").
+  std::string get(const std::string& name, const std::string& fallback = std::string()) const;
+  const std::vector<std::string>& positional() const { return this->Positional; }
+  /// Throws UsageError unless there are between min and max positional arguments.
+  void expectPositional(std::size_t min, std::size_t max, const char* what) const;
+  bool help() const { return this->Help; }
+
+  // Typed values of an option, checked: UsageError names the option and shows the value.
+  std::optional<double> number(const std::string& name) const;
+  std::optional<int> positiveInteger(const std::string& name) const;
+  /// "x,y,z"
+  std::optional<std::vector<double>> vector3(const std::string& name) const;
+  /// "WxH"
+  std::optional<std::pair<int, int>> size(const std::string& name) const;
+
+private:
+  std::map<std::string, std::string> Values;
+  std::vector<std::string> Positional;
+  bool Help = false;
+};
+
+/// Parsers for the typed values (also used for the parts of compound values).
+double parseNumber(const std::string& option, const std::string& text);
+int parsePositiveInteger(const std::string& option, const std::string& text);
+std::vector<double> parseNumbers(const std::string& option, const std::string& text,
+                                 std::size_t count, char separator);
+std::pair<int, int> parseSize(const std::string& option, const std::string& text);
+
+/// The options that change the traced scene, and how the help describes them.
+const std::vector<OptionSpec>& sceneOverrideSpecs();
+extern const char* const kSceneOverrideHelp;
+/// Applies the scene overrides given on the command line to the source.
+void applySceneOverrides(const Options& options, vtkGeodesicSource* source);
+
+/// --db, --quiet
+const std::vector<OptionSpec>& databaseSpecs();
+extern const char* const kDatabaseHelp;
+/// The conninfo from --db, else $ASRT_DB, else the PG* variables, else the private embedded
+/// server (started if needed). Throws DatabaseError.
+std::string databaseConnection(const Options& options);
+
+/// Concatenates option lists.
+std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b);
+
+/// Where a subcommand writes: --output as given, or, when it names a directory (an existing one
+/// or one ending in '/') or is absent, that directory (default: the current one) joined with the
+/// scene file's name without its extension and `suffix`. Creates missing parent directories.
+std::string outputPath(const Options& options, const std::string& scenePath,
+                       const std::string& suffix);
+
+/// Updates the source with a progress bar labelled `label` (none when `quiet`). Throws
+/// InputError with the source's message if it failed (everything that fails in the source is the
+/// scene or its parameters), Interrupted on Ctrl-C.
+void traceFrame(vtkGeodesicSource* source, const std::string& label, bool quiet);
+
+/// Text from a database or a file shown on a terminal: control characters escaped, so that a
+/// hostile frame name cannot move the cursor or hide itself.
+std::string printable(const std::string& text);
+
+/// The directory of the scene presets (Data/scenes): $ASRT_DATA_DIR/scenes, else the source
+/// tree this program was built from.
+std::string scenesDirectory();
+
+// The subcommands: each parses its arguments and returns an exit code, or throws one of the
+// errors above (or std::exception: a runtime failure).
+int runTrace(const std::vector<std::string>& args);
+int runList(const std::vector<std::string>& args);
+int runShow(const std::vector<std::string>& args);
+int runBundle(const std::vector<std::string>& args);
+int runBench(const std::vector<std::string>& args);
+int runDb(const std::vector<std::string>& args);
+}
+}
+
+#endif

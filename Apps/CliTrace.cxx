@@ -1,0 +1,333 @@
+// asrt trace: a scene to PNG, VTI and VTP files, one frame or a series (a parameter sweep or an
+// orbit of the camera) with ParaView .pvd collections, optionally stored in PostgreSQL.
+#include "Cli.h"
+
+#include "CameraOrbit.h"
+#include "DataFiles.h"
+#include "PvdCollection.h"
+#include "RayStore.h"
+#include "VtkMessages.h"
+#include "vtkGeodesicPostgreSQLWriter.h"
+#include "vtkGeodesicSource.h"
+
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkNew.h"
+#include "vtkPolyData.h"
+#include "vtkStringArray.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <sstream>
+
+namespace asrt
+{
+namespace cli
+{
+namespace
+{
+const char* const kHelp = R"(Usage: asrt trace SCENE.json [options]
+
+Traces one light ray per pixel, backwards from the eye, through a scene (Data/scenes/ has the
+paper's scenes; Data/scenes/README.md explains the format) and writes
+  PREFIX.png        the picture
+  PREFIX.vti        the frame as VTK image data: Colors, ObjectId, ImageOrder, PathLength and
+                    Termination per pixel
+  PREFIX-hits.vtp   one point per ray where it hit, with the ray's whole record
+  PREFIX-rays.vtp   with --polylines: the rays themselves (Lambda, R, AbsH along them)
+ParaView opens the .vti and .vtp files. A series (--sweep or --orbit) numbers its files
+PREFIX-000.png, PREFIX-001.png, ... and adds PREFIX.pvd, PREFIX-hits.pvd (and PREFIX-rays.pvd),
+which ParaView opens as time series (time = frame number).
+
+Output:
+  -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/')
+                        gets the scene's file name: -o out/ gives out/fig1-cylinders.png
+                        (default: the scene's file name in the current directory)
+  --formats LIST        which of png,vti,vtp to write (default: png,vti,vtp)
+  --polylines[=STRIDE]  also write the rays as polylines, every STRIDE-th pixel in both
+                        directions (default 10)
+  -q, --quiet           no progress on stderr
+
+A series (one of):
+  --sweep P=FROM:TO:N   N frames with P (mass, spin or charge) going from FROM to TO
+  --orbit N[:DEGREES]   N frames with the camera (eye, focal point and up) turned about the
+                        hole's axis (z) through DEGREES (default 360: a closed orbit, whose
+                        last frame is one step short of the first; otherwise from 0 to DEGREES)
+
+Storing (accumulation):
+  --store[=LABEL]       also store every frame in PostgreSQL, with an optional label
+  --replace             replace a stored frame with the same scene and parameters (storing
+                        it again is an error otherwise)
+)";
+
+const char* const kExamples = R"(
+Examples:
+  asrt trace Data/scenes/fig1-cylinders.json -o out/ -r 100x100
+  asrt trace Data/scenes/fig1-cylinders.json --mass 0 --preset fast -o out/flat
+  asrt trace Data/scenes/fig4-mass-start.json --sweep mass=0.1:1.2:12 -o out/ramp
+  asrt trace Data/scenes/kerr-disk.json --orbit 8 -o out/orbit
+  asrt trace Data/scenes/fig5-mass-end.json --store="mass ramp"
+)";
+
+/// One frame of a series: what differs from the scene.
+struct FrameSetting
+{
+  std::string describe; ///< e.g. "mass = 0.4"
+  std::function<void(vtkGeodesicSource*)> apply;
+};
+
+std::string formatNumber(double v)
+{
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+std::vector<FrameSetting> sweepFrames(const std::string& spec)
+{
+  const std::size_t eq = spec.find('=');
+  const std::string parameter = spec.substr(0, eq);
+  if (eq == std::string::npos ||
+      (parameter != "mass" && parameter != "spin" && parameter != "charge"))
+    throw UsageError("--sweep: expected mass=FROM:TO:N (or spin=, charge=), got '" + spec + "'");
+  const std::string range = spec.substr(eq + 1);
+  const std::size_t c1 = range.find(':'), c2 = range.rfind(':');
+  if (c1 == std::string::npos || c1 == c2)
+    throw UsageError("--sweep: expected " + parameter + "=FROM:TO:N, got '" + spec + "'");
+  const double from = parseNumber("--sweep", range.substr(0, c1));
+  const double to = parseNumber("--sweep", range.substr(c1 + 1, c2 - c1 - 1));
+  const int n = parsePositiveInteger("--sweep", range.substr(c2 + 1));
+  std::vector<FrameSetting> frames;
+  for (int k = 0; k < n; ++k)
+  {
+    const double v = n == 1 ? from : from + (to - from) * k / (n - 1);
+    frames.push_back({ parameter + " = " + formatNumber(v), [parameter, v](vtkGeodesicSource* s)
+                       {
+                         if (parameter == "mass")
+                           s->SetMass(v);
+                         else if (parameter == "spin")
+                           s->SetSpin(v);
+                         else
+                           s->SetCharge(v);
+                       } });
+  }
+  return frames;
+}
+
+std::vector<FrameSetting> orbitFrames(const std::string& spec, const std::string& scenePath,
+                                      const Options& options)
+{
+  const std::size_t colon = spec.find(':');
+  const int n = parsePositiveInteger("--orbit", spec.substr(0, colon));
+  const double degrees =
+    colon == std::string::npos ? 360.0 : parseNumber("--orbit", spec.substr(colon + 1));
+  // The camera to turn: the scene's, with the command line's overrides.
+  tools::CameraPose pose = tools::sceneCamera(scenePath);
+  auto override = [&options](const char* name, Vec3& v)
+  {
+    if (auto given = options.vector3(name))
+      v = Vec3((*given)[0], (*given)[1], (*given)[2]);
+  };
+  override("camera", pose.position);
+  override("focal", pose.focalPoint);
+  override("view-up", pose.viewUp);
+  std::vector<FrameSetting> frames;
+  for (int k = 0; k < n; ++k)
+  {
+    const double angle = tools::orbitAngle(k, n, degrees);
+    const tools::CameraPose turned = tools::turnedAboutZ(pose, angle);
+    frames.push_back({ "orbit " + formatNumber(angle) + " deg",
+                       [turned](vtkGeodesicSource* s) { tools::setCamera(s, turned); } });
+  }
+  return frames;
+}
+
+double fieldValue(vtkPolyData* hits, const char* name, int component = 0)
+{
+  vtkDataArray* a = hits->GetFieldData()->GetArray(name);
+  return a ? a->GetComponent(0, component) : std::nan("");
+}
+
+std::string fieldString(vtkPolyData* hits, const char* name)
+{
+  auto* a = vtkStringArray::SafeDownCast(hits->GetFieldData()->GetAbstractArray(name));
+  return a && a->GetNumberOfValues() > 0 ? a->GetValue(0) : std::string();
+}
+
+/// Which files to write.
+struct Formats
+{
+  bool png = false, vti = false, vtp = false;
+};
+
+Formats parseFormats(const std::string& list)
+{
+  Formats f;
+  std::stringstream items(list);
+  std::string item;
+  while (std::getline(items, item, ','))
+  {
+    if (item == "png")
+      f.png = true;
+    else if (item == "vti")
+      f.vti = true;
+    else if (item == "vtp")
+      f.vtp = true;
+    else
+      throw UsageError("--formats: unknown format '" + item + "' (png, vti, vtp)");
+  }
+  return f;
+}
+
+vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::string& label,
+                     bool replace)
+{
+  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+  tools::VtkMessageCatcher messages;
+  messages.watchAlgorithm(writer);
+  writer->SetConnectionString(conninfo.c_str());
+  writer->SetLabel(label.c_str());
+  writer->SetReplaceExisting(replace);
+  writer->SetInputData(hits);
+  writer->Write();
+  if (messages.failed())
+  {
+    std::string why = messages.firstError();
+    if (why.find("duplicate frame") != std::string::npos)
+      why += " (add --replace to store it again)";
+    throw DatabaseError(why);
+  }
+  return writer->GetFrameId();
+}
+}
+
+int runTrace(const std::vector<std::string>& args)
+{
+  const Options options(std::vector<OptionSpec>{ { "output", OptionSpec::Value, 'o' },
+                                                 { "formats", OptionSpec::Value },
+                                                 { "polylines", OptionSpec::OptionalValue },
+                                                 { "quiet", OptionSpec::Flag, 'q' },
+                                                 { "sweep", OptionSpec::Value },
+                                                 { "orbit", OptionSpec::Value },
+                                                 { "store", OptionSpec::OptionalValue },
+                                                 { "replace", OptionSpec::Flag } } +
+                          sceneOverrideSpecs() + databaseSpecs(),
+                        args);
+  if (options.help())
+  {
+    std::printf("%s\n%s\n%s%s\n%s", kHelp, kDatabaseHelp, kSceneOverrideHelp, kExamples,
+                kExitCodeHelp);
+    return kOk;
+  }
+  options.expectPositional(1, 1, "the scene file (asrt trace SCENE.json)");
+  const std::string scenePath = options.positional()[0];
+  const Formats formats = parseFormats(options.get("formats", "png,vti,vtp"));
+  const bool polylines = options.has("polylines");
+  const int stride = options.get("polylines").empty()
+                       ? 10
+                       : parsePositiveInteger("--polylines", options.get("polylines"));
+  const bool quiet = options.has("quiet");
+  if (options.has("sweep") && options.has("orbit"))
+    throw UsageError("--sweep and --orbit cannot be combined");
+  if (options.has("replace") && !options.has("store"))
+    throw UsageError("--replace only makes sense with --store");
+
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scenePath.c_str());
+  applySceneOverrides(options, source);
+  source->SetGeneratePolylines(polylines);
+  source->SetPolylineStride(stride);
+
+  std::vector<FrameSetting> frames;
+  if (options.has("sweep"))
+    frames = sweepFrames(options.get("sweep"));
+  else if (options.has("orbit"))
+    frames = orbitFrames(options.get("orbit"), scenePath, options);
+  const bool series = !frames.empty();
+  if (!series)
+    frames.push_back({ std::string(), [](vtkGeodesicSource*) {} });
+
+  // Connect before tracing: an unreachable database should not cost a trace first.
+  std::string conninfo;
+  if (options.has("store"))
+  {
+    conninfo = databaseConnection(options);
+    RayStore(conninfo).migrate();
+  }
+
+  const std::string prefix = outputPath(options, scenePath, "");
+  const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
+  tools::PvdCollection images, hitSeries, raySeries;
+  for (std::size_t k = 0; k < frames.size(); ++k)
+  {
+    frames[k].apply(source);
+    char number[32];
+    std::snprintf(number, sizeof number, "-%03zu", k);
+    const std::string base = series ? prefix + number : prefix;
+    const std::string label =
+      series ? name + " [" + std::to_string(k + 1) + "/" + std::to_string(frames.size()) + "]"
+             : name;
+    traceFrame(source, "trace " + label, quiet);
+
+    vtkImageData* image = source->GetImageOutput();
+    vtkPolyData* hits = source->GetHitsOutput();
+    std::vector<std::string> written;
+    if (formats.png)
+    {
+      tools::writePng(image, base + ".png");
+      written.push_back(base + ".png");
+    }
+    if (formats.vti)
+    {
+      tools::writeVti(image, base + ".vti");
+      images.add(static_cast<double>(k), base + ".vti");
+      written.push_back(base + ".vti");
+    }
+    if (formats.vtp)
+    {
+      tools::writeVtp(hits, base + "-hits.vtp");
+      hitSeries.add(static_cast<double>(k), base + "-hits.vtp");
+      written.push_back(base + "-hits.vtp");
+    }
+    if (polylines)
+    {
+      tools::writeVtp(source->GetPolylinesOutput(), base + "-rays.vtp");
+      raySeries.add(static_cast<double>(k), base + "-rays.vtp");
+      written.push_back(base + "-rays.vtp");
+    }
+    std::printf("%s%s%s: %gx%g, M = %g, a = %g, %s\n", name.c_str(), series ? " " : "",
+                frames[k].describe.c_str(), fieldValue(hits, "Resolution", 0),
+                fieldValue(hits, "Resolution", 1), fieldValue(hits, "Mass"),
+                fieldValue(hits, "Spin"), fieldString(hits, "IntegrationMethod").c_str());
+    for (const std::string& file : written)
+      std::printf("  wrote %s\n", file.c_str());
+    if (options.has("store"))
+    {
+      const vtkIdType id = storeFrame(hits, conninfo, options.get("store"), options.has("replace"));
+      std::printf("  stored as frame %lld\n", static_cast<long long>(id));
+    }
+    std::fflush(stdout);
+  }
+  if (series)
+  {
+    const std::pair<tools::PvdCollection*, std::string> collections[] = {
+      { &images, prefix + ".pvd" },
+      { &hitSeries, prefix + "-hits.pvd" },
+      { &raySeries, prefix + "-rays.pvd" }
+    };
+    for (const auto& [collection, path] : collections)
+      if (collection->size() > 0)
+      {
+        collection->write(path);
+        std::printf("  wrote %s (ParaView time series of %zu frames)\n", path.c_str(),
+                    collection->size());
+      }
+  }
+  return kOk;
+}
+}
+}

@@ -1,0 +1,170 @@
+// Checks files that the examples and the asrt program wrote, with VTK's readers and parsers (and
+// the Ogg inspector): each exists, reads back, and holds what it should.
+// Usage: asrtCheckOutputs SPEC...   where SPEC is
+//   PATH.png[=WxH]  a PNG of that size with more than one colour (not a blank picture)
+//   PATH.vti[=WxH]  VTK image data of that size with an RGB "Colors" array
+//   PATH.vtp[=N]    VTK poly data with points (N of them)
+//   PATH.pvd[=N]    a ParaView collection of N datasets whose files all exist
+//   PATH.ogv[=N]    an Ogg Theora movie (well-formed pages) of N frames
+//   !PATH           no such file (nothing left behind)
+//   ~SPEC           as SPEC, but an image may be a single colour (e.g. a selection of rays)
+#include "OggTheoraFile.h"
+
+#include "vtkImageData.h"
+#include "vtkNew.h"
+#include "vtkPNGReader.h"
+#include "vtkPointData.h"
+#include "vtkPolyData.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkXMLDataElement.h"
+#include "vtkXMLDataParser.h"
+#include "vtkXMLImageDataReader.h"
+#include "vtkXMLPolyDataReader.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <cstdio>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace
+{
+using vtksys::SystemTools;
+
+void require(bool ok, const std::string& path, const std::string& what)
+{
+  if (!ok)
+    throw std::runtime_error(path + ": " + what);
+}
+
+std::string size(vtkImageData* image)
+{
+  int dims[3];
+  image->GetDimensions(dims);
+  return std::to_string(dims[0]) + "x" + std::to_string(dims[1]);
+}
+
+bool allowBlank = false;
+
+std::string checkImage(vtkImageData* image, const std::string& path, const std::string& expect,
+                       const char* array)
+{
+  require(image && image->GetNumberOfPoints() > 0, path, "no pixels");
+  require(expect.empty() || size(image) == expect, path,
+          "is " + size(image) + ", expected " + expect);
+  auto* colors = vtkUnsignedCharArray::SafeDownCast(array ? image->GetPointData()->GetArray(array)
+                                                          : image->GetPointData()->GetScalars());
+  require(colors && colors->GetNumberOfComponents() >= 3, path, "has no RGB colours");
+  std::set<long> distinct;
+  for (vtkIdType k = 0; k < colors->GetNumberOfTuples() && distinct.size() < 2; ++k)
+    distinct.insert(colors->GetTypedComponent(k, 0) << 16 | colors->GetTypedComponent(k, 1) << 8 |
+                    colors->GetTypedComponent(k, 2));
+  require(allowBlank || distinct.size() >= 2, path, "is a single colour");
+  return size(image);
+}
+
+std::string check(std::string spec)
+{
+  allowBlank = !spec.empty() && spec[0] == '~';
+  if (allowBlank)
+    spec = spec.substr(1);
+  if (!spec.empty() && spec[0] == '!')
+  {
+    require(!SystemTools::FileExists(spec.substr(1)), spec.substr(1), "should not exist");
+    return "absent";
+  }
+  const std::size_t eq = spec.rfind('=');
+  const std::string path = spec.substr(0, eq);
+  const std::string expect = eq == std::string::npos ? "" : spec.substr(eq + 1);
+  require(SystemTools::FileExists(path, true), path, "missing");
+  const std::string ext = SystemTools::GetFilenameLastExtension(path);
+  if (ext == ".png")
+  {
+    vtkNew<vtkPNGReader> reader;
+    require(reader->CanReadFile(path.c_str()) != 0, path, "is not a PNG");
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    return "PNG " + checkImage(reader->GetOutput(), path, expect, nullptr);
+  }
+  if (ext == ".vti")
+  {
+    vtkNew<vtkXMLImageDataReader> reader;
+    require(reader->CanReadFile(path.c_str()) != 0, path, "is not VTK XML image data");
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    return "VTI " + checkImage(reader->GetOutput(), path, expect, "Colors");
+  }
+  if (ext == ".vtp")
+  {
+    vtkNew<vtkXMLPolyDataReader> reader;
+    require(reader->CanReadFile(path.c_str()) != 0, path, "is not VTK XML poly data");
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    const vtkIdType n = reader->GetOutput()->GetNumberOfPoints();
+    require(n > 0, path, "has no points");
+    require(expect.empty() || std::to_string(n) == expect, path,
+            "has " + std::to_string(n) + " points, expected " + expect);
+    return "VTP " + std::to_string(n) + " points";
+  }
+  if (ext == ".pvd")
+  {
+    vtkNew<vtkXMLDataParser> parser;
+    parser->SetFileName(path.c_str());
+    require(parser->Parse() != 0, path, "is not XML");
+    vtkXMLDataElement* root = parser->GetRootElement();
+    require(root && std::string(root->GetName()) == "VTKFile" && root->GetAttribute("type") &&
+              std::string(root->GetAttribute("type")) == "Collection",
+            path, "is not a VTKFile of type Collection");
+    vtkXMLDataElement* collection = root->FindNestedElementWithName("Collection");
+    require(collection != nullptr, path, "has no Collection");
+    const int n = collection->GetNumberOfNestedElements();
+    require(expect.empty() || std::to_string(n) == expect, path,
+            "lists " + std::to_string(n) + " datasets, expected " + expect);
+    const std::string dir = SystemTools::GetFilenamePath(path);
+    for (int k = 0; k < n; ++k)
+    {
+      vtkXMLDataElement* e = collection->GetNestedElement(k);
+      const char* file = e->GetAttribute("file");
+      double t;
+      require(std::string(e->GetName()) == "DataSet" && file &&
+                e->GetScalarAttribute("timestep", t),
+              path, "entry " + std::to_string(k) + " is not a DataSet with timestep and file");
+      const std::string listed =
+        SystemTools::FileIsFullPath(file) ? file : (dir.empty() ? "." : dir) + "/" + file;
+      require(SystemTools::FileExists(listed, true), path, "lists a missing file " + listed);
+    }
+    return "PVD " + std::to_string(n) + " datasets";
+  }
+  if (ext == ".ogv")
+  {
+    const asrt::testing::OggTheoraInfo info = asrt::testing::inspectOggTheora(path);
+    require(info.error.empty(), path, info.error);
+    require(expect.empty() || std::to_string(info.frames) == expect, path,
+            "has " + std::to_string(info.frames) + " frames, expected " + expect);
+    return "Ogg Theora " + std::to_string(info.width) + "x" + std::to_string(info.height) + ", " +
+           std::to_string(info.frames) + " frames";
+  }
+  throw std::runtime_error(path + ": no check for files of type '" + ext + "'");
+}
+}
+
+int main(int argc, char* argv[])
+{
+  if (argc < 2)
+  {
+    std::fprintf(stderr, "usage: %s SPEC...\n", argv[0]);
+    return 2;
+  }
+  try
+  {
+    for (int k = 1; k < argc; ++k)
+      std::printf("ok %s: %s\n", argv[k], check(argv[k]).c_str());
+  }
+  catch (const std::exception& e)
+  {
+    std::printf("FAILED %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,486 @@
+// The helpers behind the asrt program and the examples (Apps/Tools): .pvd collections read back by
+// VTK's XML parser, images and datasets read back by VTK's readers, movies checked against the
+// Ogg and Theora specifications, VTK error messages, the camera orbit, ray fans, the deflection
+// measurement against Darwin's formula, and the progress display.
+#include "AtomicFile.h"
+#include "CameraOrbit.h"
+#include "DataFiles.h"
+#include "Measurements.h"
+#include "MovieWriter.h"
+#include "OggTheoraFile.h"
+#include "Progress.h"
+#include "PvdCollection.h"
+#include "RayBundleView.h"
+#include "VtkMessages.h"
+#include "vtkGeodesicSource.h"
+
+#include "vtkDirectory.h"
+#include "vtkDoubleArray.h"
+#include "vtkImageData.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkPNGReader.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkXMLDataElement.h"
+#include "vtkXMLDataParser.h"
+#include "vtkXMLImageDataReader.h"
+#include "vtkXMLPolyDataReader.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+using namespace asrt::tools;
+using vtksys::SystemTools;
+
+namespace
+{
+/// A fresh, empty directory for one test.
+std::string scratch(const std::string& name)
+{
+  const std::string dir = std::string(ASRT_TEST_OUTPUT_DIR) + "/" + name;
+  SystemTools::RemoveADirectory(dir);
+  SystemTools::MakeDirectory(dir);
+  return dir;
+}
+
+std::vector<std::string> filesIn(const std::string& dir)
+{
+  vtkNew<vtkDirectory> d;
+  std::vector<std::string> names;
+  if (d->Open(dir.c_str()))
+    for (vtkIdType k = 0; k < d->GetNumberOfFiles(); ++k)
+      if (std::string(d->GetFile(k)) != "." && std::string(d->GetFile(k)) != "..")
+        names.emplace_back(d->GetFile(k));
+  return names;
+}
+
+/// A width × height RGB image whose pixel (i, j) is (i, j, i + j) scaled, so that every pixel
+/// differs and a flipped or shifted copy is detected.
+vtkSmartPointer<vtkImageData> gradient(int width, int height, int shift = 0)
+{
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->SetDimensions(width, height, 1);
+  vtkNew<vtkUnsignedCharArray> colors;
+  colors->SetName("Colors");
+  colors->SetNumberOfComponents(3);
+  colors->SetNumberOfTuples(static_cast<vtkIdType>(width) * height);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      const unsigned char rgb[3] = { static_cast<unsigned char>((7 * i + shift) % 256),
+                                     static_cast<unsigned char>((11 * j) % 256),
+                                     static_cast<unsigned char>((3 * i + 5 * j) % 256) };
+      colors->SetTypedTuple(static_cast<vtkIdType>(j) * width + i, rgb);
+    }
+  image->GetPointData()->AddArray(colors);
+  vtkNew<vtkDoubleArray> values;
+  values->SetName("Values");
+  values->SetNumberOfTuples(static_cast<vtkIdType>(width) * height);
+  for (vtkIdType k = 0; k < values->GetNumberOfTuples(); ++k)
+    values->SetValue(k, 0.1 * k);
+  image->GetPointData()->AddArray(values);
+  return image;
+}
+
+std::string scenePath(const char* name)
+{
+  return std::string(ASRT_SOURCE_DIR) + "/Data/scenes/" + name;
+}
+}
+
+// ---------------------------------------------------------------------------------------------
+// .pvd collections
+
+TEST(PvdCollection, VtkXmlParserReadsTheSeriesBack)
+{
+  const std::string dir = scratch("pvd");
+  PvdCollection pvd;
+  // Time steps that only a round-tripping format keeps exactly.
+  const double steps[] = { 0.1, 2.0 / 3.0, 1e-300 };
+  pvd.add(steps[0], dir + "/frame-000.vti");
+  pvd.add(steps[1], dir + "/sub/frame & \"001\".vti", 1);
+  pvd.add(steps[2], "/elsewhere/frame-002.vti");
+  pvd.write(dir + "/series.pvd");
+
+  vtkNew<vtkXMLDataParser> parser;
+  parser->SetFileName((dir + "/series.pvd").c_str());
+  ASSERT_TRUE(parser->Parse());
+  vtkXMLDataElement* root = parser->GetRootElement();
+  EXPECT_STREQ(root->GetName(), "VTKFile");
+  EXPECT_STREQ(root->GetAttribute("type"), "Collection");
+  vtkXMLDataElement* collection = root->FindNestedElementWithName("Collection");
+  ASSERT_NE(collection, nullptr);
+  ASSERT_EQ(collection->GetNumberOfNestedElements(), 3);
+  const char* files[] = { "frame-000.vti", "sub/frame & \"001\".vti", "/elsewhere/frame-002.vti" };
+  for (int k = 0; k < 3; ++k)
+  {
+    vtkXMLDataElement* e = collection->GetNestedElement(k);
+    EXPECT_STREQ(e->GetName(), "DataSet");
+    double t = -1;
+    ASSERT_TRUE(e->GetScalarAttribute("timestep", t));
+    EXPECT_EQ(t, steps[k]) << "time step " << k << " did not round-trip";
+    EXPECT_STREQ(e->GetAttribute("file"), files[k]) << "files inside the .pvd's folder are "
+                                                       "relative, others keep their path";
+  }
+  int part = -1;
+  collection->GetNestedElement(1)->GetScalarAttribute("part", part);
+  EXPECT_EQ(part, 1);
+  EXPECT_EQ(filesIn(dir).size(), 1u) << "a temporary file was left next to the .pvd";
+}
+
+TEST(PvdCollection, UnwritablePlaceThrowsAndLeavesNothing)
+{
+  const std::string dir = scratch("pvd-unwritable");
+  PvdCollection pvd;
+  pvd.add(0, dir + "/a.vti");
+  EXPECT_THROW(pvd.write(dir + "/missing/series.pvd"), std::runtime_error);
+  EXPECT_TRUE(filesIn(dir).empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Images and datasets
+
+TEST(DataFiles, PngReadsBackPixelForPixel)
+{
+  const std::string dir = scratch("png");
+  vtkSmartPointer<vtkImageData> image = gradient(7, 5);
+  image->GetPointData()->SetActiveScalars("Values"); // not the colours: writePng picks "Colors"
+  writePng(image, dir + "/g.png");
+  EXPECT_STREQ(image->GetPointData()->GetScalars()->GetName(), "Values")
+    << "writing changed the caller's active scalars";
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName((dir + "/g.png").c_str());
+  reader->Update();
+  int dims[3];
+  reader->GetOutput()->GetDimensions(dims);
+  ASSERT_EQ(dims[0], 7);
+  ASSERT_EQ(dims[1], 5);
+  vtkDataArray* read = reader->GetOutput()->GetPointData()->GetScalars();
+  vtkDataArray* written = image->GetPointData()->GetArray("Colors");
+  for (vtkIdType k = 0; k < 35; ++k)
+    for (int c = 0; c < 3; ++c)
+      ASSERT_EQ(read->GetComponent(k, c), written->GetComponent(k, c)) << "pixel " << k;
+}
+
+TEST(DataFiles, VtiAndVtpKeepEveryArray)
+{
+  const std::string dir = scratch("xml");
+  vtkSmartPointer<vtkImageData> image = gradient(6, 4);
+  writeVti(image, dir + "/g.vti");
+  vtkNew<vtkXMLImageDataReader> vti;
+  vti->SetFileName((dir + "/g.vti").c_str());
+  vti->Update();
+  vtkDataArray* values = vti->GetOutput()->GetPointData()->GetArray("Values");
+  ASSERT_NE(values, nullptr);
+  for (vtkIdType k = 0; k < 24; ++k)
+    EXPECT_EQ(values->GetTuple1(k), 0.1 * k);
+  ASSERT_NE(vti->GetOutput()->GetPointData()->GetArray("Colors"), nullptr);
+
+  vtkNew<vtkPolyData> points;
+  vtkNew<vtkPoints> xyz;
+  xyz->SetDataTypeToDouble(); // as the source's: doubles must survive the file
+  xyz->InsertNextPoint(1, 2, 3);
+  xyz->InsertNextPoint(-4, 5.5, 1e-17);
+  points->SetPoints(xyz);
+  writeVtp(points, dir + "/p.vtp");
+  vtkNew<vtkXMLPolyDataReader> vtp;
+  vtp->SetFileName((dir + "/p.vtp").c_str());
+  vtp->Update();
+  ASSERT_EQ(vtp->GetOutput()->GetNumberOfPoints(), 2);
+  double p[3];
+  vtp->GetOutput()->GetPoint(1, p);
+  EXPECT_EQ(p[2], 1e-17);
+}
+
+TEST(DataFiles, FailuresThrowNameTheFileAndLeaveNothing)
+{
+  const std::string dir = scratch("png-fail");
+  try
+  {
+    writePng(gradient(4, 4), dir + "/missing/g.png");
+    FAIL() << "no error for a missing directory";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("missing/g.png"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("ERROR: In"), std::string::npos) << e.what();
+  }
+  vtkNew<vtkImageData> grey;
+  grey->SetDimensions(2, 2, 1);
+  grey->AllocateScalars(VTK_DOUBLE, 1);
+  EXPECT_THROW(writePng(grey, dir + "/grey.png"), std::runtime_error);
+  EXPECT_THROW(writeVti(nullptr, dir + "/none.vti"), std::runtime_error);
+  EXPECT_TRUE(filesIn(dir).empty());
+}
+
+TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary)
+{
+  const std::string dir = scratch("atomic");
+  writeFileAtomically(dir + "/f.txt", "old");
+  EXPECT_THROW(writeAtomically(dir + "/f.txt",
+                               [](const std::string& tmp)
+                               {
+                                 std::ofstream(tmp) << "half";
+                                 throw std::runtime_error("interrupted");
+                               }),
+               std::runtime_error);
+  std::ifstream in(dir + "/f.txt");
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "old");
+  EXPECT_EQ(filesIn(dir).size(), 1u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Movies
+
+TEST(MovieWriter, OggTheoraHasEveryFrameAtTheRightSizeAndRate)
+{
+  const std::string dir = scratch("ogv");
+  {
+    MovieWriter movie(dir + "/m.ogv", 5);
+    for (int k = 0; k < 6; ++k)
+      movie.addFrame(gradient(50, 30, 10 * k)); // odd sizes: Theora pads to 16, keeps the picture
+    EXPECT_EQ(movie.frameCount(), 6);
+    EXPECT_TRUE(filesIn(dir).size() <= 1u);
+    movie.close();
+  }
+  const asrt::testing::OggTheoraInfo info = asrt::testing::inspectOggTheora(dir + "/m.ogv");
+  ASSERT_EQ(info.error, "");
+  EXPECT_EQ(info.width, 50);
+  EXPECT_EQ(info.height, 30);
+  EXPECT_EQ(info.rateNum, 5u * info.rateDen);
+  EXPECT_EQ(info.frames, 6);
+  EXPECT_EQ(filesIn(dir), std::vector<std::string>{ "m.ogv" });
+}
+
+TEST(MovieWriter, TheInspectorRejectsACorruptedMovie)
+{
+  // The check above could pass vacuously if the inspector accepted anything.
+  const std::string dir = scratch("ogv-corrupt");
+  {
+    MovieWriter movie(dir + "/m.ogv", 5);
+    for (int k = 0; k < 3; ++k)
+      movie.addFrame(gradient(32, 32, k));
+    movie.close();
+  }
+  std::fstream f(dir + "/m.ogv", std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(200);
+  f.put('\x5a');
+  f.close();
+  EXPECT_NE(asrt::testing::inspectOggTheora(dir + "/m.ogv").error, "");
+}
+
+TEST(MovieWriter, BadUseThrowsAndLeavesNothing)
+{
+  const std::string dir = scratch("ogv-bad");
+  EXPECT_THROW(MovieWriter(dir + "/m.avi"), std::invalid_argument);
+  EXPECT_THROW(MovieWriter(dir + "/m.ogv", 0), std::invalid_argument);
+  {
+    MovieWriter movie(dir + "/m.ogv");
+    movie.addFrame(gradient(16, 16));
+    EXPECT_THROW(movie.addFrame(gradient(18, 16)), std::runtime_error);
+    vtkNew<vtkImageData> grey;
+    grey->SetDimensions(16, 16, 1);
+    grey->AllocateScalars(VTK_FLOAT, 1);
+    EXPECT_THROW(movie.addFrame(grey), std::runtime_error);
+    // Destroyed without close(): abandoned.
+  }
+  {
+    MovieWriter empty(dir + "/empty.ogv");
+    EXPECT_THROW(empty.close(), std::runtime_error);
+  }
+  EXPECT_TRUE(filesIn(dir).empty());
+}
+
+TEST(MovieWriter, Mp4ThroughFfmpeg)
+{
+  if (!MovieWriter::mp4Available())
+    GTEST_SKIP() << "ffmpeg is not installed: MP4 unavailable (Ogg Theora is always there)";
+  const std::string dir = scratch("mp4");
+  {
+    MovieWriter movie(dir + "/m.mp4", 10);
+    for (int k = 0; k < 5; ++k)
+      movie.addFrame(gradient(33, 21, k));
+    movie.close();
+  }
+  std::ifstream in(dir + "/m.mp4", std::ios::binary);
+  char head[8] = {};
+  in.read(head, 8);
+  EXPECT_EQ(std::string(head + 4, 4), "ftyp") << "not an ISO media file";
+  EXPECT_EQ(filesIn(dir), std::vector<std::string>{ "m.mp4" });
+}
+
+// ---------------------------------------------------------------------------------------------
+// VTK's error messages
+
+TEST(VtkMessages, TheSourcesErrorArrivesAsItsMessageAlone)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scenePath("no-such-scene.json").c_str());
+  VtkMessageCatcher messages;
+  messages.watchAlgorithm(source);
+  source->Update();
+  ASSERT_TRUE(messages.failed());
+  const std::string first = messages.firstError();
+  EXPECT_NE(first.find("no-such-scene.json"), std::string::npos) << first;
+  EXPECT_EQ(first.find("ERROR: In"), std::string::npos) << first;
+  EXPECT_EQ(first.find("vtkGeodesicSource ("), std::string::npos) << first;
+  EXPECT_EQ(first.find('\n'), std::string::npos) << first;
+}
+
+TEST(VtkMessages, PlainMessageOfEachFraming)
+{
+  EXPECT_EQ(plainVtkMessage("ERROR: In /x/y.cxx, line 12\nvtkFoo (0x1234): it broke\n\n"),
+            "it broke");
+  EXPECT_EQ(plainVtkMessage("ERROR: In /x/e.cxx, line 9\nvtkCompositeDataPipeline (0x9): "
+                            "Algorithm vtkFoo(0x1) returned failure for request: vtkInformation "
+                            "(0x2)\n  Debug: Off\n"),
+            "Algorithm vtkFoo(0x1) returned failure for request: vtkInformation (0x2)");
+  EXPECT_EQ(plainVtkMessage("plain text"), "plain text");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The camera orbit and ray fans
+
+TEST(CameraOrbit, SceneCameraIsTheDocumentedOne)
+{
+  // Data/scenes/README.md: Fig. 1's static camera at (0, −30, 8) looking at the hole.
+  const CameraPose fig1 = sceneCamera(scenePath("fig1-cylinders.json"));
+  EXPECT_EQ(fig1.position, asrt::Vec3(0, -30, 8));
+  EXPECT_EQ(fig1.focalPoint, asrt::Vec3(0, 0, 0));
+  EXPECT_THROW(sceneCamera(scenePath("no-such-scene.json")), asrt::InvalidParameter);
+}
+
+TEST(CameraOrbit, QuarterTurnsAboutZ)
+{
+  const CameraPose start{ asrt::Vec3(0, -30, 8), asrt::Vec3(1, 0, 0), asrt::Vec3(0, 0, 1) };
+  const CameraPose q = turnedAboutZ(start, 90);
+  EXPECT_NEAR((q.position - asrt::Vec3(30, 0, 8)).norm(), 0, 1e-12);
+  EXPECT_NEAR((q.focalPoint - asrt::Vec3(0, 1, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((q.viewUp - asrt::Vec3(0, 0, 1)).norm(), 0, 1e-12);
+  const CameraPose back = turnedAboutZ(turnedAboutZ(start, 123.4), -123.4);
+  EXPECT_NEAR((back.position - start.position).norm(), 0, 1e-12);
+  EXPECT_DOUBLE_EQ(orbitAngle(3, 4, 360), 270); // a closed orbit does not repeat frame 0
+  EXPECT_DOUBLE_EQ(orbitAngle(4, 5, 90), 90);   // a partial one ends where asked
+  EXPECT_DOUBLE_EQ(orbitAngle(0, 1, 90), 0);
+}
+
+TEST(RayBundle, CrossPixelsAreTheMiddleRowAndColumnOnce)
+{
+  vtkSmartPointer<vtkIntArray> pixels = crossPixels(41, 31, 2);
+  std::set<std::pair<int, int>> seen;
+  for (vtkIdType k = 0; k < pixels->GetNumberOfTuples(); ++k)
+  {
+    const int i = pixels->GetTypedComponent(k, 0), j = pixels->GetTypedComponent(k, 1);
+    EXPECT_TRUE(i == 20 || j == 15) << i << ", " << j;
+    EXPECT_TRUE(seen.insert({ i, j }).second) << "pixel " << i << ", " << j << " twice";
+  }
+  EXPECT_EQ(seen.size(), 21u + 16u); // i = 0, 2, ..., 40 on row 15; j = 0, 2, ..., 30 on column 20
+  EXPECT_EQ(rayColoringFromName("AbsH"), RayColoring::AbsH);
+  EXPECT_THROW(rayColoringFromName("colour"), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The deflection measurement: against Darwin's exact formula, so that `asrt bench` and the
+// deflection example report the truth.
+
+TEST(Measurements, DeflectionConvergesToDarwinsFormula)
+{
+  asrt::IntegratorConfig loose = asrt::integratorPreset("fast");
+  asrt::IntegratorConfig tight = asrt::integratorPreset("accurate");
+  for (double b : { 6.0, 10.0, 100.0 })
+  {
+    const Deflection coarse = schwarzschildDeflection(loose, b);
+    const Deflection fine = schwarzschildDeflection(tight, b);
+    EXPECT_EQ(fine.trace.termination, asrt::Termination::Escaped);
+    EXPECT_LT(fine.relativeError(), 1e-8) << "b = " << b;
+    EXPECT_LT(fine.relativeError(), coarse.relativeError()) << "b = " << b;
+    // Weak field: 4M/b to leading order.
+    if (b == 100.0)
+    {
+      EXPECT_NEAR(fine.measured, 4.0 / b, 0.05 * 4.0 / b);
+    }
+  }
+  EXPECT_THROW(schwarzschildDeflection(tight, 5.0), asrt::InvalidParameter);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Progress on stderr
+
+namespace
+{
+/// Everything written to stderr while `f` runs.
+template<class F>
+std::string stderrOf(F&& f)
+{
+  std::fflush(stderr);
+  char name[] = "/tmp/asrt-stderr-XXXXXX";
+  const int fd = mkstemp(name);
+  const int saved = dup(STDERR_FILENO);
+  dup2(fd, STDERR_FILENO);
+  f();
+  std::fflush(stderr);
+  dup2(saved, STDERR_FILENO);
+  close(saved);
+  close(fd);
+  std::ifstream in(name);
+  std::ostringstream os;
+  os << in.rdbuf();
+  std::remove(name);
+  return os.str();
+}
+}
+
+TEST(Progress, LinesAreSparseAndEndWithTheTime)
+{
+  const std::string text = stderrOf(
+    []
+    {
+      ProgressBar bar("work", ProgressBar::Style::Lines);
+      for (int k = 0; k <= 1000; ++k)
+        bar.update(k / 1000.0);
+      bar.finish("note");
+    });
+  int lines = 0;
+  for (char c : text)
+    lines += c == '\n';
+  EXPECT_EQ(lines, 4) << text; // 25 %, 50 %, 75 %, done
+  EXPECT_NE(text.find("work: 50%"), std::string::npos) << text;
+  EXPECT_NE(text.find("work: done in"), std::string::npos) << text;
+  EXPECT_NE(text.find("note"), std::string::npos) << text;
+  EXPECT_EQ(text.find('\r'), std::string::npos) << "carriage returns outside a terminal";
+}
+
+TEST(Progress, BarRedrawsInPlaceAndSilentSaysNothing)
+{
+  const std::string bar = stderrOf(
+    []
+    {
+      ProgressBar b("work", ProgressBar::Style::Bar);
+      b.update(0.5);
+      b.finish();
+    });
+  EXPECT_NE(bar.find("\rwork ["), std::string::npos) << bar;
+  EXPECT_NE(bar.find("100%"), std::string::npos) << bar;
+  const std::string silent = stderrOf(
+    []
+    {
+      ProgressBar b("work", ProgressBar::Style::Silent);
+      b.update(0.5);
+      b.finish();
+    });
+  EXPECT_EQ(silent, "");
+}
