@@ -80,7 +80,13 @@ std::string vec(const Vec3& v)
 std::string clipped(const std::string& text, std::size_t width)
 {
   const std::string p = printable(text);
-  return p.size() <= width ? p : p.substr(0, width - 3) + "...";
+  if (p.size() <= width)
+    return p;
+  // Cut at a character boundary: never inside a UTF-8 sequence.
+  std::size_t cut = width - 3;
+  while (cut > 0 && (static_cast<unsigned char>(p[cut]) & 0xC0) == 0x80)
+    --cut;
+  return p.substr(0, cut) + "...";
 }
 
 /// Opens the store and the schema; every failure is a database error.

@@ -197,8 +197,10 @@ vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::
   if (messages.failed())
   {
     std::string why = messages.firstError();
+    // The store's own advice names its API; say what the command line offers instead.
+    const std::size_t api = why.find("; pass replace = true");
     if (why.find("duplicate frame") != std::string::npos)
-      why += " (add --replace to store it again)";
+      why = why.substr(0, api) + " (add --replace to store it again)";
     throw DatabaseError(why);
   }
   return writer->GetFrameId();

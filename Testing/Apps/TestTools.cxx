@@ -321,6 +321,18 @@ TEST(MovieWriter, Mp4ThroughFfmpeg)
   in.read(head, 8);
   EXPECT_EQ(std::string(head + 4, 4), "ftyp") << "not an ISO media file";
   EXPECT_EQ(filesIn(dir), std::vector<std::string>{ "m.mp4" });
+  // ffprobe (installed with ffmpeg) decodes it: H.264, padded to even sizes, every frame there.
+  const std::string command = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                              "stream=codec_name,width,height,r_frame_rate,nb_read_frames "
+                              "-of csv=p=0 '" +
+                              dir + "/m.mp4'";
+  FILE* probe = popen(command.c_str(), "r");
+  ASSERT_NE(probe, nullptr);
+  char line[256] = {};
+  const bool read = std::fgets(line, sizeof line, probe) != nullptr;
+  pclose(probe);
+  ASSERT_TRUE(read) << "ffprobe printed nothing";
+  EXPECT_EQ(std::string(line), "h264,34,22,10/1,5\n");
 }
 
 // ---------------------------------------------------------------------------------------------
