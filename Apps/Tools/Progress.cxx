@@ -6,9 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 
 namespace asrt
 {
@@ -17,15 +17,22 @@ namespace tools
 namespace
 {
 volatile std::sig_atomic_t interrupted = 0;
+volatile std::time_t interruptedAt = 0;
 
 extern "C" void onInterrupt(int signal)
 {
-  // A second Ctrl-C stops at once, should the work not be polling (e.g. waiting for a server).
-  if (interrupted)
+  // A second Ctrl-C a moment later stops at once, should the work not be polling (e.g. waiting
+  // for a server). One signal delivered twice (as timeout(1) sends it, to the process and to its
+  // group) is still one request.
+  timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now); // async-signal-safe
+  if (interrupted && now.tv_sec - interruptedAt >= 1)
   {
     std::signal(signal, SIG_DFL);
     std::raise(signal);
   }
+  if (!interrupted)
+    interruptedAt = now.tv_sec;
   interrupted = 1;
 }
 
