@@ -281,26 +281,29 @@ bool SceneObject::intersect(const Segment& seg, SurfaceHit& hit) const
     }
   }
 
-  hit.objectId = this->Id;
-  hit.chordPoint = chord;
-  hit.refined = false;
   Vec3 dir = b - a;
+  Vec3 x = chord;
   if (converged)
   {
-    const Vec3 x = seg.position(t).tail<3>();
-    // A curve that crosses the infinite surface just beyond the object's edge is not a hit of
-    // the object; the chord found one, so its point is kept.
-    if (x.allFinite() && this->inBounds(x))
-    {
-      hit.refined = true;
-      hit.tau = t;
-      hit.point = x;
-      const Vec3 T = seg.tangent(t).tail<3>();
-      if (T.squaredNorm() > 0.0)
-        dir = T;
-    }
+    x = seg.position(t).tail<3>();
+    converged = x.allFinite();
   }
-  if (!hit.refined)
+  // The refined point is on the ray; the chord's lies off it by the step's sagitta, so near an
+  // edge only the refined point can say whether the ray meets the finite object.
+  if (!this->inBounds(converged ? x : chord))
+    return false;
+  hit.objectId = this->Id;
+  hit.chordPoint = chord;
+  hit.refined = converged;
+  if (converged)
+  {
+    hit.tau = t;
+    hit.point = x;
+    const Vec3 T = seg.tangent(t).tail<3>();
+    if (T.squaredNorm() > 0.0)
+      dir = T;
+  }
+  else
   {
     hit.tau = tc;
     hit.point = chord;
@@ -402,7 +405,7 @@ bool Rectangle::chordHit(const Vec3& a, const Vec3& b, double& tau) const
   if (den == 0.0)
     return false; // parallel: a chord in the plane meets it in a set of measure zero
   const double t = this->N.dot(this->C - a) / den;
-  if (!inUnit(t) || !this->inBounds(a + t * d))
+  if (!inUnit(t))
     return false;
   tau = t;
   return true;
@@ -611,7 +614,7 @@ bool Disk::chordHit(const Vec3& a, const Vec3& b, double& tau) const
   if (den == 0.0)
     return false;
   const double t = this->N.dot(this->C - a) / den;
-  if (!inUnit(t) || !this->inBounds(a + t * d))
+  if (!inUnit(t))
     return false;
   tau = t;
   return true;

@@ -90,11 +90,14 @@ public:
   const std::string& name() const { return this->Name; }
   virtual const char* type() const = 0;
 
-  /// First crossing of the segment with the object: the chord x0 → x1 is tested (as the paper
-  /// does), then the crossing is refined on the segment's Hermite interpolant so that the hit's
-  /// error is the integrator's, not the chord's (Newton on F(x(τ)), bisection if Newton cannot
-  /// step). Returns false if the chord misses. If the refined point falls off the finite object,
-  /// the chord's point is kept (hit.refined = false). Thread-safe; allocates nothing.
+  /// First crossing of the segment with the object: the chord x0 → x1 finds a crossing of the
+  /// object's surface (as the paper does), which is refined on the segment's Hermite interpolant
+  /// so that the hit's error is the integrator's, not the chord's (Newton on F(x(τ)), bisection if
+  /// Newton cannot step). Whether the hit lies on the finite object is judged at the refined
+  /// point, since that point is on the ray and the chord's is not: a curve crossing beyond an edge
+  /// is a miss even where its chord crosses inside, and the converse is a hit. Only if refinement
+  /// fails is the chord's point judged and kept (hit.refined = false). Thread-safe; allocates
+  /// nothing.
   bool intersect(const Segment& seg, SurfaceHit& hit) const;
   Color color(const SurfaceHit& hit) const { return this->Tex->sample(hit.u, hit.v); }
   const Texture& texture() const { return *this->Tex; }
@@ -108,7 +111,9 @@ public:
   virtual bool boundingSphere(Vec3& center, double& radius) const = 0;
 
 protected:
-  /// Smallest τ ∈ [0, 1] at which the chord a + τ(b − a) meets the finite surface.
+  /// Smallest τ ∈ [0, 1] at which the chord a + τ(b − a) meets the surface. Planar objects test
+  /// their whole plane (their bounds are judged on the refined point); curved ones may reject
+  /// crossings off their bounds here, as a cylinder does to pick the wall that is hit.
   virtual bool chordHit(const Vec3& a, const Vec3& b, double& tau) const = 0;
   /// A function vanishing on the surface, with its gradient (for Newton refinement). |∇F| = 1 on
   /// the surface, so that F near it is a signed distance and tolerances are lengths.

@@ -352,26 +352,51 @@ TEST(SceneRefine, CurvedSegmentHitIsFourthOrderAgainstTheChordsSecond)
   }
 }
 
-TEST(SceneRefine, KeepsTheChordPointWhenTheCurveCrossesBeyondTheEdge)
+namespace
 {
-  const double R = 10, alpha0 = 0.3, h = 0.2, beta = alpha0 + 0.37 * h;
-  const Vec3 eu(std::cos(beta), std::sin(beta), 0);
-  const Segment seg = arc(R, alpha0, h);
-  // Where the chord crosses the plane, at a radius below the arc's (R).
-  SurfaceHit full;
-  ASSERT_TRUE(
-    Rectangle(1, "p", solid(), Vec3::Zero(), eu, Vec3(0, 0, 1), inf, inf).intersect(seg, full));
-  const double rhoChord = full.chordPoint.norm();
-  ASSERT_LT(rhoChord, R - 0.01);
-  // A strip of the plane from the axis to halfway between the chord's and the arc's crossings.
-  const double edge = 0.5 * (rhoChord + R);
-  const Rectangle strip(1, "s", solid(), 0.5 * edge * eu, eu, Vec3(0, 0, 1), 0.5 * edge, 1.0);
+/// An arc of radius 10 crossing the plane through the z-axis along `eu`, and where its chord
+/// crosses that plane: at a radius below the arc's, by the step's sagitta.
+struct ArcThroughPlane
+{
+  double R = 10, alpha0 = 0.3, h = 0.2, beta = alpha0 + 0.37 * h;
+  Vec3 eu{ std::cos(beta), std::sin(beta), 0 };
+  Segment seg = arc(R, alpha0, h);
+  double rhoChord = 0;
+  ArcThroughPlane()
+  {
+    SurfaceHit full;
+    EXPECT_TRUE(
+      Rectangle(1, "p", solid(), Vec3::Zero(), eu, Vec3(0, 0, 1), inf, inf).intersect(seg, full));
+    rhoChord = full.chordPoint.norm();
+  }
+  /// The strip of the plane between radii lo and hi along eu.
+  Rectangle strip(double lo, double hi) const
+  {
+    return Rectangle(1, "s", solid(), 0.5 * (lo + hi) * eu, eu, Vec3(0, 0, 1), 0.5 * (hi - lo),
+                     1.0);
+  }
+};
+}
+
+TEST(SceneRefine, MissesWhereTheCurveCrossesBeyondTheEdgeThoughTheChordCrossesInside)
+{
+  const ArcThroughPlane a;
+  ASSERT_LT(a.rhoChord, a.R - 0.01);
+  // The ray itself crosses the plane at radius R; the strip ends halfway between the chord's
+  // crossing and R, so the ray passes beyond its edge.
   SurfaceHit hit;
-  ASSERT_TRUE(strip.intersect(seg, hit));
-  EXPECT_FALSE(hit.refined);
-  EXPECT_EQ(hit.point, hit.chordPoint);
-  EXPECT_LT((hit.point - full.chordPoint).norm(), 1e-12);
-  EXPECT_LE(hit.u, 1.0);
+  EXPECT_FALSE(a.strip(0.0, 0.5 * (a.rhoChord + a.R)).intersect(a.seg, hit));
+}
+
+TEST(SceneRefine, HitsWhereTheCurveCrossesInsideThoughTheChordCrossesBeyondTheEdge)
+{
+  const ArcThroughPlane a;
+  ASSERT_LT(a.rhoChord, a.R - 0.01);
+  SurfaceHit hit;
+  ASSERT_TRUE(a.strip(0.5 * (a.rhoChord + a.R), a.R + 1.0).intersect(a.seg, hit));
+  EXPECT_TRUE(hit.refined);
+  // The hit is the ray's own crossing, exactly R along eu.
+  EXPECT_LT((hit.point - a.R * a.eu).norm(), 1e-2 * (a.R - a.rhoChord));
 }
 
 TEST(SceneRefine, FallsBackToBisectionWhereNewtonCannotStep)
