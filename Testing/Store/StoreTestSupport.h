@@ -94,6 +94,78 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
   return b;
 }
 
+/// The fields of a stored ray, in the order the store documents (the columns of rays_v, the words
+/// of its record_bytes, the bytea columns of schema versions 1 and 2), with their size in bytes
+/// and their value as a word: written out here independently of RayStore.
+struct RecordField
+{
+  const char* name;
+  int size;
+  std::uint64_t (*word)(const RayRecord&);
+};
+#define ASRT_RECORD_W64(name, e)                                                                   \
+  RecordField                                                                                      \
+  {                                                                                                \
+    name, 8, [](const RayRecord& r) { return bitsOf(e); }                                          \
+  }
+#define ASRT_RECORD_W32(name, e)                                                                   \
+  RecordField                                                                                      \
+  {                                                                                                \
+    name, 4, [](const RayRecord& r) { return std::uint64_t(std::uint32_t(std::int32_t(e))); }      \
+  }
+inline const RecordField RecordFields[] = {
+  ASRT_RECORD_W32("i", r.i),
+  ASRT_RECORD_W32("j", r.j),
+  ASRT_RECORD_W64("origin_x", r.origin.x()),
+  ASRT_RECORD_W64("origin_y", r.origin.y()),
+  ASRT_RECORD_W64("origin_z", r.origin.z()),
+  ASRT_RECORD_W64("dir_x", r.direction.x()),
+  ASRT_RECORD_W64("dir_y", r.direction.y()),
+  ASRT_RECORD_W64("dir_z", r.direction.z()),
+  ASRT_RECORD_W64("p_t", r.momentum[0]),
+  ASRT_RECORD_W64("p_x", r.momentum[1]),
+  ASRT_RECORD_W64("p_y", r.momentum[2]),
+  ASRT_RECORD_W64("p_z", r.momentum[3]),
+  ASRT_RECORD_W32("termination", int(r.termination)),
+  ASRT_RECORD_W32("object_id", r.objectId),
+  ASRT_RECORD_W64("hit_x", r.hitPoint.x()),
+  ASRT_RECORD_W64("hit_y", r.hitPoint.y()),
+  ASRT_RECORD_W64("hit_z", r.hitPoint.z()),
+  ASRT_RECORD_W64("normal_x", r.hitNormal.x()),
+  ASRT_RECORD_W64("normal_y", r.hitNormal.y()),
+  ASRT_RECORD_W64("normal_z", r.hitNormal.z()),
+  ASRT_RECORD_W64("u", r.u),
+  ASRT_RECORD_W64("v", r.v),
+  ASRT_RECORD_W64("chord_error", r.chordError),
+  ASRT_RECORD_W64("path_length", r.affineLength),
+  ASRT_RECORD_W64("winding", r.winding),
+  ASRT_RECORD_W32("image_order", r.imageOrder),
+  RecordField{ "steps", 8, [](const RayRecord& r) { return std::uint64_t(r.steps); } },
+  ASRT_RECORD_W64("max_abs_h", r.maxAbsH),
+  ASRT_RECORD_W64("color_r", r.color.x()),
+  ASRT_RECORD_W64("color_g", r.color.y()),
+  ASRT_RECORD_W64("color_b", r.color.z()),
+  ASRT_RECORD_W64("dudi", r.dudi),
+  ASRT_RECORD_W64("dudj", r.dudj),
+  ASRT_RECORD_W64("dvdi", r.dvdi),
+  ASRT_RECORD_W64("dvdj", r.dvdj),
+};
+#undef ASRT_RECORD_W64
+#undef ASRT_RECORD_W32
+
+/// The packed record of schema version 3 (rays_v's record_bytes): every field's word, big-endian.
+inline std::string packedRecord(const RayRecord& r)
+{
+  std::string bytes;
+  for (const RecordField& f : RecordFields)
+  {
+    const std::uint64_t w = f.word(r);
+    for (int m = f.size - 1; m >= 0; --m)
+      bytes.push_back(char(w >> (8 * m)));
+  }
+  return bytes;
+}
+
 inline double secondsSince(Clock::time_point t0)
 {
   return std::chrono::duration<double>(Clock::now() - t0).count();
