@@ -999,6 +999,23 @@ void copyPaths(PGconn* conn, std::int64_t frameId, const std::vector<RayPath>& p
   writer.finish();
 }
 
+/// The complete frame `old` (labelled `label`) has the identity of the one being written: a
+/// duplicate, refused unless `replace`, which deletes its row (its paths and tiles go with it).
+/// Its tables of rays are dropped after the commit (see dropOrphanBlocks: dropping them here would
+/// lock ray_blocks for the whole write); until then nothing shows them.
+void deleteReplaced(PGconn* conn, std::int64_t old, const std::string& label, bool replace)
+{
+  if (!replace)
+  {
+    throw StoreError("duplicate frame: this scene with these parameters is already stored as "
+                     "frame " +
+                     std::to_string(old) + " (label \"" + label +
+                     "\"); pass replace = true to replace it");
+  }
+  Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
+                         "deleting the frame to be replaced failed");
+}
+
 /// The scene row a frame was to use disappeared before the frame's row referenced it (an unused
 /// scene row is removed after a failed write or the deletion of its last frame): look it up again.
 struct SceneVanished
@@ -1455,17 +1472,7 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
                                std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
                                "\"); delete it first if its writers are gone");
             }
-            if (!replace)
-            {
-              throw StoreError("duplicate frame: this scene with these parameters is already "
-                               "stored as frame " +
-                               std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
-                               "\"); pass replace = true to replace it");
-            }
-            // Its tables of rays are dropped after the commit (dropping them here would lock
-            // ray_blocks for the whole write); until then nothing shows them.
-            Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
-                                   "deleting the frame to be replaced failed");
+            deleteReplaced(conn, old, getText(r.get(), 0, 1), replace);
             replaced = true;
           }
 
@@ -1589,15 +1596,7 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
               exec(conn, "COMMIT", "committing the frame failed");
               return old;
             }
-            if (!replace)
-            {
-              throw StoreError("duplicate frame: this scene with these parameters is already "
-                               "stored as frame " +
-                               std::to_string(old) + " (label \"" + getText(r.get(), 0, 3) +
-                               "\"); pass replace = true to replace it");
-            }
-            Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
-                                   "deleting the frame to be replaced failed");
+            deleteReplaced(conn, old, getText(r.get(), 0, 3), replace);
             replaced = true;
             // No conflict is possible any more: the old row is deleted and locked by us.
             r = insertFrame(conn, sceneId, texts, scene, label, tileCount, false);

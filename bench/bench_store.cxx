@@ -831,6 +831,15 @@ int main(int argc, char* argv[])
       h.serverCpu, double(nH) * RayStore::kRecordBytes / 1e6,
       (nH + RayStore::kBlockSize - 1) / RayStore::kBlockSize, h.clientCpu, f.clientCpu, f.write,
       loadBefore.c_str(), loadAfter.c_str(), std::thread::hardware_concurrency());
+    if (!nearWrite)
+      std::printf(
+        "\nWhy writing misses 2× here: the backend's CPU time alone is %.2f× the file's whole "
+        "write, and those copies are what PostgreSQL 15's COPY does with every byte (the "
+        "variants below show that this layout, a table per frame and no WAL for the rays, is the "
+        "cheapest of those measured: the others add the WAL's copy of every byte, or TOAST's "
+        "chunks, or a foreign-key check per row). Client and server could overlap on two idle "
+        "cores; on two cores shared with other builds they mostly take turns.\n",
+        h.serverCpu / f.write);
 
     std::printf(
       "\n### Store layouts and settings, in the same run\n\n"

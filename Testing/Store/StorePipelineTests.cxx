@@ -289,6 +289,24 @@ std::vector<std::vector<std::uint64_t>> lineBits(vtkPolyData* lines)
 }
 
 /// A value from the database, whose schema exists (each test may run alone in its process).
+/// vtkGeodesicSource tracing fig1 at w × h with polylines every `stride` pixels, and a writer of
+/// its hits and polylines to the test server.
+struct PolylineFrame
+{
+  PolylineFrame(int w, int h, int stride)
+  {
+    this->Source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
+    this->Source->SetResolution(w, h);
+    this->Source->GeneratePolylinesOn();
+    this->Source->SetPolylineStride(stride);
+    this->Writer->SetInputConnection(0, this->Source->GetOutputPort(1));
+    this->Writer->SetInputConnection(1, this->Source->GetOutputPort(2));
+    this->Writer->SetConnectionString(server().conninfo().c_str());
+  }
+  vtkNew<vtkGeodesicSource> Source;
+  vtkNew<vtkGeodesicPostgreSQLWriter> Writer;
+};
+
 std::string count(const std::string& sql)
 {
   asrt::RayStore(server().conninfo()).migrate();
@@ -298,16 +316,10 @@ std::string count(const std::string& sql)
 
 TEST(StorePipeline, PolylinesRoundTripBitForBit)
 {
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
-  source->SetResolution(12, 9);
+  PolylineFrame frame(12, 9, 4);
+  vtkGeodesicSource* source = frame.Source;
+  vtkGeodesicPostgreSQLWriter* writer = frame.Writer;
   source->SetMass(0.9); // a frame of its own
-  source->GeneratePolylinesOn();
-  source->SetPolylineStride(4);
-  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
-  writer->SetInputConnection(0, source->GetOutputPort(1));
-  writer->SetInputConnection(1, source->GetOutputPort(2));
-  writer->SetConnectionString(server().conninfo().c_str());
   ASSERT_EQ(writer->Write(), 1);
   vtkPolyData* traced = source->GetPolylinesOutput();
   ASSERT_EQ(traced->GetNumberOfLines(), 9); // pixels (0|4|8, 0|4|8)
@@ -351,15 +363,9 @@ TEST(StorePipeline, PolylinesRoundTripBitForBit)
 
 TEST(StorePipeline, PolylinesAndRaysAreWrittenTogetherOrNotAtAll)
 {
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
-  source->SetResolution(13, 11); // 143 rays, which the veto below refuses
-  source->GeneratePolylinesOn();
-  source->SetPolylineStride(5);
-  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
-  writer->SetInputConnection(0, source->GetOutputPort(1));
-  writer->SetInputConnection(1, source->GetOutputPort(2));
-  writer->SetConnectionString(server().conninfo().c_str());
+  PolylineFrame frame(13, 11, 5); // 143 rays, which the veto below refuses
+  vtkGeodesicSource* source = frame.Source;
+  vtkGeodesicPostgreSQLWriter* writer = frame.Writer;
   vtkNew<ErrorLog> log;
   writer->AddObserver(vtkCommand::ErrorEvent, log);
   const std::string state = "SELECT (SELECT count(*) FROM frames) || ':' || (SELECT count(*) FROM "

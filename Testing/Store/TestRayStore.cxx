@@ -245,24 +245,13 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
   const std::int64_t id = store.writeFrame(scene(), "view", records);
   Db db(ci);
   // Binary results: the doubles as the server computed them.
-  PGresult* r = PQexecParams(db.Conn,
-                             ("SELECT ray, i, j, termination, object_id, steps, hit_x, u, dvdj, "
-                              "winding, dudi, record_bytes FROM rays_v WHERE frame_id = " +
-                              std::to_string(id) + " ORDER BY ray")
-                               .c_str(),
-                             0, nullptr, nullptr, nullptr, nullptr, 1);
-  ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQresultErrorMessage(r);
+  const auto rows =
+    db.binaryRows("SELECT ray, i, j, termination, object_id, steps, hit_x, u, "
+                  "dvdj, winding, dudi, record_bytes FROM rays_v WHERE frame_id = " +
+                  std::to_string(id) + " ORDER BY ray");
+  const PGresult* r = rows.get();
   ASSERT_EQ(PQntuples(r), int(records.size()));
-  auto word = [&](int row, int col)
-  {
-    std::uint64_t w = 0;
-    const char* p = PQgetvalue(r, row, col);
-    for (int k = 0; k < PQgetlength(r, row, col); ++k)
-    {
-      w = (w << 8) | std::uint8_t(p[k]);
-    }
-    return w;
-  };
+  auto word = [&](int row, int col) { return resultWord(r, row, col); };
   for (int row = 0; row < PQntuples(r); ++row)
   {
     const RayRecord& e = records[std::size_t(row)];
@@ -278,20 +267,9 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
     ASSERT_EQ(std::int64_t(word(row, 5)), e.steps);
     const double expected[] = { e.hitPoint.x(), e.u, e.dvdj, e.winding, e.dudi };
     for (int c = 0; c < 5; ++c)
-    {
-      const double got = fromBits(word(row, 6 + c));
-      if (std::isnan(expected[c]))
-      {
-        // SQL yields the canonical NaN; readFrame keeps the payload.
-        ASSERT_TRUE(std::isnan(got)) << "row " << row << " column " << c;
-      }
-      else
-      {
-        ASSERT_EQ(bitsOf(got), bitsOf(expected[c])) << "row " << row << " column " << c;
-      }
-    }
+      ASSERT_TRUE(sameFromSql(fromBits(word(row, 6 + c)), expected[c]))
+        << "row " << row << " column " << c;
   }
-  PQclear(r);
 }
 
 TEST(RayStoreFrames, SameSceneAndParametersIsTheSameFrame)
@@ -623,21 +601,12 @@ TEST(RayStorePaths, RoundTripIsBitExactAndSqlSeesEveryPoint)
 
   // path_points_v: one row per point, each value exact (every NaN is SQL's NaN).
   Db db(ci);
-  PGresult* r = PQexecParams(db.Conn,
-                             ("SELECT path, point, i, j, x, y, z, lambda, r, abs_h FROM "
-                              "path_points_v WHERE frame_id = " +
-                              std::to_string(id) + " ORDER BY path, point")
-                               .c_str(),
-                             0, nullptr, nullptr, nullptr, nullptr, 1);
-  ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQresultErrorMessage(r);
+  const auto rows = db.binaryRows("SELECT path, point, i, j, x, y, z, lambda, r, abs_h FROM "
+                                  "path_points_v WHERE frame_id = " +
+                                  std::to_string(id) + " ORDER BY path, point");
+  const PGresult* r = rows.get();
   ASSERT_EQ(PQntuples(r), 3 + 0 + 5000 + 1 + 250);
-  auto word = [&](int row, int col)
-  {
-    std::uint64_t w = 0;
-    for (int k = 0; k < PQgetlength(r, row, col); ++k)
-      w = (w << 8) | std::uint8_t(PQgetvalue(r, row, col)[k]);
-    return w;
-  };
+  auto word = [&](int row, int col) { return resultWord(r, row, col); };
   for (int row = 0; row < PQntuples(r); ++row)
   {
     const std::size_t path = word(row, 0), point = word(row, 1);
@@ -649,15 +618,9 @@ TEST(RayStorePaths, RoundTripIsBitExactAndSqlSeesEveryPoint)
     const asrt::PathPoint& q = p.points[point];
     const double expected[] = { q.x.x(), q.x.y(), q.x.z(), q.lambda, q.r, q.absH };
     for (int c = 0; c < 6; ++c)
-    {
-      const double got = fromBits(word(row, 4 + c));
-      if (std::isnan(expected[c]))
-        ASSERT_TRUE(std::isnan(got)) << "row " << row << " column " << c;
-      else
-        ASSERT_EQ(bitsOf(got), bitsOf(expected[c])) << "row " << row << " column " << c;
-    }
+      ASSERT_TRUE(sameFromSql(fromBits(word(row, 4 + c)), expected[c]))
+        << "row " << row << " column " << c;
   }
-  PQclear(r);
 }
 
 TEST(RayStorePaths, BadPathsAreRefusedBeforeTheDatabase)
