@@ -1,6 +1,8 @@
 #include "GeodesicRecordArrays.h"
 
 #include "vtkCellArray.h"
+#include "vtkCellArrayIterator.h"
+#include "vtkCellData.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
@@ -201,6 +203,107 @@ std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
     r.dvdj = jac[3];
   }
   return records;
+}
+
+void pathsToPolyData(const std::vector<RayPath>& paths, vtkPolyData* lines)
+{
+  vtkIdType total = 0;
+  for (const RayPath& p : paths)
+    total += static_cast<vtkIdType>(p.points.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(total);
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  auto lambda = makeArray<vtkDoubleArray>("Lambda", 1, total);
+  auto radius = makeArray<vtkDoubleArray>("R", 1, total);
+  auto absH = makeArray<vtkDoubleArray>("AbsH", 1, total);
+  const auto n = static_cast<vtkIdType>(paths.size());
+  auto pixel = makeArray<vtkIntArray>("Pixel", 2, n);
+  auto term = makeArray<vtkIntArray>("Termination", 1, n);
+  vtkIdType k = 0;
+  std::vector<vtkIdType> ids;
+  for (vtkIdType c = 0; c < n; ++c)
+  {
+    const RayPath& p = paths[static_cast<size_t>(c)];
+    ids.clear();
+    for (const PathPoint& q : p.points)
+    {
+      points->SetPoint(k, q.x.data());
+      lambda->SetValue(k, q.lambda);
+      radius->SetValue(k, q.r);
+      absH->SetValue(k, q.absH);
+      ids.push_back(k++);
+    }
+    cells->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
+    const int ij[2] = { p.i, p.j };
+    pixel->SetTypedTuple(c, ij);
+    term->SetValue(c, static_cast<int>(p.termination));
+  }
+  lines->Initialize();
+  lines->SetPoints(points);
+  lines->SetLines(cells);
+  lines->GetPointData()->AddArray(lambda);
+  lines->GetPointData()->AddArray(radius);
+  lines->GetPointData()->AddArray(absH);
+  lines->GetCellData()->AddArray(pixel);
+  lines->GetCellData()->AddArray(term);
+}
+
+std::vector<RayPath> polyDataToPaths(vtkPolyData* lines)
+{
+  const vtkIdType points = lines->GetNumberOfPoints();
+  auto pointArray = [&](const char* name)
+  {
+    vtkDataArray* a = lines->GetPointData()->GetArray(name);
+    if (!a || a->GetNumberOfComponents() != 1 || a->GetNumberOfTuples() != points)
+      throw InvalidParameter(std::string("polylines lack a valid \"") + name +
+                             "\" point array (1 component, one tuple per point)");
+    return a;
+  };
+  vtkDataArray* lambda = pointArray("Lambda");
+  vtkDataArray* radius = pointArray("R");
+  vtkDataArray* absH = pointArray("AbsH");
+  if (lines->GetNumberOfVerts() + lines->GetNumberOfPolys() + lines->GetNumberOfStrips() > 0)
+    throw InvalidParameter("polylines: the input has cells that are not lines (vertices, "
+                           "polygons or strips)");
+  const vtkIdType cells = lines->GetNumberOfLines();
+  auto cellArray = [&](const char* name, int components)
+  {
+    vtkDataArray* a = lines->GetCellData()->GetArray(name);
+    if (!a || a->GetNumberOfComponents() != components || a->GetNumberOfTuples() != cells)
+      throw InvalidParameter(std::string("polylines lack a valid \"") + name + "\" cell array (" +
+                             std::to_string(components) + " components, one tuple per line)");
+    return a;
+  };
+  vtkDataArray* pixel = cellArray("Pixel", 2);
+  vtkDataArray* term = cellArray("Termination", 1);
+  std::vector<RayPath> paths(static_cast<size_t>(cells));
+  auto it = vtkSmartPointer<vtkCellArrayIterator>::Take(lines->GetLines()->NewIterator());
+  vtkIdType c = 0;
+  for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++c)
+  {
+    vtkIdType size = 0;
+    const vtkIdType* ids = nullptr;
+    it->GetCurrentCell(size, ids);
+    RayPath& p = paths[static_cast<size_t>(c)];
+    p.i = static_cast<std::int32_t>(pixel->GetComponent(c, 0));
+    p.j = static_cast<std::int32_t>(pixel->GetComponent(c, 1));
+    const int t = static_cast<int>(term->GetComponent(c, 0));
+    if (t < 0 || t > static_cast<int>(Termination::HitObject))
+      throw InvalidParameter("polyline " + std::to_string(c) + " has an unknown termination " +
+                             std::to_string(t));
+    p.termination = static_cast<Termination>(t);
+    p.points.resize(static_cast<size_t>(size));
+    for (vtkIdType m = 0; m < size; ++m)
+    {
+      PathPoint& q = p.points[static_cast<size_t>(m)];
+      lines->GetPoint(ids[m], q.x.data());
+      q.lambda = lambda->GetComponent(ids[m], 0);
+      q.r = radius->GetComponent(ids[m], 0);
+      q.absH = absH->GetComponent(ids[m], 0);
+    }
+  }
+  return paths;
 }
 
 void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd)

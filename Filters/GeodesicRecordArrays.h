@@ -21,6 +21,12 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
 void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits);
 /// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
+/// Ray paths as polylines, one per path in order, double points with point data "Lambda", "R",
+/// "AbsH" and cell data "Pixel" (i, j) and "Termination": vtkGeodesicSource's port 2.
+void pathsToPolyData(const std::vector<RayPath>& paths, vtkPolyData* lines);
+/// The inverse of pathsToPolyData; throws InvalidParameter naming what is missing or malformed
+/// (an array, a cell that is no polyline, an unknown termination).
+std::vector<RayPath> polyDataToPaths(vtkPolyData* lines);
 /// The frame's scene and parameters as field data ("SceneJSON", "Mass", ..., "Resolution").
 void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd);
 /// The frame's description back from its "SceneJSON", without image textures (nothing the store

@@ -1,8 +1,8 @@
 #include "vtkGeodesicPostgreSQLReader.h"
 
 #include "GeodesicRecordArrays.h"
-#include "StoreConnection.h"
 #include "RayStore.h"
+#include "StoreConnection.h"
 
 #include "vtkImageData.h"
 #include "vtkInformation.h"
@@ -11,14 +11,17 @@
 #include "vtkPolyData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <algorithm>
+#include <set>
 #include <sstream>
+#include <utility>
 
 vtkStandardNewMacro(vtkGeodesicPostgreSQLReader);
 
 vtkGeodesicPostgreSQLReader::vtkGeodesicPostgreSQLReader()
 {
   this->SetNumberOfInputPorts(0);
-  this->SetNumberOfOutputPorts(2);
+  this->SetNumberOfOutputPorts(3);
 }
 
 vtkGeodesicPostgreSQLReader::~vtkGeodesicPostgreSQLReader()
@@ -35,6 +38,11 @@ vtkImageData* vtkGeodesicPostgreSQLReader::GetImageOutput()
 vtkPolyData* vtkGeodesicPostgreSQLReader::GetHitsOutput()
 {
   return vtkPolyData::SafeDownCast(this->GetOutputDataObject(1));
+}
+
+vtkPolyData* vtkGeodesicPostgreSQLReader::GetPolylinesOutput()
+{
+  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(2));
 }
 
 int vtkGeodesicPostgreSQLReader::FillOutputPortInformation(int port, vtkInformation* info)
@@ -86,7 +94,7 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
   catch (const std::exception& e)
   {
     vtkErrorMacro(<< e.what());
-    for (int port = 0; port < 2; ++port)
+    for (int port = 0; port < this->GetNumberOfOutputPorts(); ++port)
       if (vtkDataObject* out = vtkDataObject::GetData(outputVector, port))
         out->Initialize();
     return 0;
@@ -106,14 +114,29 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
 {
   vtkImageData* image = vtkImageData::GetData(outputVector, 0);
   vtkPolyData* hits = vtkPolyData::GetData(outputVector, 1);
+  vtkPolyData* lines = vtkPolyData::GetData(outputVector, 2);
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     const std::vector<asrt::RayRecord> records =
       store.readFrame(this->ResolvedFrame, this->Predicate ? this->Predicate : "");
+    this->UpdateProgress(0.7);
+    std::vector<asrt::RayPath> paths = store.readPaths(this->ResolvedFrame);
+    if (this->Predicate && *this->Predicate)
+    {
+      std::set<std::pair<int, int>> selected;
+      for (const asrt::RayRecord& r : records)
+        selected.insert({ r.i, r.j });
+      paths.erase(std::remove_if(paths.begin(), paths.end(),
+                                 [&](const asrt::RayPath& p) {
+                                   return selected.count({ p.i, p.j }) == 0;
+                                 }),
+                  paths.end());
+    }
     this->UpdateProgress(0.8);
     asrt::recordsToImage(records, this->Width, 0, this->Height, image);
     asrt::recordsToPolyData(records, hits);
+    asrt::pathsToPolyData(paths, lines);
     auto frame = asrt::parseSceneWithoutImages(store.frameSceneText(this->ResolvedFrame));
     asrt::setFrameFieldData(frame, hits->GetFieldData());
     this->UpdateProgress(1.0);
@@ -123,6 +146,7 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
     vtkErrorMacro(<< e.what());
     image->Initialize();
     hits->Initialize();
+    lines->Initialize();
     return 0;
   }
   return 1;

@@ -5,9 +5,11 @@
  * RequestInformation lists the stored frames (GetNumberOfFrames, GetFrameIdAt,
  * GetFrameDescription). RequestData reads the frame FrameId back as vtkGeodesicSource's outputs:
  * port 0 the image, shaded again from the stored colours, port 1 the hit points with every record
- * field, bit-exact for doubles, and the frame's scene as field data. An optional SQL Predicate over
- * the columns of the view rays_v (e.g. "object_id = 2 AND image_order = 1") selects a subset of
- * rays; it runs in a read-only transaction. Connection as for vtkGeodesicPostgreSQLWriter.
+ * field, bit-exact for doubles, and the frame's scene as field data, port 2 the polylines stored
+ * with the frame (empty if none), bit-exact. An optional SQL Predicate over the columns of the
+ * view rays_v (e.g. "object_id = 2 AND image_order = 1") selects a subset of rays, evaluated by
+ * the server in a read-only transaction; port 2 then holds the polylines of the selected rays'
+ * pixels only. Connection as for vtkGeodesicPostgreSQLWriter.
  */
 #ifndef vtkGeodesicPostgreSQLReader_h
 #define vtkGeodesicPostgreSQLReader_h
@@ -53,6 +55,7 @@ public:
 
   vtkImageData* GetImageOutput();
   vtkPolyData* GetHitsOutput();
+  vtkPolyData* GetPolylinesOutput();
 
 protected:
   vtkGeodesicPostgreSQLReader();

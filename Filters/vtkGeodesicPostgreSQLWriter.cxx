@@ -1,8 +1,8 @@
 #include "vtkGeodesicPostgreSQLWriter.h"
 
 #include "GeodesicRecordArrays.h"
-#include "StoreConnection.h"
 #include "RayStore.h"
+#include "StoreConnection.h"
 
 #include "vtkInformation.h"
 #include "vtkObjectFactory.h"
@@ -10,7 +10,10 @@
 
 vtkStandardNewMacro(vtkGeodesicPostgreSQLWriter);
 
-vtkGeodesicPostgreSQLWriter::vtkGeodesicPostgreSQLWriter() = default;
+vtkGeodesicPostgreSQLWriter::vtkGeodesicPostgreSQLWriter()
+{
+  this->SetNumberOfInputPorts(2);
+}
 
 vtkGeodesicPostgreSQLWriter::~vtkGeodesicPostgreSQLWriter()
 {
@@ -18,9 +21,11 @@ vtkGeodesicPostgreSQLWriter::~vtkGeodesicPostgreSQLWriter()
   this->SetLabel(nullptr);
 }
 
-int vtkGeodesicPostgreSQLWriter::FillInputPortInformation(int, vtkInformation* info)
+int vtkGeodesicPostgreSQLWriter::FillInputPortInformation(int port, vtkInformation* info)
 {
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  if (port == 1)
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
   return 1;
 }
 
@@ -33,11 +38,19 @@ void vtkGeodesicPostgreSQLWriter::WriteData()
       throw asrt::InvalidParameter("nothing to write: the input has no hit points");
     const asrt::SceneDescription frame = asrt::frameFromFieldData(hits->GetFieldData());
     const std::vector<asrt::RayRecord> records = asrt::polyDataToRecords(hits);
+    std::vector<asrt::RayPath> paths;
+    if (this->GetNumberOfInputConnections(1) > 0)
+    {
+      vtkPolyData* lines = vtkPolyData::SafeDownCast(this->GetInputDataObject(1, 0));
+      if (!lines)
+        throw asrt::InvalidParameter("the polylines input (port 1) is not poly data");
+      paths = asrt::polyDataToPaths(lines);
+    }
     this->UpdateProgress(0.1);
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     store.migrate();
-    this->FrameId = static_cast<vtkIdType>(
-      store.writeFrame(frame, this->Label ? this->Label : "", records, this->ReplaceExisting));
+    this->FrameId = static_cast<vtkIdType>(store.writeFrame(frame, this->Label ? this->Label : "",
+                                                            records, paths, this->ReplaceExisting));
     this->UpdateProgress(1.0);
   }
   catch (const std::exception& e)

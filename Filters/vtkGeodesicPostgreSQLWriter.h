@@ -2,11 +2,15 @@
  * @class   vtkGeodesicPostgreSQLWriter
  * @brief   accumulates a traced frame in PostgreSQL
  *
- * Input: the hit points of vtkGeodesicSource (its port 1): one vertex per ray with the ray records
- * as point data and the frame's effective scene as field data. The frame is written in one
- * transaction with binary COPY (asrt::RayStore): it is wholly stored or not at all. The same scene
- * with the same parameters is the same frame; writing it again is an error unless
- * ReplaceExisting is on.
+ * Input port 0: the hit points of vtkGeodesicSource (its port 1): one vertex per ray with the ray
+ * records as point data and the frame's effective scene as field data. Input port 1, optional:
+ * the source's polylines (its port 2), stored with the frame, one per pixel, bit-exact
+ * (vtkGeodesicPostgreSQLReader gives them back on its port 2). The frame, and its polylines if
+ * connected, are written in one transaction with binary COPY (asrt::RayStore): wholly stored or
+ * not at all. The same scene with the same parameters is the same frame; writing it again is an
+ * error unless ReplaceExisting is on. Malformed polylines (missing arrays, cells that are not
+ * lines, two polylines of one pixel, a pixel outside the frame) are refused before anything is
+ * written.
  *
  * Connection: a libpq conninfo string or URI in ConnectionString; empty uses the standard PG*
  * environment variables when any is set, and otherwise starts (or reuses) the private embedded

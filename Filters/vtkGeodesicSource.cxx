@@ -4,9 +4,6 @@
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
 
-#include "vtkCellArray.h"
-#include "vtkCellData.h"
-#include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
 #include "vtkImageReader2.h"
@@ -14,14 +11,11 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
-#include "vtkLongLongArray.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
-#include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
-#include "vtkUnsignedCharArray.h"
 
 #include <vtksys/SystemTools.hxx>
 
@@ -32,6 +26,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 vtkStandardNewMacro(vtkGeodesicSource);
 
@@ -51,16 +46,6 @@ double physicalMemory()
 {
   const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && size > 0 ? static_cast<double>(pages) * size : 8e9;
-}
-
-template<class A>
-vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
-{
-  auto a = vtkSmartPointer<A>::New();
-  a->SetName(name);
-  a->SetNumberOfComponents(components);
-  a->SetNumberOfTuples(tuples);
-  return a;
 }
 }
 
@@ -377,40 +362,14 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
           for (int i = 0; i < W; i += s)
             chosen.emplace_back(i, j);
       }
-      auto linePoints = vtkSmartPointer<vtkPoints>::New();
-      linePoints->SetDataTypeToDouble();
-      auto cells = vtkSmartPointer<vtkCellArray>::New();
-      auto lambda = makeArray<vtkDoubleArray>("Lambda", 1, 0);
-      auto radius = makeArray<vtkDoubleArray>("R", 1, 0);
-      auto absH = makeArray<vtkDoubleArray>("AbsH", 1, 0);
-      auto linePixel = makeArray<vtkIntArray>("Pixel", 2, 0);
-      auto lineTermination = makeArray<vtkIntArray>("Termination", 1, 0);
-      std::vector<asrt::PathPoint> path;
-      for (const auto& [i, j] : chosen)
+      std::vector<asrt::RayPath> paths(chosen.size());
+      for (std::size_t k = 0; k < chosen.size(); ++k)
       {
-        path.clear();
-        const asrt::RayRecord r = tracer.tracePixel(i, j, &path);
-        std::vector<vtkIdType> ids;
-        ids.reserve(path.size());
-        for (const asrt::PathPoint& pp : path)
-        {
-          ids.push_back(linePoints->InsertNextPoint(pp.x.data()));
-          lambda->InsertNextValue(pp.lambda);
-          radius->InsertNextValue(pp.r);
-          absH->InsertNextValue(pp.absH);
-        }
-        cells->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
-        const int ij[2] = { i, j };
-        linePixel->InsertNextTypedTuple(ij);
-        lineTermination->InsertNextValue(static_cast<int>(r.termination));
+        asrt::RayPath& p = paths[k];
+        std::tie(p.i, p.j) = chosen[k];
+        p.termination = tracer.tracePixel(p.i, p.j, &p.points).termination;
       }
-      lines->SetPoints(linePoints);
-      lines->SetLines(cells);
-      lines->GetPointData()->AddArray(lambda);
-      lines->GetPointData()->AddArray(radius);
-      lines->GetPointData()->AddArray(absH);
-      lines->GetCellData()->AddArray(linePixel);
-      lines->GetCellData()->AddArray(lineTermination);
+      asrt::pathsToPolyData(paths, lines);
     }
     this->UpdateProgress(1.0);
   }

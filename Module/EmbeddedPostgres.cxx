@@ -876,7 +876,15 @@ std::string EmbeddedPostgres::ensureRunning()
       std::to_string(port()) + "\nunix_socket_directories = '" + socketDir +
       "'\n"
       // Trust authentication is safe only because nobody else can reach the socket.
-      "unix_socket_permissions = 0700\n";
+      "unix_socket_permissions = 0700\n"
+      // A private server has no replicas and no archive, so the WAL needs only what crash
+      // recovery needs: a table created in the transaction that loads it (how RayStore writes a
+      // frame's rays) is then fsynced at commit instead of going through the WAL as well, so the
+      // rays are written once, not twice. Durability is the same.
+      "wal_level = minimal\n"
+      "max_wal_senders = 0\n"
+      // Every frame (tile) has a table of rays: a query over all frames locks each of them.
+      "max_locks_per_transaction = 512\n";
     if (!Durable)
       // Not durable against an OS crash, but every committed write survives a stop of any kind:
       // synchronous_commit stays on so a commit has reached the WAL buffers the OS will keep.

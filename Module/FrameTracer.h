@@ -45,6 +45,15 @@ struct PathPoint
   double absH;
 };
 
+/// The traced path of one pixel's ray: the points from the eye on (vtkGeodesicSource's
+/// polylines, stored with a frame by RayStore).
+struct RayPath
+{
+  std::int32_t i = 0, j = 0; ///< the pixel
+  Termination termination = Termination::Running;
+  std::vector<PathPoint> points;
+};
+
 /// Traces pixels of one scene. Thread-safe: every traced pixel uses its own propagator.
 class ASRTCORE_EXPORT FrameTracer
 {

@@ -7,20 +7,95 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <set>
+#include <utility>
 
 namespace asrt
 {
 namespace
 {
 // ---------------------------------------------------------------------------------------------
-// The per-ray fields, in storage order. Each is moved as a 32- or 64-bit word so that doubles
-// keep every bit (NaN payloads, −0, denormals).
+// The per-ray fields, in storage order: column name, word kind, record member. Each is moved as a
+// 32- or 64-bit word so that doubles keep every bit (NaN payloads, −0, denormals). This one list
+// makes the SQL columns, the encoder and the decoder, so that they cannot disagree.
+#define ASRT_RAY_FIELDS(X)                                                                         \
+  X(i, I32, r.i)                                                                                   \
+  X(j, I32, r.j)                                                                                   \
+  X(origin_x, F64, r.origin.x())                                                                   \
+  X(origin_y, F64, r.origin.y())                                                                   \
+  X(origin_z, F64, r.origin.z())                                                                   \
+  X(dir_x, F64, r.direction.x())                                                                   \
+  X(dir_y, F64, r.direction.y())                                                                   \
+  X(dir_z, F64, r.direction.z())                                                                   \
+  X(p_t, F64, r.momentum[0])                                                                       \
+  X(p_x, F64, r.momentum[1])                                                                       \
+  X(p_y, F64, r.momentum[2])                                                                       \
+  X(p_z, F64, r.momentum[3])                                                                       \
+  X(termination, I32, r.termination)                                                               \
+  X(object_id, I32, r.objectId)                                                                    \
+  X(hit_x, F64, r.hitPoint.x())                                                                    \
+  X(hit_y, F64, r.hitPoint.y())                                                                    \
+  X(hit_z, F64, r.hitPoint.z())                                                                    \
+  X(normal_x, F64, r.hitNormal.x())                                                                \
+  X(normal_y, F64, r.hitNormal.y())                                                                \
+  X(normal_z, F64, r.hitNormal.z())                                                                \
+  X(u, F64, r.u)                                                                                   \
+  X(v, F64, r.v)                                                                                   \
+  X(chord_error, F64, r.chordError)                                                                \
+  X(path_length, F64, r.affineLength)                                                              \
+  X(winding, F64, r.winding)                                                                       \
+  X(image_order, I32, r.imageOrder)                                                                \
+  X(steps, I64, r.steps)                                                                           \
+  X(max_abs_h, F64, r.maxAbsH)                                                                     \
+  X(color_r, F64, r.color.x())                                                                     \
+  X(color_g, F64, r.color.y())                                                                     \
+  X(color_b, F64, r.color.z())                                                                     \
+  X(dudi, F64, r.dudi)                                                                             \
+  X(dudj, F64, r.dudj)                                                                             \
+  X(dvdi, F64, r.dvdi)                                                                             \
+  X(dvdj, F64, r.dvdj)
+
 enum class Kind
 {
   I32,
   I64,
   F64
 };
+
+struct Column
+{
+  const char* name;
+  Kind kind;
+};
+
+#define ASRT_COLUMN(name, kind, member) Column{ #name, Kind::kind },
+constexpr Column Columns[] = { ASRT_RAY_FIELDS(ASRT_COLUMN) };
+#undef ASRT_COLUMN
+
+constexpr int wordSize(Kind k)
+{
+  return k == Kind::I32 ? 4 : 8;
+}
+
+constexpr int recordBytes()
+{
+  int bytes = 0;
+  for (const Column& c : Columns)
+  {
+    bytes += wordSize(c.kind);
+  }
+  return bytes;
+}
+static_assert(recordBytes() == RayStore::kRecordBytes, "kRecordBytes must match the fields");
+// A row of ray_blocks: the 24-byte tuple header, frame_id, tile, block, first_ray and n (28
+// bytes), the bytea's 4-byte length and the records. PostgreSQL keeps a tuple of at most 8160
+// bytes in one 8 kB page; kBlockSize is the most records that fit.
+constexpr int rowBytes(int rays)
+{
+  return 24 + 28 + 4 + RayStore::kRecordBytes * rays;
+}
+static_assert(rowBytes(RayStore::kBlockSize) <= 8160 && rowBytes(RayStore::kBlockSize + 1) > 8160,
+              "kBlockSize must be the most records that fit in one heap page");
 
 std::uint64_t bitsOf(double d)
 {
@@ -35,103 +110,85 @@ double doubleOf(std::uint64_t w)
   return d;
 }
 
-struct Column
+// Big-endian words, in and out.
+template<class T>
+char* putI32(char* p, T v)
 {
-  const char* name;
-  Kind kind;
-  std::uint64_t (*get)(const RayRecord&);
-  void (*set)(RayRecord&, std::uint64_t);
-};
-
-#define ASRT_F64(n, e)                                                                             \
-  Column                                                                                           \
-  {                                                                                                \
-    n, Kind::F64, [](const RayRecord& r) { return bitsOf(e); },                                    \
-      [](RayRecord& r, std::uint64_t w) { e = doubleOf(w); }                                       \
-  }
-#define ASRT_I32(n, e)                                                                             \
-  Column                                                                                           \
-  {                                                                                                \
-    n, Kind::I32,                                                                                  \
-      [](const RayRecord& r) { return std::uint64_t(std::uint32_t(std::int32_t(e))); },            \
-      [](RayRecord& r, std::uint64_t w) { e = std::int32_t(std::uint32_t(w)); }                    \
-  }
-
-const Column Columns[] = {
-  ASRT_I32("i", r.i),
-  ASRT_I32("j", r.j),
-  ASRT_F64("origin_x", r.origin.x()),
-  ASRT_F64("origin_y", r.origin.y()),
-  ASRT_F64("origin_z", r.origin.z()),
-  ASRT_F64("dir_x", r.direction.x()),
-  ASRT_F64("dir_y", r.direction.y()),
-  ASRT_F64("dir_z", r.direction.z()),
-  ASRT_F64("p_t", r.momentum[0]),
-  ASRT_F64("p_x", r.momentum[1]),
-  ASRT_F64("p_y", r.momentum[2]),
-  ASRT_F64("p_z", r.momentum[3]),
-  Column{ "termination", Kind::I32,
-          [](const RayRecord& r) { return std::uint64_t(std::uint32_t(r.termination)); },
-          [](RayRecord& r, std::uint64_t w) { r.termination = Termination(std::int32_t(w)); } },
-  ASRT_I32("object_id", r.objectId),
-  ASRT_F64("hit_x", r.hitPoint.x()),
-  ASRT_F64("hit_y", r.hitPoint.y()),
-  ASRT_F64("hit_z", r.hitPoint.z()),
-  ASRT_F64("normal_x", r.hitNormal.x()),
-  ASRT_F64("normal_y", r.hitNormal.y()),
-  ASRT_F64("normal_z", r.hitNormal.z()),
-  ASRT_F64("u", r.u),
-  ASRT_F64("v", r.v),
-  ASRT_F64("chord_error", r.chordError),
-  ASRT_F64("path_length", r.affineLength),
-  ASRT_F64("winding", r.winding),
-  ASRT_I32("image_order", r.imageOrder),
-  Column{ "steps", Kind::I64, [](const RayRecord& r) { return std::uint64_t(r.steps); },
-          [](RayRecord& r, std::uint64_t w) { r.steps = std::int64_t(w); } },
-  ASRT_F64("max_abs_h", r.maxAbsH),
-  ASRT_F64("color_r", r.color.x()),
-  ASRT_F64("color_g", r.color.y()),
-  ASRT_F64("color_b", r.color.z()),
-  ASRT_F64("dudi", r.dudi),
-  ASRT_F64("dudj", r.dudj),
-  ASRT_F64("dvdi", r.dvdi),
-  ASRT_F64("dvdj", r.dvdj),
-};
-#undef ASRT_F64
-#undef ASRT_I32
-constexpr int NumColumns = int(sizeof(Columns) / sizeof(Columns[0]));
-
-int wordSize(Kind k)
-{
-  return k == Kind::I32 ? 4 : 8;
+  const std::uint32_t w = __builtin_bswap32(std::uint32_t(std::int32_t(v)));
+  std::memcpy(p, &w, 4);
+  return p + 4;
 }
+char* putI64(char* p, std::int64_t v)
+{
+  const std::uint64_t w = __builtin_bswap64(std::uint64_t(v));
+  std::memcpy(p, &w, 8);
+  return p + 8;
+}
+char* putF64(char* p, double v)
+{
+  return putI64(p, std::int64_t(bitsOf(v)));
+}
+template<class T>
+const char* getI32(const char* p, T& v)
+{
+  std::uint32_t w;
+  std::memcpy(&w, p, 4);
+  v = static_cast<T>(std::int32_t(__builtin_bswap32(w)));
+  return p + 4;
+}
+const char* getI64(const char* p, std::int64_t& v)
+{
+  std::uint64_t w;
+  std::memcpy(&w, p, 8);
+  v = std::int64_t(__builtin_bswap64(w));
+  return p + 8;
+}
+const char* getF64(const char* p, double& v)
+{
+  std::int64_t w;
+  p = getI64(p, w);
+  v = doubleOf(std::uint64_t(w));
+  return p;
+}
+
+/// Writes the kRecordBytes bytes of a record at p; returns the end.
+char* encodeRecord(const RayRecord& r, char* p)
+{
+#define ASRT_PUT(name, kind, member) p = put##kind(p, member);
+  ASRT_RAY_FIELDS(ASRT_PUT)
+#undef ASRT_PUT
+  return p;
+}
+
+/// Reads a record written by encodeRecord.
+void decodeRecord(const char* p, RayRecord& r)
+{
+#define ASRT_GET(name, kind, member) p = get##kind(p, member);
+  ASRT_RAY_FIELDS(ASRT_GET)
+#undef ASRT_GET
+}
+
+/// A path point: x, y, z, λ, r, |H|, as big-endian float64 words.
+constexpr Column PathColumns[] = { { "x", Kind::F64 }, { "y", Kind::F64 },
+                                   { "z", Kind::F64 }, { "lambda", Kind::F64 },
+                                   { "r", Kind::F64 }, { "abs_h", Kind::F64 } };
+constexpr int PathPointBytes = 6 * 8;
 
 // ---------------------------------------------------------------------------------------------
 // The schema. Migration N takes version N−1 to N; each runs inside migrate()'s transaction.
 
-std::string columnList(const char* prefix)
+/// SQL for the big-endian integer of `size` bytes at byte `start` (0-based) of `bytes`.
+std::string wordExpr(const std::string& bytes, const std::string& start, int size)
 {
-  std::string s;
-  for (const Column& c : Columns)
-  {
-    s += ", ";
-    s += prefix;
-    s += c.name;
-  }
-  return s;
+  return "('x' || encode(substr(" + bytes + ", " + start + " + 1, " + std::to_string(size) +
+         "), 'hex'))::bit(" + std::to_string(8 * size) + ")::" + (size == 4 ? "integer" : "bigint");
 }
 
-// SQL decoding of the stored big-endian words. The double is rebuilt from sign, exponent and
-// mantissa with exact operations (products by powers of two); NaN payloads are not kept in SQL,
-// only in readFrame. Written out per column rather than as SQL functions: a function whose
-// argument is used several times is not inlined, and the call overhead would dominate.
-std::string wordExpr(const std::string& bytes, int size)
-{
-  return "('x' || encode(substr(" + bytes + ", " + std::to_string(size) + " * k + 1, " +
-         std::to_string(size) + "), 'hex'))::bit(" + std::to_string(8 * size) +
-         ")::" + (size == 4 ? "integer" : "bigint");
-}
-
+// SQL decoding of a stored 64-bit word as a double. The double is rebuilt from sign, exponent and
+// mantissa with exact operations (products by powers of two). SQL arithmetic has no NaN payloads:
+// every NaN comes out as PostgreSQL's one NaN (record_bytes and readFrame keep the bits). Written
+// out per column rather than as SQL functions: a function whose argument is used several times is
+// not inlined, and the call overhead would dominate.
 std::string float8Expr(const std::string& w)
 {
   const std::string mant = "(" + w + " & 4503599627370495)";
@@ -143,10 +200,26 @@ std::string float8Expr(const std::string& w)
          " + 4503599627370496)::float8 * (2::float8 ^ (" + expo + " - 1075)::float8) END";
 }
 
-// One row per ray. Each block's values are detoasted once (the OFFSET 0 sub-select) rather than
-// once per ray; columns a query does not use are neither detoasted nor decoded. Version 1 is kept
-// exactly as it was created, since migration 2 starts from it.
-std::string raysView(int version)
+/// The decoded columns of a view, ",\n  <expr> AS <name>" for each of `fields`; word(field,
+/// offset) is the SQL of the field's word, `offset` its byte offset in a packed record.
+template<class Fields, class Word>
+std::string fieldColumns(const Fields& fields, Word word)
+{
+  std::string s;
+  int offset = 0;
+  for (const Column& f : fields)
+  {
+    const std::string w = word(f, offset);
+    s += ",\n  " + (f.kind == Kind::F64 ? float8Expr(w) : w) + " AS " + f.name;
+    offset += wordSize(f.kind);
+  }
+  return s;
+}
+
+// Versions 1 and 2 kept one bytea column per field, in blocks of up to 4096 rays. Their view is
+// kept exactly as it was created, since migrations 2 and 3 start from it. Each block's values are
+// detoasted once (the OFFSET 0 sub-select) rather than once per ray.
+std::string legacyRaysView(int version)
 {
   std::string s;
   if (version == 1)
@@ -155,17 +228,16 @@ std::string raysView(int version)
   }
   else
   {
-    // first_ray counts within the tile (a rank does not know the sizes of the other tiles); ray
-    // numbers the frame as readFrame() returns it, tile after tile. Only complete frames are
-    // shown: the committed tiles of a frame still being written are nobody's business.
     s += "CREATE VIEW rays_v AS SELECT b.frame_id, b.tile, b.block, o.base + b.first_ray + k AS "
          "ray, b.first_ray + k AS tile_ray";
   }
-  for (const Column& c : Columns)
-  {
-    const std::string w = wordExpr("d." + std::string(c.name), wordSize(c.kind));
-    s += ",\n  " + (c.kind == Kind::F64 ? float8Expr(w) : w) + " AS " + c.name;
-  }
+  s +=
+    fieldColumns(Columns,
+                 [](const Column& c, int)
+                 {
+                   const int size = wordSize(c.kind);
+                   return wordExpr("d." + std::string(c.name), std::to_string(size) + " * k", size);
+                 });
   s += "\nFROM ray_blocks b\n";
   if (version >= 2)
   {
@@ -237,7 +309,7 @@ CREATE TABLE ray_blocks (
   {
     s += "ALTER TABLE ray_blocks ALTER COLUMN " + std::string(c.name) + " SET STORAGE EXTERNAL;\n";
   }
-  s += raysView(1);
+  s += legacyRaysView(1);
   return s;
 }
 
@@ -259,7 +331,152 @@ DROP VIEW rays_v;
 ALTER TABLE ray_blocks ADD COLUMN tile integer NOT NULL DEFAULT 0 CHECK (tile >= 0);
 ALTER TABLE ray_blocks DROP CONSTRAINT ray_blocks_pkey;
 ALTER TABLE ray_blocks ADD PRIMARY KEY (frame_id, tile, block);
-)SQL" + raysView(2);
+)SQL" + legacyRaysView(2);
+}
+
+// Version 3: the records of a ray packed together, kBlockSize rays per row kept inline, in a table
+// per tile attached to the partitioned ray_blocks (see RayStore.h); the paths of rays.
+
+/// The table holding the rays of one tile of one frame. Made from numbers only: nothing a caller
+/// gives reaches this name.
+std::string blockTable(std::int64_t frame, std::int32_t tile)
+{
+  return "ray_blocks_" + std::to_string(frame) + "_" + std::to_string(tile);
+}
+
+/// Creates a tile's table. Its CHECK makes ATTACH PARTITION skip scanning it; its rows are never
+/// updated and are frozen by COPY FREEZE, so autovacuum has nothing to do there (and would only
+/// read it to gather statistics that no query needs).
+std::string createBlockTable(std::int64_t frame, std::int32_t tile)
+{
+  return "CREATE TABLE " + blockTable(frame, tile) +
+         " (LIKE ray_block_layout INCLUDING ALL, PRIMARY KEY (block), CHECK (frame_id = " +
+         std::to_string(frame) + " AND tile = " + std::to_string(tile) +
+         ")) WITH (autovacuum_enabled = false)";
+}
+
+std::string attachBlockTable(const std::string& parent, std::int64_t frame, std::int32_t tile)
+{
+  return "ALTER TABLE " + parent + " ATTACH PARTITION " + blockTable(frame, tile) +
+         " FOR VALUES FROM (" + std::to_string(frame) + ", " + std::to_string(tile) + ") TO (" +
+         std::to_string(frame) + ", " + std::to_string(std::int64_t(tile) + 1) + ")";
+}
+
+/// One row per ray of every complete frame. record_bytes is the packed record itself, every bit
+/// of it (NaN payloads included), for clients that decode it and for readFrame's predicates.
+std::string raysView()
+{
+  const std::string rec = std::to_string(RayStore::kRecordBytes);
+  std::string s = "CREATE VIEW rays_v AS SELECT b.frame_id, b.tile, b.block, o.base + b.first_ray "
+                  "+ k AS ray, b.first_ray + k AS tile_ray";
+  s += fieldColumns(
+    Columns, [&](const Column& c, int offset)
+    { return wordExpr("b.data", rec + " * k + " + std::to_string(offset), wordSize(c.kind)); });
+  s += ",\n  substr(b.data, " + rec + " * k + 1, " + rec + ") AS record_bytes\n";
+  // first_ray counts within the tile (a rank does not know the sizes of the other tiles); ray
+  // numbers the frame as readFrame() returns it, tile after tile. Only complete frames are
+  // shown: the committed tiles of a frame still being written are nobody's business, and the
+  // tables of deleted frames not yet dropped are nobody's either.
+  s += "FROM ray_blocks b\n"
+       "JOIN frames f ON f.id = b.frame_id AND f.status = 'complete'\n"
+       "CROSS JOIN LATERAL (SELECT coalesce(sum(t.ray_count), 0)::bigint AS base FROM "
+       "frame_tiles t WHERE t.frame_id = b.frame_id AND t.tile < b.tile) o\n"
+       "CROSS JOIN LATERAL generate_series(0, b.n - 1) AS k;\n";
+  return s;
+}
+
+/// One row per point of every stored path of a complete frame.
+std::string pathPointsView()
+{
+  std::string s = "CREATE VIEW path_points_v AS SELECT p.frame_id, p.i, p.j, p.seq AS path, k AS "
+                  "point";
+  s += fieldColumns(PathColumns,
+                    [](const Column& c, int offset)
+                    {
+                      return wordExpr("d.points",
+                                      std::to_string(PathPointBytes) + " * k + " +
+                                        std::to_string(offset),
+                                      wordSize(c.kind));
+                    });
+  // The points are detoasted once per path (the OFFSET 0 sub-select), not once per point.
+  s += "\nFROM ray_paths p\n"
+       "JOIN frames f ON f.id = p.frame_id AND f.status = 'complete'\n"
+       "CROSS JOIN LATERAL (SELECT p.n, p.points || ''::bytea AS points OFFSET 0) d\n"
+       "CROSS JOIN LATERAL generate_series(0, d.n - 1) AS k;\n";
+  return s;
+}
+
+/// The new tables, before the rays of version 2 move into them.
+std::string migration3Tables()
+{
+  const std::string rays = std::to_string(RayStore::kBlockSize);
+  const std::string rec = std::to_string(RayStore::kRecordBytes);
+  return R"SQL(
+-- The definition of the per-tile tables of ray_blocks (CREATE TABLE ... LIKE it); holds no rows.
+CREATE TABLE ray_block_layout (
+  frame_id bigint NOT NULL,
+  tile integer NOT NULL CHECK (tile >= 0),
+  block integer NOT NULL CHECK (block >= 0),
+  first_ray bigint NOT NULL CHECK (first_ray = )SQL" +
+         rays + R"SQL(::bigint * block),
+  n integer NOT NULL CHECK (n BETWEEN 1 AND )SQL" +
+         rays + R"SQL(),
+  data bytea NOT NULL CHECK (length(data) = )SQL" +
+         rec + R"SQL( * n));
+-- Inline and uncompressed: a row fills one page, and the words do not compress.
+ALTER TABLE ray_block_layout ALTER COLUMN data SET STORAGE PLAIN;
+CREATE TABLE ray_blocks_v3 (LIKE ray_block_layout INCLUDING STORAGE)
+  PARTITION BY RANGE (frame_id, tile);
+)SQL";
+}
+
+/// Version 2's rays of one tile, re-packed: each ray's words concatenated, kBlockSize rays a row.
+/// The series of rays depends on the detoasted block (d.n, not b.n) so that the planner cannot
+/// put it outside, which would detoast the block once per ray; the records are made before the
+/// grouping (the outer OFFSET 0), which would otherwise sort whole blocks once per ray.
+std::string convertTileV2(std::int64_t frame, std::int32_t tile)
+{
+  const std::string rays = std::to_string(RayStore::kBlockSize);
+  std::string rec, detoast;
+  for (const Column& c : Columns)
+  {
+    const std::string size = std::to_string(wordSize(c.kind));
+    rec += std::string(rec.empty() ? "" : " || ") + "substr(d." + c.name + ", " + size +
+           " * k + 1, " + size + ")";
+    detoast +=
+      std::string(detoast.empty() ? "" : ", ") + "b." + c.name + " || ''::bytea AS " + c.name;
+  }
+  return "INSERT INTO " + blockTable(frame, tile) +
+         " (frame_id, tile, block, first_ray, n, data) SELECT " + std::to_string(frame) + ", " +
+         std::to_string(tile) + ", (r / " + rays + ")::integer, min(r), count(*)::integer, " +
+         "string_agg(rec, ''::bytea ORDER BY r) FROM (SELECT b.first_ray + k AS r, " + rec +
+         " AS rec FROM ray_blocks b CROSS JOIN LATERAL (SELECT b.n, " + detoast +
+         " OFFSET 0) d CROSS JOIN LATERAL generate_series(0, d.n - 1) AS k WHERE b.frame_id = " +
+         std::to_string(frame) + " AND b.tile = " + std::to_string(tile) +
+         " OFFSET 0) x GROUP BY r / " + rays;
+}
+
+/// After the move: the new table takes the old one's name, and the paths arrive.
+std::string migration3Finish()
+{
+  return R"SQL(
+DROP VIEW rays_v;
+DROP TABLE ray_blocks;
+ALTER TABLE ray_blocks_v3 RENAME TO ray_blocks;
+CREATE TABLE ray_paths (
+  frame_id bigint NOT NULL REFERENCES frames (id) ON DELETE CASCADE,
+  i integer NOT NULL,
+  j integer NOT NULL,
+  seq integer NOT NULL CHECK (seq >= 0),
+  termination integer NOT NULL,
+  n integer NOT NULL CHECK (n >= 0),
+  points bytea NOT NULL CHECK (length(points) = )SQL" +
+         std::to_string(PathPointBytes) + R"SQL( * n),
+  PRIMARY KEY (frame_id, i, j),
+  UNIQUE (frame_id, seq));
+ALTER TABLE ray_paths ALTER COLUMN points SET STORAGE EXTERNAL;
+)SQL" + raysView() +
+         pathPointsView();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -291,6 +508,16 @@ std::string trimmed(std::string s)
   throw StoreError(what + ": " + trimmed(msg), state ? state : "");
 }
 
+void cancelQuery(PGconn* conn)
+{
+  if (PGcancel* c = PQgetCancel(conn))
+  {
+    char why[256];
+    PQcancel(c, why, int(sizeof why));
+    PQfreeCancel(c);
+  }
+}
+
 /// Parameters for PQexecParams, all typed, doubles and integers in binary (exact).
 class Params
 {
@@ -303,15 +530,9 @@ public:
 
   Result exec(PGconn* conn, const std::string& sql, const std::string& what) const
   {
-    std::vector<const char*> values;
-    std::vector<int> lengths;
-    for (const std::string& v : this->Values)
-    {
-      values.push_back(v.data());
-      lengths.push_back(int(v.size()));
-    }
-    Result r(PQexecParams(conn, sql.c_str(), int(values.size()), this->Types.data(), values.data(),
-                          lengths.data(), this->Formats.data(), 1));
+    const Arrays a(*this);
+    Result r(PQexecParams(conn, sql.c_str(), int(a.Values.size()), this->Types.data(),
+                          a.Values.data(), a.Lengths.data(), this->Formats.data(), 1));
     const ExecStatusType st = r ? PQresultStatus(r.get()) : PGRES_FATAL_ERROR;
     if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK)
     {
@@ -320,7 +541,69 @@ public:
     return r;
   }
 
+  /// Runs a query whose rows come one at a time (single-row mode: the client never holds more
+  /// than one row), calling row(result) for each, binary.
+  template<class Row>
+  void stream(PGconn* conn, const std::string& sql, const std::string& what, Row row) const
+  {
+    const Arrays a(*this);
+    if (!PQsendQueryParams(conn, sql.c_str(), int(a.Values.size()), this->Types.data(),
+                           a.Values.data(), a.Lengths.data(), this->Formats.data(), 1) ||
+        !PQsetSingleRowMode(conn))
+    {
+      fail(what, conn, nullptr);
+    }
+    // Every result is consumed, even after an error, so that the connection is ready again.
+    std::string error, state;
+    while (PGresult* raw = PQgetResult(conn))
+    {
+      Result r(raw);
+      const ExecStatusType st = PQresultStatus(raw);
+      if (st == PGRES_SINGLE_TUPLE && error.empty())
+      {
+        try
+        {
+          row(raw);
+        }
+        catch (const StoreError& e)
+        {
+          // Stop asking for rows; the rest are read and dropped.
+          error = e.what();
+          state = e.sqlState();
+          cancelQuery(conn);
+        }
+      }
+      else if (st != PGRES_SINGLE_TUPLE && st != PGRES_TUPLES_OK && error.empty())
+      {
+        const char* s = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
+        error = what + ": " + trimmed(PQresultErrorMessage(raw));
+        state = s ? s : "";
+      }
+    }
+    if (!error.empty())
+    {
+      throw StoreError(error, state);
+    }
+    if (PQstatus(conn) != CONNECTION_OK)
+    {
+      fail(what, conn, nullptr);
+    }
+  }
+
 private:
+  struct Arrays
+  {
+    explicit Arrays(const Params& p)
+    {
+      for (const std::string& v : p.Values)
+      {
+        this->Values.push_back(v.data());
+        this->Lengths.push_back(int(v.size()));
+      }
+    }
+    std::vector<const char*> Values;
+    std::vector<int> Lengths;
+  };
   Params& add(const std::string& s, Oid type, int format)
   {
     this->Values.push_back(s);
@@ -412,7 +695,7 @@ const char* const FrameColumns =
   "f.relative_tolerance, f.absolute_tolerance, f.status, coalesce(f.write_seconds, 'NaN'), "
   "coalesce(f.trace_seconds, 'NaN'), "
   "to_char(f.created_at AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS.US\"Z\"'), f.ray_count, "
-  "f.tile_count "
+  "f.tile_count, (SELECT count(*) FROM ray_paths p WHERE p.frame_id = f.id) "
   "FROM frames f JOIN scenes s ON s.id = f.scene_id WHERE f.status = 'complete'";
 
 FrameInfo frameFromRow(const PGresult* r, int row)
@@ -449,6 +732,7 @@ FrameInfo frameFromRow(const PGresult* r, int row)
   f.createdAt = getText(r, row, c++);
   f.rayCount = getI64(r, row, c++);
   f.tileCount = getI32(r, row, c++);
+  f.pathCount = getI64(r, row, c++);
   return f;
 }
 
@@ -490,69 +774,48 @@ SceneTexts sceneTexts(const SceneDescription& d)
   return t;
 }
 
-/// Binary COPY output, streamed to the server in ~1 MB messages.
+/// Binary COPY input, streamed to the server in ~1 MB messages.
 class CopyWriter
 {
 public:
-  explicit CopyWriter(PGconn* conn)
+  CopyWriter(PGconn* conn, const std::string& copySql, const char* what)
     : Conn(conn)
+    , What(what)
   {
-    this->Buf.reserve(Flush + (1 << 18));
+    Result copy(PQexec(conn, copySql.c_str()));
+    if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_IN)
+    {
+      fail(std::string("starting to write ") + what + " failed", conn, copy.get());
+    }
+    this->Buf.reserve(Flush + (1 << 16));
     this->Buf.append("PGCOPY\n\377\r\n\0", 11);
     this->u32(0);
     this->u32(0);
   }
-  void u16(std::uint16_t v) { this->be(v, 2); }
-  void u32(std::uint32_t v) { this->be(v, 4); }
-  void be(std::uint64_t w, int size)
+  /// Starts a row of `fields` fields.
+  void row(std::uint16_t fields)
   {
-    char b[8];
-    for (int k = 0; k < size; ++k)
-    {
-      b[k] = char(w >> (8 * (size - 1 - k)));
-    }
-    this->Buf.append(b, size);
-  }
-  void block(std::int64_t frameId, std::int32_t tile, std::int32_t block, std::int64_t firstRay,
-             const RayRecord* r, int n)
-  {
-    this->u16(5 + NumColumns);
-    this->u32(8);
-    this->be(std::uint64_t(frameId), 8);
-    this->u32(4);
-    this->be(std::uint32_t(tile), 4);
-    this->u32(4);
-    this->be(std::uint32_t(block), 4);
-    this->u32(8);
-    this->be(std::uint64_t(firstRay), 8);
-    this->u32(4);
-    this->be(std::uint32_t(n), 4);
-    for (const Column& c : Columns)
-    {
-      const int size = wordSize(c.kind);
-      this->u32(std::uint32_t(size * n));
-      const std::size_t at = this->Buf.size();
-      this->Buf.resize(at + std::size_t(size) * n);
-      char* p = &this->Buf[at];
-      for (int m = 0; m < n; ++m, p += size)
-      {
-        std::uint64_t w = c.get(r[m]);
-        if (size == 8)
-        {
-          w = __builtin_bswap64(w);
-          std::memcpy(p, &w, 8);
-        }
-        else
-        {
-          const std::uint32_t h = __builtin_bswap32(std::uint32_t(w));
-          std::memcpy(p, &h, 4);
-        }
-      }
-    }
     if (this->Buf.size() >= Flush)
     {
       this->send();
     }
+    this->u16(fields);
+  }
+  void i32(std::int32_t v)
+  {
+    this->u32(4);
+    putI32(this->grow(4), v);
+  }
+  void i64(std::int64_t v)
+  {
+    this->u32(8);
+    putI64(this->grow(8), v);
+  }
+  /// A bytea field of `size` bytes; returns where to write them.
+  char* bytes(std::size_t size)
+  {
+    this->u32(std::uint32_t(size));
+    return this->grow(size);
   }
   void finish()
   {
@@ -560,12 +823,12 @@ public:
     this->send();
     if (PQputCopyEnd(this->Conn, nullptr) != 1)
     {
-      fail("writing the rays failed", this->Conn, nullptr);
+      fail(this->failure(), this->Conn, nullptr);
     }
     Result r(PQgetResult(this->Conn));
     if (!r || PQresultStatus(r.get()) != PGRES_COMMAND_OK)
     {
-      fail("writing the rays failed", this->Conn, r.get());
+      fail(this->failure(), this->Conn, r.get());
     }
     while (PGresult* extra = PQgetResult(this->Conn))
     {
@@ -574,25 +837,38 @@ public:
   }
 
 private:
+  void u16(std::uint16_t v)
+  {
+    const std::uint16_t w = __builtin_bswap16(v);
+    std::memcpy(this->grow(2), &w, 2);
+  }
+  void u32(std::uint32_t v) { putI32(this->grow(4), v); }
+  char* grow(std::size_t size)
+  {
+    const std::size_t at = this->Buf.size();
+    this->Buf.resize(at + size);
+    return &this->Buf[at];
+  }
+  std::string failure() const { return std::string("writing ") + this->What + " failed"; }
   void send()
   {
     if (!this->Buf.empty() &&
         PQputCopyData(this->Conn, this->Buf.data(), int(this->Buf.size())) != 1)
     {
-      fail("writing the rays failed", this->Conn, nullptr);
+      fail(this->failure(), this->Conn, nullptr);
     }
     this->Buf.clear();
   }
   static constexpr std::size_t Flush = 1 << 20;
   PGconn* Conn;
+  const char* What;
   std::string Buf;
 };
 
-/// Leaves a COPY IN or OUT that an error interrupted, so that the connection can roll back.
+/// Leaves a COPY that an error interrupted, so that the connection can roll back.
 void abandonCopy(PGconn* conn, const char* why)
 {
-  const PGTransactionStatusType ts = PQtransactionStatus(conn);
-  if (ts != PQTRANS_ACTIVE)
+  if (PQtransactionStatus(conn) != PQTRANS_ACTIVE)
   {
     return;
   }
@@ -600,16 +876,7 @@ void abandonCopy(PGconn* conn, const char* why)
   PQputCopyEnd(conn, why);
   while (PGresult* r = PQgetResult(conn))
   {
-    const ExecStatusType st = PQresultStatus(r);
     PQclear(r);
-    if (st == PGRES_COPY_OUT)
-    {
-      char* buf = nullptr;
-      while (PQgetCopyData(conn, &buf, 0) > 0)
-      {
-        PQfreemem(buf);
-      }
-    }
     if (PQstatus(conn) == CONNECTION_BAD)
     {
       break;
@@ -630,32 +897,130 @@ void rollback(PGconn* conn)
   }
 }
 
-/// Streams the records of one tile (a whole frame is tile 0) into ray_blocks in one COPY.
+/// Writes the records of one tile (a whole frame is tile 0) into a table of its own, created
+/// here, loaded in one COPY FREEZE and attached to ray_blocks. The caller's transaction must be
+/// READ COMMITTED (COPY FREEZE refuses a transaction that holds a snapshot). An empty tile has
+/// no table.
 void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t count,
               const std::function<void(std::size_t, RayRecord&)>& next)
 {
-  // Tests find a writer's backend by this statement's beginning ("COPY ray_blocks").
-  Result copy(PQexec(conn, ("COPY ray_blocks (frame_id, tile, block, first_ray, n" +
-                            columnList("") + ") FROM STDIN (FORMAT binary)")
-                             .c_str()));
-  if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_IN)
+  if (count == 0)
   {
-    fail("starting to write the rays failed", conn, copy.get());
+    return;
   }
+  exec(conn, createBlockTable(frameId, tile), "creating the table of the rays failed");
+  // Tests find a writer's backend by this statement's beginning ("COPY ray_blocks").
+  CopyWriter writer(conn,
+                    "COPY " + blockTable(frameId, tile) +
+                      " (frame_id, tile, block, first_ray, n, data) FROM STDIN (FORMAT binary, "
+                      "FREEZE)",
+                    "the rays");
   constexpr std::size_t blockSize = RayStore::kBlockSize;
-  CopyWriter writer(conn);
-  std::vector<RayRecord> block(std::min(count, blockSize));
+  RayRecord block[blockSize];
   for (std::size_t first = 0, b = 0; first < count; first += blockSize, ++b)
   {
     const int n = int(std::min(blockSize, count - first));
     for (int m = 0; m < n; ++m)
     {
-      next(first + std::size_t(m), block[std::size_t(m)]);
+      next(first + std::size_t(m), block[m]);
     }
-    writer.block(frameId, tile, std::int32_t(b), std::int64_t(first), block.data(), n);
+    writer.row(6);
+    writer.i64(frameId);
+    writer.i32(tile);
+    writer.i32(std::int32_t(b));
+    writer.i64(std::int64_t(first));
+    writer.i32(n);
+    char* p = writer.bytes(std::size_t(RayStore::kRecordBytes) * std::size_t(n));
+    for (int m = 0; m < n; ++m)
+    {
+      p = encodeRecord(block[m], p);
+    }
+  }
+  writer.finish();
+  exec(conn, attachBlockTable("ray_blocks", frameId, tile), "attaching the rays failed");
+}
+
+/// Refuses paths that the frame cannot hold: a pixel outside it, two paths of one pixel, more
+/// points than a bytea holds.
+void checkPaths(const SceneDescription& scene, const std::vector<RayPath>& paths)
+{
+  std::set<std::pair<int, int>> seen;
+  for (std::size_t k = 0; k < paths.size(); ++k)
+  {
+    const RayPath& p = paths[k];
+    const std::string which = "path " + std::to_string(k) + " (pixel " + std::to_string(p.i) +
+                              ", " + std::to_string(p.j) + ")";
+    if (p.i < 0 || p.j < 0 || p.i >= scene.camera.width || p.j >= scene.camera.height)
+    {
+      throw StoreError(which + " lies outside the " + std::to_string(scene.camera.width) + " x " +
+                       std::to_string(scene.camera.height) + " frame; nothing was stored");
+    }
+    if (!seen.insert({ p.i, p.j }).second)
+    {
+      throw StoreError(which + ": that pixel already has a path; nothing was stored");
+    }
+    if (p.points.size() > (std::size_t(1) << 30) / PathPointBytes - 1)
+    {
+      throw StoreError(which + " has " + std::to_string(p.points.size()) +
+                       " points, more than PostgreSQL holds in one value; nothing was stored");
+    }
+  }
+}
+
+void copyPaths(PGconn* conn, std::int64_t frameId, const std::vector<RayPath>& paths)
+{
+  if (paths.empty())
+  {
+    return;
+  }
+  CopyWriter writer(conn,
+                    "COPY ray_paths (frame_id, i, j, seq, termination, n, points) FROM STDIN "
+                    "(FORMAT binary)",
+                    "the paths");
+  for (std::size_t k = 0; k < paths.size(); ++k)
+  {
+    const RayPath& path = paths[k];
+    writer.row(7);
+    writer.i64(frameId);
+    writer.i32(path.i);
+    writer.i32(path.j);
+    writer.i32(std::int32_t(k));
+    writer.i32(std::int32_t(path.termination));
+    writer.i32(std::int32_t(path.points.size()));
+    char* p = writer.bytes(path.points.size() * PathPointBytes);
+    for (const PathPoint& q : path.points)
+    {
+      for (const double v : { q.x.x(), q.x.y(), q.x.z(), q.lambda, q.r, q.absH })
+      {
+        p = putF64(p, v);
+      }
+    }
   }
   writer.finish();
 }
+
+/// The complete frame `old` (labelled `label`) has the identity of the one being written: a
+/// duplicate, refused unless `replace`, which deletes its row (its paths and tiles go with it).
+/// Its tables of rays are dropped after the commit (see dropOrphanBlocks: dropping them here would
+/// lock ray_blocks for the whole write); until then nothing shows them.
+void deleteReplaced(PGconn* conn, std::int64_t old, const std::string& label, bool replace)
+{
+  if (!replace)
+  {
+    throw StoreError("duplicate frame: this scene with these parameters is already stored as "
+                     "frame " +
+                     std::to_string(old) + " (label \"" + label +
+                     "\"); pass replace = true to replace it");
+  }
+  Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
+                         "deleting the frame to be replaced failed");
+}
+
+/// The scene row a frame was to use disappeared before the frame's row referenced it (an unused
+/// scene row is removed after a failed write or the deletion of its last frame): look it up again.
+struct SceneVanished
+{
+};
 
 /// Inserts the row of a frame being written. With `ifAbsent`, a frame of the same identity makes
 /// the result empty instead of an error (the caller then looks at that frame).
@@ -674,20 +1039,52 @@ Result insertFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
   }
   ins.f64(cam.viewAngle).i32(cam.width).i32(cam.height).text(ic.method).f64(ic.step);
   ins.f64(ic.relativeTolerance).f64(ic.absoluteTolerance).i32(tileCount);
-  return ins.exec(conn,
-                  std::string("INSERT INTO frames (scene_id, frame_hash, effective_text, name, "
-                              "label, mass, spin, charge, camera_x, camera_y, camera_z, focal_x, "
-                              "focal_y, focal_z, up_x, up_y, up_z, view_angle, width, height, "
-                              "method, step, relative_tolerance, absolute_tolerance, tile_count, "
-                              "status) VALUES ($1, sha256($2), $3, $4, $5, $6, $7, $8, $9, $10, "
-                              "$11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23, "
-                              "$24, $25, 'writing')") +
-                    (ifAbsent ? " ON CONFLICT (frame_hash) DO NOTHING" : "") + " RETURNING id",
-                  "creating the frame failed");
+  try
+  {
+    return ins.exec(
+      conn,
+      std::string("INSERT INTO frames (scene_id, frame_hash, effective_text, name, label, mass, "
+                  "spin, charge, camera_x, camera_y, camera_z, focal_x, focal_y, focal_z, up_x, "
+                  "up_y, up_z, view_angle, width, height, method, step, relative_tolerance, "
+                  "absolute_tolerance, tile_count, status) VALUES ($1, sha256($2), $3, $4, $5, $6, "
+                  "$7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, "
+                  "$23, $24, $25, 'writing')") +
+        (ifAbsent ? " ON CONFLICT (frame_hash) DO NOTHING" : "") + " RETURNING id",
+      "creating the frame failed");
+  }
+  catch (const StoreError& e)
+  {
+    if (e.sqlState() == "23503")
+    {
+      throw SceneVanished();
+    }
+    throw;
+  }
+}
+
+/// Decodes a path's points (the bytes of ray_paths.points).
+void decodePoints(const char* p, std::size_t count, std::vector<PathPoint>& points)
+{
+  points.resize(count);
+  for (PathPoint& q : points)
+  {
+    for (double* v : { &q.x.x(), &q.x.y(), &q.x.z(), &q.lambda, &q.r, &q.absH })
+    {
+      p = getF64(p, *v);
+    }
+  }
 }
 }
 
 // -----------------------------------------------------------------------------------------------
+
+namespace
+{
+/// Writes begin READ COMMITTED whatever the server's default: the frame-identity checks rely on
+/// its row locking, and COPY FREEZE refuses a transaction that holds a snapshot.
+const char* const WriteBegin = "BEGIN ISOLATION LEVEL READ COMMITTED";
+const char* const ReadBegin = "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY";
+}
 
 struct RayStore::Impl
 {
@@ -764,31 +1161,154 @@ struct RayStore::Impl
   /// The id of the scene row, created if missing. The scene row is shared by every frame of the
   /// scene (a movie's frames differ only in their parameters). It is created in its own short
   /// transaction and never locked by a frame's write: an upsert inside the frame's transaction
-  /// would hold its row lock for the whole COPY and serialise every other writer of the scene. A
-  /// failed frame may leave an unused scene row.
+  /// would hold its row lock for the whole COPY and serialise every other writer of the scene.
+  /// The row may be removed again (see dropUnusedScenes) before the frame's row refers to it:
+  /// insertFrame() then throws SceneVanished and the writer asks again.
   std::int64_t sceneRow(const SceneTexts& texts)
   {
-    return this->transaction(
-      "BEGIN",
-      [&]
+    for (int attempt = 0; attempt < 5; ++attempt)
+    {
+      const std::int64_t id = this->transaction(
+        WriteBegin,
+        [&]
+        {
+          Params()
+            .bytes(texts.scene)
+            .text(texts.scene)
+            .exec(this->Conn,
+                  "INSERT INTO scenes (content_hash, description, description_text) "
+                  "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
+                  "storing the scene failed");
+          Result found =
+            Params()
+              .bytes(texts.scene)
+              .exec(this->Conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
+                    "finding the scene failed");
+          const std::int64_t sceneId = PQntuples(found.get()) ? getI64(found.get(), 0, 0) : -1;
+          exec(this->Conn, "COMMIT", "committing the scene failed");
+          return sceneId;
+        });
+      if (id >= 0)
       {
-        Params()
-          .bytes(texts.scene)
-          .text(texts.scene)
-          .exec(this->Conn,
-                "INSERT INTO scenes (content_hash, description, description_text) "
-                "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
-                "storing the scene failed");
-        Result found = Params()
-                         .bytes(texts.scene)
-                         .exec(this->Conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
-                               "finding the scene failed");
-        const std::int64_t id = getI64(found.get(), 0, 0);
-        exec(this->Conn, "COMMIT", "committing the scene failed");
         return id;
-      });
+      }
+    }
+    throw StoreError("storing the scene failed: its row kept disappearing under concurrent "
+                     "deletions");
+  }
+
+  /// Removes scene rows that no frame uses: `sceneId`'s, or all of them when it is negative.
+  /// They are left by a failed write (the scene row is committed before the frame's transaction)
+  /// or by the deletion of a scene's last frame. A row that a frame being written refers to is
+  /// locked by that writer and skipped; a writer that looked the row up but has not referred to it
+  /// yet looks it up again (SceneVanished). Best effort and never throws: the caller may be
+  /// handling another error, and an unused scene row is only a few kB of description that the
+  /// next write of the scene reuses.
+  void dropUnusedScenes(std::int64_t sceneId) noexcept
+  {
+    if (PQstatus(this->Conn) != CONNECTION_OK || PQtransactionStatus(this->Conn) != PQTRANS_IDLE)
+    {
+      return;
+    }
+    try
+    {
+      Params().i64(sceneId).exec(
+        this->Conn,
+        "DELETE FROM scenes WHERE id IN (SELECT s.id FROM scenes s WHERE ($1 < 0 OR s.id = $1) "
+        "AND NOT EXISTS (SELECT 1 FROM frames f WHERE f.scene_id = s.id) FOR UPDATE SKIP LOCKED)",
+        "removing an unused scene failed");
+    }
+    catch (const StoreError&)
+    {
+      // A frame committed in the meantime refers to it (foreign key): it stays, as it should.
+    }
+  }
+
+  /// Drops the tables of rays whose frame is gone: those of a replaced frame, or of frames
+  /// deleted with plain SQL. Dropping a table of ray_blocks locks ray_blocks exclusively, so this
+  /// waits at most a moment for reads under way and otherwise leaves the tables for a later call
+  /// (rays_v and readFrame never show them). Never throws.
+  void dropOrphanBlocks() noexcept
+  {
+    if (PQstatus(this->Conn) != CONNECTION_OK || PQtransactionStatus(this->Conn) != PQTRANS_IDLE)
+    {
+      return;
+    }
+    try
+    {
+      this->transaction(
+        WriteBegin,
+        [&]
+        {
+          Result r = exec(this->Conn,
+                          "SELECT m[1]::bigint, m[2]::integer FROM pg_inherits i JOIN pg_class c "
+                          "ON c.oid = i.inhrelid CROSS JOIN LATERAL regexp_match(c.relname::text, "
+                          "'^ray_blocks_([0-9]+)_([0-9]+)$') AS m WHERE i.inhparent = "
+                          "'ray_blocks'::regclass AND NOT EXISTS (SELECT 1 FROM frames f WHERE "
+                          "f.id = m[1]::bigint)",
+                          "looking for the rays of deleted frames failed");
+          std::string tables;
+          for (int row = 0; row < PQntuples(r.get()); ++row)
+          {
+            tables += (tables.empty() ? "" : ", ") +
+                      blockTable(getI64(r.get(), row, 0), getI32(r.get(), row, 1));
+          }
+          if (!tables.empty())
+          {
+            exec(this->Conn, "SET LOCAL lock_timeout = '2s'", "setting a lock timeout failed");
+            exec(this->Conn, "DROP TABLE IF EXISTS " + tables,
+                 "dropping the rays of deleted frames failed");
+          }
+          exec(this->Conn, "COMMIT", "committing failed");
+        });
+    }
+    catch (const StoreError&)
+    {
+      // Left for a later call.
+    }
   }
 };
+
+namespace
+{
+/// Runs a script of several statements (the migrations).
+void execScript(PGconn* conn, const std::string& sql, const std::string& what)
+{
+  Result r(PQexec(conn, sql.c_str()));
+  if (!r || PQresultStatus(r.get()) != PGRES_COMMAND_OK)
+  {
+    fail(what, conn, r.get());
+  }
+}
+
+void runMigration(PGconn* conn, int version)
+{
+  const std::string what = "migration to schema version " + std::to_string(version) + " failed";
+  if (version == 1)
+  {
+    execScript(conn, migration1(), what);
+  }
+  else if (version == 2)
+  {
+    execScript(conn, migration2(), what);
+  }
+  else
+  {
+    execScript(conn, migration3Tables(), what);
+    Result tiles =
+      exec(conn, "SELECT DISTINCT frame_id, tile FROM ray_blocks ORDER BY frame_id, tile", what);
+    for (int row = 0; row < PQntuples(tiles.get()); ++row)
+    {
+      const std::int64_t frame = getI64(tiles.get(), row, 0);
+      const std::int32_t tile = getI32(tiles.get(), row, 1);
+      exec(conn, createBlockTable(frame, tile), what);
+      exec(conn, convertTileV2(frame, tile), what);
+      exec(conn, attachBlockTable("ray_blocks_v3", frame, tile), what);
+    }
+    execScript(conn, migration3Finish(), what);
+  }
+}
+}
 
 RayStore::RayStore(const std::string& conninfo)
   : P(new Impl)
@@ -822,6 +1342,10 @@ RayStore::RayStore(const std::string& conninfo)
     delete this->P;
     throw StoreError("cannot set the client encoding to UTF8: " + msg);
   }
+  // The server's notices ("table does not exist, skipping", ...) are not the caller's business;
+  // libpq would print them on stderr.
+  PQsetNoticeProcessor(
+    this->P->Conn, [](void*, const char*) {}, nullptr);
 }
 
 RayStore::~RayStore()
@@ -841,16 +1365,22 @@ int RayStore::schemaVersion()
   return this->P->readVersion();
 }
 
-void RayStore::migrate()
+void RayStore::migrate(int targetVersion)
 {
+  if (targetVersion < 1 || targetVersion > kSchemaVersion)
+  {
+    throw StoreError("cannot migrate to schema version " + std::to_string(targetVersion) +
+                     ": this build knows versions 1 to " + std::to_string(kSchemaVersion));
+  }
   this->P->ensureConnected();
   this->P->SchemaChecked = false;
+  PGconn* conn = this->P->Conn;
   this->P->transaction(
-    "BEGIN",
+    WriteBegin,
     [&]
     {
       // Concurrent migrators wait for each other instead of failing on each other's tables.
-      exec(this->P->Conn, "SELECT pg_advisory_xact_lock(1095979604)", "locking the schema failed");
+      exec(conn, "SELECT pg_advisory_xact_lock(1095979604)", "locking the schema failed");
       const int v = this->P->readVersion();
       if (v > kSchemaVersion)
       {
@@ -858,122 +1388,156 @@ void RayStore::migrate()
                          ", this build knows " + std::to_string(kSchemaVersion) +
                          "; refusing to touch a database written by a newer ASRT");
       }
-      const std::vector<std::string> migrations = { migration1(), migration2() };
-      for (int m = v; m < kSchemaVersion; ++m)
+      if (v > targetVersion)
       {
-        Result r(PQexec(this->P->Conn, migrations[std::size_t(m)].c_str()));
-        if (!r || PQresultStatus(r.get()) != PGRES_COMMAND_OK)
-        {
-          fail("migration to schema version " + std::to_string(m + 1) + " failed", this->P->Conn,
-               r.get());
-        }
+        throw StoreError("the database is at schema version " + std::to_string(v) +
+                         ", past the requested " + std::to_string(targetVersion) +
+                         "; migrations never go back");
       }
-      if (v != kSchemaVersion)
+      for (int m = v + 1; m <= targetVersion; ++m)
       {
-        exec(this->P->Conn, "DELETE FROM schema_version", "recording the schema version failed");
+        runMigration(conn, m);
+      }
+      if (v != targetVersion)
+      {
+        exec(conn, "DELETE FROM schema_version", "recording the schema version failed");
         Params()
-          .i32(kSchemaVersion)
-          .exec(this->P->Conn, "INSERT INTO schema_version (version) VALUES ($1)",
+          .i32(targetVersion)
+          .exec(conn, "INSERT INTO schema_version (version) VALUES ($1)",
                 "recording the schema version failed");
       }
-      exec(this->P->Conn, "COMMIT", "committing the migration failed");
+      exec(conn, "COMMIT", "committing the migration failed");
     });
+  if (targetVersion == kSchemaVersion)
+  {
+    this->P->dropOrphanBlocks();
+    this->P->dropUnusedScenes(-1);
+  }
 }
 
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
                                   const std::vector<RayRecord>& records, bool replace,
                                   double traceSeconds)
 {
+  return this->writeFrame(scene, label, records, std::vector<RayPath>(), replace, traceSeconds);
+}
+
+std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
+                                  const std::vector<RayRecord>& records,
+                                  const std::vector<RayPath>& paths, bool replace,
+                                  double traceSeconds)
+{
   return this->writeFrame(
     scene, label, records.size(), [&records](std::size_t k, RayRecord& r) { r = records[k]; },
-    replace, traceSeconds);
+    replace, traceSeconds, paths);
 }
 
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
                                   std::size_t count,
                                   const std::function<void(std::size_t, RayRecord&)>& next,
-                                  bool replace, double traceSeconds)
+                                  bool replace, double traceSeconds,
+                                  const std::vector<RayPath>& paths)
 {
   const auto start = std::chrono::steady_clock::now();
   requireText(label, "the label");
   requireText(scene.name, "the scene name");
   const SceneTexts texts = sceneTexts(scene);
+  checkPaths(scene, paths);
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
-  const std::int64_t sceneId = this->P->sceneRow(texts);
-  return this->P->transaction(
-    "BEGIN",
-    [&]
+  for (int attempt = 0;; ++attempt)
+  {
+    const std::int64_t sceneId = this->P->sceneRow(texts);
+    bool replaced = false;
+    try
     {
-      Result r;
+      const std::int64_t frameId = this->P->transaction(
+        WriteBegin,
+        [&]
+        {
+          Result r =
+            Params()
+              .bytes(texts.frame)
+              .exec(conn,
+                    "SELECT id, label, status FROM frames WHERE frame_hash = sha256($1) FOR UPDATE",
+                    "looking for an existing frame failed");
+          if (PQntuples(r.get()) > 0)
+          {
+            const std::int64_t old = getI64(r.get(), 0, 0);
+            if (getText(r.get(), 0, 2) != "complete")
+            {
+              // Replacing it would pull the frame from under the ranks writing its tiles.
+              throw StoreError("duplicate frame: this scene with these parameters is being "
+                               "written as tiled frame " +
+                               std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
+                               "\"); delete it first if its writers are gone");
+            }
+            deleteReplaced(conn, old, getText(r.get(), 0, 1), replace);
+            replaced = true;
+          }
 
-      r = Params()
-            .bytes(texts.frame)
+          try
+          {
+            r = insertFrame(conn, sceneId, texts, scene, label, 1, false);
+          }
+          catch (const StoreError& e)
+          {
+            if (e.sqlState() == "23505")
+            {
+              // Another writer stored the same frame between our check and our insert.
+              throw StoreError("duplicate frame: this scene with these parameters was just "
+                               "stored by another writer; pass replace = true to replace it",
+                               e.sqlState());
+            }
+            throw;
+          }
+          const std::int64_t id = getI64(r.get(), 0, 0);
+
+          copyTile(conn, id, 0, count, next);
+          copyPaths(conn, id, paths);
+          Params()
+            .i64(id)
+            .i64(std::int64_t(count))
             .exec(conn,
-                  "SELECT id, label, status FROM frames WHERE frame_hash = sha256($1) FOR UPDATE",
-                  "looking for an existing frame failed");
-      if (PQntuples(r.get()) > 0)
-      {
-        const std::int64_t old = getI64(r.get(), 0, 0);
-        if (getText(r.get(), 0, 2) != "complete")
-        {
-          // Replacing it would pull the frame from under the ranks writing its tiles.
-          throw StoreError("duplicate frame: this scene with these parameters is being written "
-                           "as tiled frame " +
-                           std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
-                           "\"); delete it first if its writers are gone");
-        }
-        if (!replace)
-        {
-          throw StoreError("duplicate frame: this scene with these parameters is already stored as "
-                           "frame " +
-                           std::to_string(old) + " (label \"" + getText(r.get(), 0, 1) +
-                           "\"); pass replace = true to replace it");
-        }
-        Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
-                               "deleting the frame to be replaced failed");
-      }
+                  "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, 0, "
+                  "$2, clock_timestamp())",
+                  "recording the frame's rays failed");
 
-      try
+          const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          Params()
+            .i64(id)
+            .i64(std::int64_t(count))
+            .f64(seconds)
+            .f64(traceSeconds)
+            .exec(conn,
+                  "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = $3, "
+                  "trace_seconds = nullif($4, 'NaN'), completed_at = clock_timestamp() WHERE id "
+                  "= $1",
+                  "completing the frame failed");
+          exec(conn, "COMMIT", "committing the frame failed");
+          return id;
+        });
+      if (replaced)
       {
-        r = insertFrame(conn, sceneId, texts, scene, label, 1, false);
+        this->P->dropOrphanBlocks();
       }
-      catch (const StoreError& e)
-      {
-        if (e.sqlState() == "23505")
-        {
-          // Another writer stored the same frame between our check and our insert.
-          throw StoreError("duplicate frame: this scene with these parameters was just stored by "
-                           "another writer; pass replace = true to replace it",
-                           e.sqlState());
-        }
-        throw;
-      }
-      const std::int64_t frameId = getI64(r.get(), 0, 0);
-
-      copyTile(conn, frameId, 0, count, next);
-      Params()
-        .i64(frameId)
-        .i64(std::int64_t(count))
-        .exec(conn,
-              "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, 0, $2, "
-              "clock_timestamp())",
-              "recording the frame's rays failed");
-
-      const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      Params()
-        .i64(frameId)
-        .i64(std::int64_t(count))
-        .f64(seconds)
-        .f64(traceSeconds)
-        .exec(conn,
-              "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = $3, "
-              "trace_seconds = nullif($4, 'NaN'), completed_at = clock_timestamp() WHERE id = $1",
-              "completing the frame failed");
-      exec(conn, "COMMIT", "committing the frame failed");
       return frameId;
-    });
+    }
+    catch (const SceneVanished&)
+    {
+      if (attempt == 4)
+      {
+        throw StoreError("writing the frame failed: its scene row kept disappearing under "
+                         "concurrent deletions");
+      }
+    }
+    catch (...)
+    {
+      this->P->dropUnusedScenes(sceneId);
+      throw;
+    }
+  }
 }
 
 std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std::string& label,
@@ -989,61 +1553,72 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
   const SceneTexts texts = sceneTexts(scene);
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
-  const std::int64_t sceneId = this->P->sceneRow(texts);
   // Every rank runs this at about the same time. INSERT ... ON CONFLICT DO NOTHING waits for a
   // concurrent inserter of the same identity and then yields to it, so that all agree on its row.
-  // The row can still vanish between that and the SELECT (a concurrent replace or delete):
-  // then try again.
+  // The row can still vanish between that and the SELECT (a concurrent replace or delete), and so
+  // can the scene's row before the frame's refers to it: then try again.
   for (int attempt = 0; attempt < 10; ++attempt)
   {
-    const std::optional<std::int64_t> id = this->P->transaction(
-      "BEGIN",
-      [&]() -> std::optional<std::int64_t>
-      {
-        Result r = insertFrame(conn, sceneId, texts, scene, label, tileCount, true);
-        if (PQntuples(r.get()) == 0)
+    const std::int64_t sceneId = this->P->sceneRow(texts);
+    bool replaced = false;
+    std::optional<std::int64_t> id;
+    try
+    {
+      id = this->P->transaction(
+        WriteBegin,
+        [&]() -> std::optional<std::int64_t>
         {
-          r = Params()
-                .bytes(texts.frame)
-                .exec(conn,
-                      "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = "
-                      "sha256($1) FOR UPDATE",
-                      "looking for the frame failed");
+          Result r = insertFrame(conn, sceneId, texts, scene, label, tileCount, true);
           if (PQntuples(r.get()) == 0)
           {
-            exec(conn, "ROLLBACK", "ending the transaction failed");
-            return std::nullopt;
-          }
-          const std::int64_t old = getI64(r.get(), 0, 0);
-          const std::string status = getText(r.get(), 0, 1);
-          const int oldTiles = getI32(r.get(), 0, 2);
-          if (status == "writing")
-          {
-            if (oldTiles != tileCount)
+            r = Params()
+                  .bytes(texts.frame)
+                  .exec(conn,
+                        "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = "
+                        "sha256($1) FOR UPDATE",
+                        "looking for the frame failed");
+            if (PQntuples(r.get()) == 0)
             {
-              throw StoreError("frame " + std::to_string(old) +
-                               " of this scene is being written as " + std::to_string(oldTiles) +
-                               " tiles, not " + std::to_string(tileCount));
+              exec(conn, "ROLLBACK", "ending the transaction failed");
+              return std::nullopt;
             }
-            exec(conn, "COMMIT", "committing the frame failed");
-            return old;
+            const std::int64_t old = getI64(r.get(), 0, 0);
+            const std::string status = getText(r.get(), 0, 1);
+            const int oldTiles = getI32(r.get(), 0, 2);
+            if (status == "writing")
+            {
+              if (oldTiles != tileCount)
+              {
+                throw StoreError("frame " + std::to_string(old) +
+                                 " of this scene is being written as " + std::to_string(oldTiles) +
+                                 " tiles, not " + std::to_string(tileCount));
+              }
+              exec(conn, "COMMIT", "committing the frame failed");
+              return old;
+            }
+            deleteReplaced(conn, old, getText(r.get(), 0, 3), replace);
+            replaced = true;
+            // No conflict is possible any more: the old row is deleted and locked by us.
+            r = insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
           }
-          if (!replace)
-          {
-            throw StoreError("duplicate frame: this scene with these parameters is already stored "
-                             "as frame " +
-                             std::to_string(old) + " (label \"" + getText(r.get(), 0, 3) +
-                             "\"); pass replace = true to replace it");
-          }
-          Params().i64(old).exec(conn, "DELETE FROM frames WHERE id = $1",
-                                 "deleting the frame to be replaced failed");
-          // No conflict is possible any more: the old row is deleted and locked by us.
-          r = insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
-        }
-        const std::int64_t frameId = getI64(r.get(), 0, 0);
-        exec(conn, "COMMIT", "committing the frame failed");
-        return frameId;
-      });
+          const std::int64_t frameId = getI64(r.get(), 0, 0);
+          exec(conn, "COMMIT", "committing the frame failed");
+          return frameId;
+        });
+    }
+    catch (const SceneVanished&)
+    {
+      continue;
+    }
+    catch (...)
+    {
+      this->P->dropUnusedScenes(sceneId);
+      throw;
+    }
+    if (replaced)
+    {
+      this->P->dropOrphanBlocks();
+    }
     if (id)
     {
       return *id;
@@ -1052,7 +1627,6 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
   throw StoreError("starting the tiled frame failed: its row kept disappearing under concurrent "
                    "replacements or deletions");
 }
-
 void RayStore::writeTile(std::int64_t frameId, int tile, const std::vector<RayRecord>& records)
 {
   this->writeTile(frameId, tile, records.size(),
@@ -1066,7 +1640,7 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
   PGconn* conn = this->P->Conn;
   const std::string which = "tile " + std::to_string(tile) + " of frame " + std::to_string(frameId);
   this->P->transaction(
-    "BEGIN",
+    WriteBegin,
     [&]
     {
       // FOR KEY SHARE keeps the frame from being deleted under the COPY without blocking the
@@ -1108,9 +1682,10 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
       }
       catch (const StoreError& e)
       {
-        if (e.sqlState() == "23505")
+        if (e.sqlState() == "23505" || e.sqlState() == "42P07")
         {
-          // A concurrent writer of the same tile committed first.
+          // A concurrent writer of the same tile committed first (its row of frame_tiles, or its
+          // table of rays, exists).
           throw StoreError("writing " + which + " failed: the tile is already written",
                            e.sqlState());
         }
@@ -1219,22 +1794,47 @@ std::optional<std::int64_t> RayStore::findFrame(const SceneDescription& scene)
 void RayStore::deleteFrame(std::int64_t id)
 {
   this->P->requireSchema();
-  Result r = Params().i64(id).exec(this->P->Conn, "DELETE FROM frames WHERE id = $1",
-                                   "deleting the frame failed");
-  if (std::string(PQcmdTuples(r.get())) == "0")
-  {
-    throw StoreError("there is no frame " + std::to_string(id) + " to delete");
-  }
+  PGconn* conn = this->P->Conn;
+  const std::int64_t sceneId = this->P->transaction(
+    WriteBegin,
+    [&]
+    {
+      // The row lock waits for the writers of its tiles (they hold it in key-share mode), so that
+      // no table of rays is attached after the ones dropped here.
+      Result r = Params().i64(id).exec(conn, "SELECT scene_id FROM frames WHERE id = $1 FOR UPDATE",
+                                       "deleting the frame failed");
+      if (PQntuples(r.get()) == 0)
+      {
+        throw StoreError("there is no frame " + std::to_string(id) + " to delete");
+      }
+      const std::int64_t scene = getI64(r.get(), 0, 0);
+      Result tiles = Params().i64(id).exec(
+        conn, "SELECT tile FROM frame_tiles WHERE frame_id = $1 AND ray_count > 0 ORDER BY tile",
+        "deleting the frame failed");
+      Params().i64(id).exec(conn, "DELETE FROM frames WHERE id = $1", "deleting the frame failed");
+      std::string tables;
+      for (int row = 0; row < PQntuples(tiles.get()); ++row)
+      {
+        tables += (tables.empty() ? "" : ", ") + blockTable(id, getI32(tiles.get(), row, 0));
+      }
+      if (!tables.empty())
+      {
+        exec(conn, "DROP TABLE " + tables, "deleting the frame's rays failed");
+      }
+      exec(conn, "COMMIT", "committing the deletion failed");
+      return scene;
+    });
+  this->P->dropUnusedScenes(sceneId);
 }
 
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
 {
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
-  // REPEATABLE READ: the frame row, the selection and the blocks come from one snapshot. Always
-  // rolled back, so that nothing a predicate might have done (set_config, ...) outlives the read.
+  // REPEATABLE READ: the frame row, its tiles and its rays come from one snapshot. Always rolled
+  // back, so that nothing a predicate might have done (set_config, ...) outlives the read.
   return this->P->transaction(
-    "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY",
+    ReadBegin,
     [&]
     {
       Result r = Params().i64(id).exec(
@@ -1245,123 +1845,73 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
         throw StoreError("there is no frame " + std::to_string(id));
       }
       const std::int64_t rayCount = getI64(r.get(), 0, 0);
-
-      // COPY takes no parameters: the frame id reaches it bound, through a transaction-local
-      // setting.
-      Params()
-        .text(std::to_string(id))
-        .exec(conn, "SELECT set_config('asrt.frame', $1, true)", "reading the frame failed");
-      Result copy(PQexec(conn, ("COPY (SELECT n" + columnList("") +
-                                " FROM ray_blocks WHERE frame_id = "
-                                "current_setting('asrt.frame')::bigint ORDER BY tile, block) "
-                                "TO STDOUT (FORMAT binary)")
-                                 .c_str()));
-      if (!copy || PQresultStatus(copy.get()) != PGRES_COPY_OUT)
-      {
-        fail("reading the rays failed", conn, copy.get());
-      }
+      const std::string frame = "frame " + std::to_string(id);
       std::vector<RayRecord> records;
-      records.reserve(std::size_t(rayCount));
-      std::vector<RayRecord> block(kBlockSize);
-      std::int64_t ray = 0;
-      bool header = true;
-      auto corrupt = [&](const char* what)
+      if (predicate.empty())
       {
-        throw StoreError(std::string("reading the rays of frame ") + std::to_string(id) +
-                         " failed: malformed COPY data (" + what + ")");
-      };
-      for (;;)
-      {
-        char* buf = nullptr;
-        const int len = PQgetCopyData(conn, &buf, 0);
-        if (len == -1)
+        // Where each tile's rays start in the frame, and how many it has.
+        struct TileRays
         {
-          break;
+          std::int64_t base, count;
+        };
+        std::vector<std::pair<std::int32_t, TileRays>> tiles;
+        r = Params().i64(id).exec(
+          conn, "SELECT tile, ray_count FROM frame_tiles WHERE frame_id = $1 ORDER BY tile",
+          "reading the frame's tiles failed");
+        std::int64_t base = 0;
+        for (int row = 0; row < PQntuples(r.get()); ++row)
+        {
+          const std::int64_t count = getI64(r.get(), row, 1);
+          tiles.push_back({ getI32(r.get(), row, 0), { base, count } });
+          base += count;
         }
-        if (len < 0)
+        if (base != rayCount)
         {
-          fail("reading the rays failed", conn, nullptr);
+          throw StoreError(frame + " is inconsistent: it says " + std::to_string(rayCount) +
+                           " rays, its tiles " + std::to_string(base));
         }
-        std::unique_ptr<char, void (*)(void*)> hold(buf, PQfreemem);
-        const char* p = buf;
-        const char* end = buf + len;
-        if (header)
-        {
-          if (len < 19 || std::memcmp(p, "PGCOPY\n\377\r\n\0", 11) != 0)
+        records.resize(std::size_t(rayCount));
+        // A parallel plan would only copy the rows once more, between processes.
+        exec(conn, "SELECT set_config('max_parallel_workers_per_gather', '0', true)",
+             "reading the rays failed");
+        // Rows come in whatever order the server finds them; each says where its rays go. The
+        // table's keys and checks (one row per block, first_ray = kBlockSize × block, n ≤
+        // kBlockSize) make the rows' ranges disjoint, so a count that adds up covers every ray
+        // exactly once.
+        std::int64_t got = 0;
+        Params().i64(id).stream(
+          conn, "SELECT tile, first_ray, n, data FROM ray_blocks WHERE frame_id = $1",
+          "reading the rays failed",
+          [&](const PGresult* row)
           {
-            corrupt("header");
-          }
-          p += 15;
-          p += 4 + readBE(p, 4);
-          header = false;
-        }
-        if (end - p < 2)
-        {
-          corrupt("short row");
-        }
-        const std::uint16_t fields = std::uint16_t(readBE(p, 2));
-        p += 2;
-        if (fields == 0xFFFF)
-        {
-          continue;
-        }
-        if (fields != 1 + NumColumns || end - p < 8 || readBE(p, 4) != 4)
-        {
-          corrupt("row shape");
-        }
-        const int n = int(std::int32_t(readBE(p + 4, 4)));
-        p += 8;
-        if (n <= 0 || n > kBlockSize)
-        {
-          corrupt("block size");
-        }
-        for (const Column& c : Columns)
-        {
-          const int size = wordSize(c.kind);
-          if (end - p < 4 || std::int64_t(readBE(p, 4)) != std::int64_t(size) * n ||
-              end - p < 4 + std::int64_t(size) * n)
-          {
-            corrupt(c.name);
-          }
-          p += 4;
-          for (int m = 0; m < n; ++m, p += size)
-          {
-            std::uint64_t w;
-            if (size == 8)
+            const std::int32_t tile = getI32(row, 0, 0);
+            const std::int64_t first = getI64(row, 0, 1);
+            const std::int32_t n = getI32(row, 0, 2);
+            const auto t = std::find_if(tiles.begin(), tiles.end(),
+                                        [&](const auto& x) { return x.first == tile; });
+            if (t == tiles.end() || n < 1 || n > kBlockSize || first < 0 ||
+                first + n > t->second.count ||
+                PQgetlength(row, 0, 3) != std::int64_t(n) * kRecordBytes)
             {
-              std::memcpy(&w, p, 8);
-              w = __builtin_bswap64(w);
+              throw StoreError("reading the rays of " + frame + " failed: a stored block (tile " +
+                               std::to_string(tile) + ", first ray " + std::to_string(first) +
+                               ") does not fit the frame");
             }
-            else
+            const char* p = PQgetvalue(row, 0, 3);
+            RayRecord* out = &records[std::size_t(t->second.base + first)];
+            for (int m = 0; m < n; ++m, p += kRecordBytes)
             {
-              std::uint32_t h;
-              std::memcpy(&h, p, 4);
-              w = __builtin_bswap32(h);
+              decodeRecord(p, out[m]);
             }
-            c.set(block[std::size_t(m)], w);
-          }
+            got += n;
+          });
+        if (got != rayCount)
+        {
+          throw StoreError(frame + " is inconsistent: it says " + std::to_string(rayCount) +
+                           " rays, its blocks hold " + std::to_string(got));
         }
-        records.insert(records.end(), block.begin(), block.begin() + n);
-        ray += n;
       }
-      Result done(PQgetResult(conn));
-      if (!done || PQresultStatus(done.get()) != PGRES_COMMAND_OK)
-      {
-        fail("reading the rays failed", conn, done.get());
-      }
-      while (PGresult* extra = PQgetResult(conn))
-      {
-        PQclear(extra);
-      }
-      if (ray != rayCount)
-      {
-        throw StoreError("frame " + std::to_string(id) + " is inconsistent: it says " +
-                         std::to_string(rayCount) + " rays, its blocks hold " +
-                         std::to_string(ray));
-      }
-      // The predicate runs last, so that settings it may change (search_path, ...) cannot affect
-      // the store's own statements; the rollback then undoes them.
-      if (!predicate.empty())
+      else
       {
         Params()
           .text(std::to_string(this->PredicateTimeout.count()) + "ms")
@@ -1369,33 +1919,82 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
                 "setting the predicate's time limit failed");
         // The predicate is the one deliberate splice (see the header). The frame restriction is
         // inside the sub-select, so text that closes the parentheses still sees only this frame;
-        // the extended protocol refuses a second statement; READ ONLY refuses writes.
-        r = Params().i64(id).exec(conn,
-                                  "SELECT r.ray FROM (SELECT * FROM rays_v WHERE frame_id = $1) r "
-                                  "WHERE (" +
-                                    predicate + "\n)",
-                                  "the ray predicate failed");
-        std::vector<char> selected(std::size_t(rayCount), 0);
-        for (int row = 0; row < PQntuples(r.get()); ++row)
-        {
-          const std::int64_t k = getI64(r.get(), row, 0);
-          if (k >= 0 && k < rayCount)
+        // the extended protocol refuses a second statement; READ ONLY refuses writes. The server
+        // evaluates it and sends the selected records only, in any order.
+        std::vector<std::pair<std::int64_t, RayRecord>> selected;
+        Params().i64(id).stream(
+          conn,
+          "SELECT r.ray, r.record_bytes FROM (SELECT * FROM rays_v WHERE frame_id = $1) r "
+          "WHERE (" +
+            predicate + "\n)",
+          "the ray predicate failed",
+          [&](const PGresult* row)
           {
-            selected[std::size_t(k)] = 1;
-          }
-        }
-        std::size_t kept = 0;
-        for (std::size_t k = 0; k < records.size(); ++k)
+            const std::int64_t ray = getI64(row, 0, 0);
+            if (PQgetisnull(row, 0, 0) || ray < 0 || ray >= rayCount ||
+                PQgetlength(row, 0, 1) != kRecordBytes)
+            {
+              throw StoreError("the ray predicate failed: its query gave a row that is no ray of " +
+                               frame);
+            }
+            selected.emplace_back(ray, RayRecord());
+            decodeRecord(PQgetvalue(row, 0, 1), selected.back().second);
+          });
+        std::sort(selected.begin(), selected.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        records.reserve(selected.size());
+        for (std::size_t k = 0; k < selected.size(); ++k)
         {
-          if (selected[k])
+          if (k > 0 && selected[k].first == selected[k - 1].first)
           {
-            records[kept++] = records[k];
+            throw StoreError("the ray predicate failed: its query gave ray " +
+                             std::to_string(selected[k].first) + " twice");
           }
+          records.push_back(selected[k].second);
         }
-        records.resize(kept);
       }
       exec(conn, "ROLLBACK", "ending the read failed");
       return records;
+    });
+}
+
+std::vector<RayPath> RayStore::readPaths(std::int64_t id)
+{
+  this->P->requireSchema();
+  PGconn* conn = this->P->Conn;
+  return this->P->transaction(
+    ReadBegin,
+    [&]
+    {
+      Result r =
+        Params().i64(id).exec(conn, "SELECT 1 FROM frames WHERE id = $1 AND status = 'complete'",
+                              "reading the frame failed");
+      if (PQntuples(r.get()) == 0)
+      {
+        throw StoreError("there is no frame " + std::to_string(id));
+      }
+      std::vector<RayPath> paths;
+      Params().i64(id).stream(
+        conn, "SELECT i, j, termination, n, points FROM ray_paths WHERE frame_id = $1 ORDER BY seq",
+        "reading the paths failed",
+        [&](const PGresult* row)
+        {
+          RayPath p;
+          p.i = getI32(row, 0, 0);
+          p.j = getI32(row, 0, 1);
+          p.termination = Termination(getI32(row, 0, 2));
+          const std::int32_t n = getI32(row, 0, 3);
+          if (n < 0 || PQgetlength(row, 0, 4) != std::int64_t(n) * PathPointBytes)
+          {
+            throw StoreError("reading the paths of frame " + std::to_string(id) +
+                             " failed: the path of pixel (" + std::to_string(p.i) + ", " +
+                             std::to_string(p.j) + ") is malformed");
+          }
+          decodePoints(PQgetvalue(row, 0, 4), std::size_t(n), p.points);
+          paths.push_back(std::move(p));
+        });
+      exec(conn, "ROLLBACK", "ending the read failed");
+      return paths;
     });
 }
 }

@@ -1,20 +1,29 @@
 // Accumulation of traced frames in PostgreSQL: scenes, frames and their rays, written in one
 // transaction each with binary COPY and read back bit-exact.
 //
-// Layout (chosen by measurement, see Testing/Store/TestRayStore.cxx): the rays of a frame are
-// stored in blocks of consecutive records (kBlockSize, in the order written), one row per block,
-// each field a bytea column holding the block's values as big-endian 32/64-bit words. One row
-// per ray was 3-4x slower to write and 4x slower to read, per-block float8[] arrays (which SQL
-// could unnest natively) 2-3x slower both ways. SQL still sees one row per ray through the view
-// rays_v, which decodes the words (big-endian so that SQL can decode them with bit(n)
-// casts); a predicate given to readFrame is evaluated there.
+// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"). A ray is a
+// packed record of kRecordBytes bytes, its fields as big-endian 32/64-bit words in the column
+// order of the view rays_v (big-endian so that SQL can decode them with bit(n) casts). Rows of
+// ray_blocks hold kBlockSize consecutive records in one bytea kept inline (STORAGE PLAIN: one row
+// fills one 8 kB page, so nothing goes through TOAST). ray_blocks is partitioned by (frame, tile):
+// each tile's rows go into a table of their own, created in the transaction that writes them,
+// loaded with COPY FREEZE and attached to ray_blocks before the commit. A table created in the
+// writing transaction is what lets PostgreSQL skip the WAL under wal_level = minimal (the
+// embedded server's setting) and fsync the table at commit instead, writing the rays once rather
+// than twice; with wal_level replica or logical (a server with replication) the same statements
+// are WAL-logged as usual. Either way the commit is durable. SQL sees one row per ray through the
+// view rays_v, which decodes the words; a predicate given to readFrame is evaluated there, on the
+// server, and only the selected rays travel.
 //
 // Tiled frames (issue 7): several processes (ranks) write the tiles of one frame concurrently,
 // each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
 // on, with status 'writing'; the transaction of the tile that brings the count of written tiles
 // to the frame's tile count also makes it 'complete'. Everything that reads frames (listFrames,
-// findFrame, readFrame, rays_v) shows complete frames only, so a frame whose writer died is never
-// seen half-written; abandonedFrames() finds such frames for deleteFrame().
+// findFrame, readFrame, rays_v, path_points_v) shows complete frames only, so a frame whose
+// writer died is never seen half-written; abandonedFrames() finds such frames for deleteFrame().
+//
+// Paths: a frame may also keep the polylines of some of its rays (RayPath, one per pixel), in
+// ray_paths, written in the frame's transaction; the view path_points_v shows one row per point.
 //
 // Plain C++: no VTK types, no libpq types in this header.
 #ifndef asrt_RayStore_h
@@ -81,16 +90,20 @@ struct FrameInfo
   double traceSeconds = 0; ///< NaN when the writer did not say
   std::string createdAt;   ///< ISO 8601, UTC
   std::int64_t rayCount = 0;
-  int tileCount = 1; ///< tiles it was written in (1 for writeFrame)
+  int tileCount = 1;          ///< tiles it was written in (1 for writeFrame)
+  std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
+
 
 class ASRTCORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 2;
-  /// Rays per stored block.
-  static constexpr int kBlockSize = 4096;
+  static constexpr int kSchemaVersion = 3;
+  /// Bytes of one packed ray record (the fields of rays_v, big-endian).
+  static constexpr int kRecordBytes = 260;
+  /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page.
+  static constexpr int kBlockSize = 31;
 
   /// Connects. `conninfo` is a libpq connection string or URI; empty means libpq's defaults and
   /// the PG* environment variables. A connect_timeout of 10 s applies unless the conninfo or
@@ -102,8 +115,10 @@ public:
   RayStore& operator=(const RayStore&) = delete;
 
   /// Creates or upgrades the schema in one transaction (serialised against concurrent migrators).
-  /// Refuses a database whose schema is newer than this build's. Idempotent.
-  void migrate();
+  /// Refuses a database whose schema is newer than this build's. Idempotent. Also drops the
+  /// tables of rays left behind by frames deleted with plain SQL. `targetVersion` below
+  /// kSchemaVersion stops at that version (to test migrations); it never downgrades.
+  void migrate(int targetVersion = kSchemaVersion);
   /// The database's schema version; 0 if it has none yet.
   int schemaVersion();
 
@@ -115,6 +130,13 @@ public:
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
                           const std::vector<RayRecord>& records, bool replace = false,
                           double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+  /// As above, with the paths of some of its rays stored in the same transaction (bit-exact, in
+  /// the given order). At most one path per pixel, each pixel inside the frame's resolution:
+  /// anything else is refused (StoreError) before touching the database.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          const std::vector<RayRecord>& records, const std::vector<RayPath>& paths,
+                          bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
   /// As above, with the records produced one at a time by `next(index, record)` for index in
   /// [0, count), e.g. straight from a tracer. If it throws, the transaction is rolled back (no
   /// trace of the frame remains) and the exception propagates.
@@ -122,7 +144,8 @@ public:
                           std::size_t count,
                           const std::function<void(std::size_t, RayRecord&)>& next,
                           bool replace = false,
-                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN(),
+                          const std::vector<RayPath>& paths = {});
 
   /// Starts (or joins) a frame written as `tileCount` tiles by writeTile(), possibly from several
   /// processes at once: the frame row is created and committed with status 'writing'. Every rank
@@ -155,11 +178,15 @@ public:
   /// bit-exact. `predicate`, if not empty, is an
   /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
   /// image_order = 1"). It is the one piece of caller text spliced into SQL, deliberately: it is
-  /// evaluated in a READ ONLY transaction that is rolled back, with predicateTimeout as
-  /// statement_timeout, restricted to the frame's rays, so it can select but not write.
+  /// evaluated on the server in a READ ONLY transaction that is rolled back, with
+  /// predicateTimeout as statement_timeout, restricted to the frame's rays, so it can select but
+  /// not write; only the selected records are sent back.
   std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
-  /// Deletes a frame and its rays, complete or not (e.g. abandoned); throws StoreError if there
-  /// is none.
+  /// The paths stored with frame `id`, in the order written, bit-exact (empty if none).
+  std::vector<RayPath> readPaths(std::int64_t id);
+  /// Deletes a frame with its rays and paths, complete or not (e.g. abandoned), and its scene row
+  /// if no other frame uses it; throws StoreError if there is none. It waits for reads of other
+  /// frames that are under way (dropping a frame's tables locks ray_blocks briefly).
   void deleteFrame(std::int64_t id);
   /// The effective scene text of frame `id` (what effectiveSceneText() gave when it was written):
   /// enough to describe, re-trace or interpolate the frame. Throws StoreError if there is none.

@@ -1,15 +1,19 @@
 // The VTK side of accumulation: vtkGeodesicSource → vtkGeodesicPostgreSQLWriter → a real
 // throwaway server → vtkGeodesicPostgreSQLReader gives back the same frame, bit for bit.
 #include "SceneFile.h"
+#include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
 #include "TraceAndStore.h"
 #include "vtkGeodesicPostgreSQLReader.h"
 #include "vtkGeodesicPostgreSQLWriter.h"
 #include "vtkGeodesicSource.h"
 
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
 #include "vtkCommand.h"
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
+#include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
@@ -239,4 +243,222 @@ TEST(StorePipeline, AbortedTraceAndStoreLeavesNothing)
   // And the same frame stores fine afterwards.
   options.progress = nullptr;
   EXPECT_GE(asrt::traceAndStore(tracer, store, options), 0);
+}
+
+// -----------------------------------------------------------------------------------------------
+// The source's polylines, stored with the frame.
+
+namespace
+{
+/// Everything a polyline output holds, as bits: per line its cell values and its points with
+/// their point values, in order.
+std::vector<std::vector<std::uint64_t>> lineBits(vtkPolyData* lines)
+{
+  std::vector<std::vector<std::uint64_t>> out;
+  auto bits = [](double v)
+  {
+    std::uint64_t b;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+  };
+  vtkCellArray* cells = lines->GetLines();
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < lines->GetNumberOfLines(); ++c)
+  {
+    std::vector<std::uint64_t> line;
+    for (const char* name : { "Pixel", "Termination" })
+    {
+      vtkDataArray* a = lines->GetCellData()->GetArray(name);
+      for (int k = 0; k < a->GetNumberOfComponents(); ++k)
+        line.push_back(bits(a->GetComponent(c, k)));
+    }
+    cells->GetCellAtId(c, ids);
+    for (vtkIdType m = 0; m < ids->GetNumberOfIds(); ++m)
+    {
+      const vtkIdType p = ids->GetId(m);
+      double x[3];
+      lines->GetPoint(p, x);
+      for (double v : x)
+        line.push_back(bits(v));
+      for (const char* name : { "Lambda", "R", "AbsH" })
+        line.push_back(bits(lines->GetPointData()->GetArray(name)->GetComponent(p, 0)));
+    }
+    out.push_back(line);
+  }
+  return out;
+}
+
+/// A value from the database, whose schema exists (each test may run alone in its process).
+/// vtkGeodesicSource tracing fig1 at w × h with polylines every `stride` pixels, and a writer of
+/// its hits and polylines to the test server.
+struct PolylineFrame
+{
+  PolylineFrame(int w, int h, int stride)
+  {
+    this->Source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
+    this->Source->SetResolution(w, h);
+    this->Source->GeneratePolylinesOn();
+    this->Source->SetPolylineStride(stride);
+    this->Writer->SetInputConnection(0, this->Source->GetOutputPort(1));
+    this->Writer->SetInputConnection(1, this->Source->GetOutputPort(2));
+    this->Writer->SetConnectionString(server().conninfo().c_str());
+  }
+  vtkNew<vtkGeodesicSource> Source;
+  vtkNew<vtkGeodesicPostgreSQLWriter> Writer;
+};
+
+std::string count(const std::string& sql)
+{
+  asrt::RayStore(server().conninfo()).migrate();
+  return asrt::testing::Db(server().conninfo()).value(sql);
+}
+}
+
+TEST(StorePipeline, PolylinesRoundTripBitForBit)
+{
+  PolylineFrame frame(12, 9, 4);
+  vtkGeodesicSource* source = frame.Source;
+  vtkGeodesicPostgreSQLWriter* writer = frame.Writer;
+  source->SetMass(0.9); // a frame of its own
+  ASSERT_EQ(writer->Write(), 1);
+  vtkPolyData* traced = source->GetPolylinesOutput();
+  ASSERT_EQ(traced->GetNumberOfLines(), 9); // pixels (0|4|8, 0|4|8)
+  ASSERT_GT(traced->GetNumberOfPoints(), 9 * 10);
+
+  vtkNew<vtkGeodesicPostgreSQLReader> reader;
+  reader->SetConnectionString(server().conninfo().c_str());
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(lineBits(reader->GetPolylinesOutput()), lineBits(traced));
+  EXPECT_EQ(bitsByPixel(reader->GetHitsOutput()), bitsByPixel(source->GetHitsOutput()));
+  // SQL sees every point.
+  EXPECT_EQ(count("SELECT count(*) FROM path_points_v WHERE frame_id = " +
+                  std::to_string(writer->GetFrameId())),
+            std::to_string(traced->GetNumberOfPoints()));
+
+  // With a predicate, the polylines of the selected rays' pixels only.
+  reader->SetPredicate("i = 4");
+  reader->Update();
+  const auto all = lineBits(traced);
+  std::vector<std::vector<std::uint64_t>> expected;
+  vtkDataArray* pixel = traced->GetCellData()->GetArray("Pixel");
+  for (vtkIdType c = 0; c < traced->GetNumberOfLines(); ++c)
+    if (pixel->GetComponent(c, 0) == 4)
+      expected.push_back(all[static_cast<size_t>(c)]);
+  ASSERT_EQ(expected.size(), 3u);
+  EXPECT_EQ(lineBits(reader->GetPolylinesOutput()), expected);
+
+  // A frame written without polylines reads back with none.
+  vtkNew<vtkGeodesicPostgreSQLWriter> bare;
+  source->SetMass(0.95);
+  bare->SetInputConnection(0, source->GetOutputPort(1));
+  bare->SetConnectionString(server().conninfo().c_str());
+  ASSERT_EQ(bare->Write(), 1);
+  reader->SetPredicate(nullptr);
+  reader->SetFrameId(bare->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(reader->GetPolylinesOutput()->GetNumberOfLines(), 0);
+  EXPECT_GT(reader->GetHitsOutput()->GetNumberOfPoints(), 0);
+}
+
+TEST(StorePipeline, PolylinesAndRaysAreWrittenTogetherOrNotAtAll)
+{
+  PolylineFrame frame(13, 11, 5); // 143 rays, which the veto below refuses
+  vtkGeodesicSource* source = frame.Source;
+  vtkGeodesicPostgreSQLWriter* writer = frame.Writer;
+  vtkNew<ErrorLog> log;
+  writer->AddObserver(vtkCommand::ErrorEvent, log);
+  const std::string state = "SELECT (SELECT count(*) FROM frames) || ':' || (SELECT count(*) FROM "
+                            "ray_paths) || ':' || (SELECT count(*) FROM ray_blocks)";
+  const std::string before = count(state);
+  // The server refuses the transaction's last statement, after the rays and the polylines.
+  asrt::testing::Db db(server().conninfo());
+  db.value("ALTER TABLE frame_tiles ADD CONSTRAINT veto CHECK (ray_count <> 143)");
+  writer->Write();
+  db.value("ALTER TABLE frame_tiles DROP CONSTRAINT veto");
+  ASSERT_EQ(log->Messages.size(), 1u);
+  EXPECT_NE(log->Messages[0].find("veto"), std::string::npos) << log->Messages[0];
+  EXPECT_EQ(count(state), before);
+  // Then it goes in whole.
+  writer->Write();
+  EXPECT_EQ(log->Messages.size(), 1u);
+  vtkNew<vtkGeodesicPostgreSQLReader> reader;
+  reader->SetConnectionString(server().conninfo().c_str());
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(lineBits(reader->GetPolylinesOutput()), lineBits(source->GetPolylinesOutput()));
+}
+
+TEST(StorePipeline, BadPolylinesAreRefusedBeforeAnythingIsWritten)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig2-no-hole.json").c_str());
+  source->SetResolution(10, 10);
+  source->SetMass(0.7);
+  source->GeneratePolylinesOn();
+  vtkNew<vtkIntArray> twice; // one pixel listed twice: two polylines of one pixel
+  twice->SetNumberOfComponents(2);
+  for (int k = 0; k < 2; ++k)
+    twice->InsertNextTuple2(3, 4);
+  source->SetPolylinePixels(twice);
+  source->Update();
+  vtkPolyData* good = source->GetPolylinesOutput();
+  ASSERT_EQ(good->GetNumberOfLines(), 2);
+
+  auto variant = [&](auto change)
+  {
+    auto copy = vtkSmartPointer<vtkPolyData>::New();
+    copy->DeepCopy(good);
+    change(copy.Get());
+    return copy;
+  };
+  struct Case
+  {
+    const char* what;
+    vtkSmartPointer<vtkPolyData> lines;
+    const char* message;
+  };
+  const Case cases[] = {
+    { "duplicate pixel", variant([](vtkPolyData*) {}), "that pixel already has a path" },
+    { "no Lambda", variant([](vtkPolyData* p) { p->GetPointData()->RemoveArray("Lambda"); }),
+      "\"Lambda\" point array" },
+    { "no Pixel", variant([](vtkPolyData* p) { p->GetCellData()->RemoveArray("Pixel"); }),
+      "\"Pixel\" cell array" },
+    { "pixel outside",
+      variant([](vtkPolyData* p) { p->GetCellData()->GetArray("Pixel")->SetComponent(1, 0, 10); }),
+      "lies outside the 10 x 10 frame" },
+    { "bad termination",
+      variant([](vtkPolyData* p)
+              { p->GetCellData()->GetArray("Termination")->SetComponent(0, 0, 99); }),
+      "unknown termination 99" },
+    { "a vertex",
+      variant(
+        [](vtkPolyData* p)
+        {
+          p->GetCellData()->Initialize(); // only the lines' cell data would be valid
+          vtkNew<vtkCellArray> verts;
+          const vtkIdType zero = 0;
+          verts->InsertNextCell(1, &zero);
+          p->SetVerts(verts);
+        }),
+      "not lines" },
+  };
+  const std::string state = "SELECT (SELECT count(*) FROM frames) || ':' || (SELECT count(*) FROM "
+                            "ray_paths) || ':' || (SELECT count(*) FROM scenes)";
+  const std::string before = count(state);
+  for (const Case& c : cases)
+  {
+    vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+    writer->SetInputConnection(0, source->GetOutputPort(1));
+    writer->SetInputData(1, c.lines);
+    writer->SetConnectionString(server().conninfo().c_str());
+    vtkNew<ErrorLog> log;
+    writer->AddObserver(vtkCommand::ErrorEvent, log);
+    writer->Write();
+    ASSERT_EQ(log->Messages.size(), 1u) << c.what;
+    EXPECT_NE(log->Messages[0].find(c.message), std::string::npos)
+      << c.what << ": " << log->Messages[0];
+    EXPECT_EQ(writer->GetFrameId(), -1) << c.what;
+    EXPECT_EQ(count(state), before) << c.what;
+  }
 }

@@ -10,10 +10,12 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -94,6 +96,100 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
   return b;
 }
 
+/// The fields of a stored ray, in the order the store documents (the columns of rays_v, the words
+/// of its record_bytes, the bytea columns of schema versions 1 and 2), with their size in bytes
+/// and their value as a word: written out here independently of RayStore.
+struct RecordField
+{
+  const char* name;
+  int size;
+  std::uint64_t (*word)(const RayRecord&);
+};
+inline std::uint64_t fieldWord(double d)
+{
+  return bitsOf(d);
+}
+inline std::uint64_t fieldWord(std::int32_t v)
+{
+  return std::uint64_t(std::uint32_t(v));
+}
+inline std::uint64_t fieldWord(std::int64_t v)
+{
+  return std::uint64_t(v);
+}
+#define ASRT_RECORD_FIELD(name, size, e)                                                           \
+  RecordField                                                                                      \
+  {                                                                                                \
+    name, size, [](const RayRecord& r) { return fieldWord(e); }                                    \
+  }
+inline const RecordField RecordFields[] = {
+  ASRT_RECORD_FIELD("i", 4, r.i),
+  ASRT_RECORD_FIELD("j", 4, r.j),
+  ASRT_RECORD_FIELD("origin_x", 8, r.origin.x()),
+  ASRT_RECORD_FIELD("origin_y", 8, r.origin.y()),
+  ASRT_RECORD_FIELD("origin_z", 8, r.origin.z()),
+  ASRT_RECORD_FIELD("dir_x", 8, r.direction.x()),
+  ASRT_RECORD_FIELD("dir_y", 8, r.direction.y()),
+  ASRT_RECORD_FIELD("dir_z", 8, r.direction.z()),
+  ASRT_RECORD_FIELD("p_t", 8, r.momentum[0]),
+  ASRT_RECORD_FIELD("p_x", 8, r.momentum[1]),
+  ASRT_RECORD_FIELD("p_y", 8, r.momentum[2]),
+  ASRT_RECORD_FIELD("p_z", 8, r.momentum[3]),
+  ASRT_RECORD_FIELD("termination", 4, std::int32_t(r.termination)),
+  ASRT_RECORD_FIELD("object_id", 4, r.objectId),
+  ASRT_RECORD_FIELD("hit_x", 8, r.hitPoint.x()),
+  ASRT_RECORD_FIELD("hit_y", 8, r.hitPoint.y()),
+  ASRT_RECORD_FIELD("hit_z", 8, r.hitPoint.z()),
+  ASRT_RECORD_FIELD("normal_x", 8, r.hitNormal.x()),
+  ASRT_RECORD_FIELD("normal_y", 8, r.hitNormal.y()),
+  ASRT_RECORD_FIELD("normal_z", 8, r.hitNormal.z()),
+  ASRT_RECORD_FIELD("u", 8, r.u),
+  ASRT_RECORD_FIELD("v", 8, r.v),
+  ASRT_RECORD_FIELD("chord_error", 8, r.chordError),
+  ASRT_RECORD_FIELD("path_length", 8, r.affineLength),
+  ASRT_RECORD_FIELD("winding", 8, r.winding),
+  ASRT_RECORD_FIELD("image_order", 4, r.imageOrder),
+  ASRT_RECORD_FIELD("steps", 8, r.steps),
+  ASRT_RECORD_FIELD("max_abs_h", 8, r.maxAbsH),
+  ASRT_RECORD_FIELD("color_r", 8, r.color.x()),
+  ASRT_RECORD_FIELD("color_g", 8, r.color.y()),
+  ASRT_RECORD_FIELD("color_b", 8, r.color.z()),
+  ASRT_RECORD_FIELD("dudi", 8, r.dudi),
+  ASRT_RECORD_FIELD("dudj", 8, r.dudj),
+  ASRT_RECORD_FIELD("dvdi", 8, r.dvdi),
+  ASRT_RECORD_FIELD("dvdj", 8, r.dvdj),
+};
+#undef ASRT_RECORD_FIELD
+
+/// A binary result value of a PGresult as a big-endian word (integers and float8 alike).
+inline std::uint64_t resultWord(const PGresult* r, int row, int col)
+{
+  std::uint64_t w = 0;
+  for (int k = 0; k < PQgetlength(r, row, col); ++k)
+    w = (w << 8) | std::uint8_t(PQgetvalue(r, row, col)[k]);
+  return w;
+}
+
+/// Whether SQL's double `got` is `expected`, bit for bit, or for a NaN any NaN: SQL arithmetic
+/// knows one NaN only (the stored bits keep the payload).
+inline bool sameFromSql(double got, double expected)
+{
+  return std::isnan(expected) ? std::isnan(got) : bitsOf(got) == bitsOf(expected);
+}
+
+/// The packed record of schema version 3 (rays_v's record_bytes): every field's word, big-endian.
+inline std::string packedRecord(const RayRecord& r)
+{
+  std::string bytes;
+  for (const RecordField& f : RecordFields)
+  {
+    const std::uint64_t w = f.word(r);
+    for (int m = f.size - 1; m >= 0; --m)
+      bytes.push_back(char(w >> (8 * m)));
+  }
+  return bytes;
+}
+
 inline double secondsSince(Clock::time_point t0)
 {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -148,6 +244,16 @@ struct Db
     std::string v = (st == PGRES_TUPLES_OK && PQntuples(r) > 0) ? PQgetvalue(r, 0, 0) : "";
     PQclear(r);
     return v;
+  }
+  /// The rows of a query with binary results (integers and doubles as the server holds them);
+  /// throws with the server's message.
+  std::unique_ptr<PGresult, void (*)(PGresult*)> binaryRows(const std::string& sql)
+  {
+    std::unique_ptr<PGresult, void (*)(PGresult*)> r(
+      PQexecParams(this->Conn, sql.c_str(), 0, nullptr, nullptr, nullptr, nullptr, 1), PQclear);
+    if (PQresultStatus(r.get()) != PGRES_TUPLES_OK)
+      throw std::runtime_error(sql + ": " + PQresultErrorMessage(r.get()));
+    return r;
   }
   PGconn* Conn;
 };

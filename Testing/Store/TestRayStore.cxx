@@ -1,6 +1,7 @@
 // asrt::RayStore against a real throwaway PostgreSQL 15 server: schema, bit-exact round trips,
-// frame identity, predicates, hostile input, connection failures, interrupted writers, and the
-// measurement behind the storage layout.
+// frame identity, predicates, hostile input, connection failures, interrupted writers, paths,
+// and what deleted, replaced and failed frames leave behind (nothing). The measurement behind the
+// storage layout is a benchmark: bench/bench_store.cxx.
 #include "RayStore.h"
 #include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
@@ -201,7 +202,7 @@ TEST(RayStoreFrames, RoundTripIsBitExact)
   RayStore store(freshDatabase());
   store.migrate();
   // Not a multiple of the block size: the last block is partial.
-  const auto records = synthetic(2 * RayStore::kBlockSize + 1234, 97);
+  const auto records = synthetic(100 * RayStore::kBlockSize + 17, 97);
   asrt::SceneDescription s = scene();
   s.camera.position = asrt::Vec3(0.1, -30.000000000000004, 1e-300);
   s.integrator.relativeTolerance = 1.2345678901234567e-9;
@@ -244,27 +245,20 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
   const std::int64_t id = store.writeFrame(scene(), "view", records);
   Db db(ci);
   // Binary results: the doubles as the server computed them.
-  PGresult* r = PQexecParams(db.Conn,
-                             ("SELECT ray, i, j, termination, object_id, steps, hit_x, u, dvdj, "
-                              "winding, dudi FROM rays_v WHERE frame_id = " +
-                              std::to_string(id) + " ORDER BY ray")
-                               .c_str(),
-                             0, nullptr, nullptr, nullptr, nullptr, 1);
-  ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQresultErrorMessage(r);
+  const auto rows =
+    db.binaryRows("SELECT ray, i, j, termination, object_id, steps, hit_x, u, "
+                  "dvdj, winding, dudi, record_bytes FROM rays_v WHERE frame_id = " +
+                  std::to_string(id) + " ORDER BY ray");
+  const PGresult* r = rows.get();
   ASSERT_EQ(PQntuples(r), int(records.size()));
-  auto word = [&](int row, int col)
-  {
-    std::uint64_t w = 0;
-    const char* p = PQgetvalue(r, row, col);
-    for (int k = 0; k < PQgetlength(r, row, col); ++k)
-    {
-      w = (w << 8) | std::uint8_t(p[k]);
-    }
-    return w;
-  };
+  auto word = [&](int row, int col) { return resultWord(r, row, col); };
   for (int row = 0; row < PQntuples(r); ++row)
   {
     const RayRecord& e = records[std::size_t(row)];
+    // The packed record: every bit, NaN payloads included.
+    ASSERT_EQ(std::string(PQgetvalue(r, row, 11), std::size_t(PQgetlength(r, row, 11))),
+              packedRecord(e))
+      << "row " << row;
     ASSERT_EQ(std::int64_t(word(row, 0)), row);
     ASSERT_EQ(std::int32_t(word(row, 1)), e.i);
     ASSERT_EQ(std::int32_t(word(row, 2)), e.j);
@@ -273,20 +267,9 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
     ASSERT_EQ(std::int64_t(word(row, 5)), e.steps);
     const double expected[] = { e.hitPoint.x(), e.u, e.dvdj, e.winding, e.dudi };
     for (int c = 0; c < 5; ++c)
-    {
-      const double got = fromBits(word(row, 6 + c));
-      if (std::isnan(expected[c]))
-      {
-        // SQL yields the canonical NaN; readFrame keeps the payload.
-        ASSERT_TRUE(std::isnan(got)) << "row " << row << " column " << c;
-      }
-      else
-      {
-        ASSERT_EQ(bitsOf(got), bitsOf(expected[c])) << "row " << row << " column " << c;
-      }
-    }
+      ASSERT_TRUE(sameFromSql(fromBits(word(row, 6 + c)), expected[c]))
+        << "row " << row << " column " << c;
   }
-  PQclear(r);
 }
 
 TEST(RayStoreFrames, SameSceneAndParametersIsTheSameFrame)
@@ -485,7 +468,7 @@ TEST(RayStoreFrames, FailedWriterLeavesNothing)
   const std::string ci = freshDatabase();
   RayStore store(ci);
   store.migrate();
-  const auto records = synthetic(4 * RayStore::kBlockSize, 128);
+  const auto records = synthetic(16384, 128);
   Db db(ci);
 
   // The record source throws halfway through the COPY.
@@ -507,6 +490,8 @@ TEST(RayStoreFrames, FailedWriterLeavesNothing)
   EXPECT_FALSE(store.findFrame(scene()).has_value());
   EXPECT_EQ(db.value("SELECT count(*) FROM frames"), "0");
   EXPECT_EQ(db.value("SELECT count(*) FROM ray_blocks"), "0");
+  // Nor a scene row: it was committed before the frame's transaction, and removed after.
+  EXPECT_EQ(db.value("SELECT count(*) FROM scenes"), "0");
 
   // The connection dies halfway through the COPY.
   const int pid = store.backendPid();
@@ -533,247 +518,189 @@ TEST(RayStoreFrames, FailedWriterLeavesNothing)
   EXPECT_EQ(store.listFrames().size(), 1u);
 }
 
-// ---------------------------------------------------------------------------------------------
-// The measurement behind the layout: the store's blocks against one row per ray and against
-// per-block float8[] arrays (which SQL could unnest natively), all with binary COPY. Prints;
-// asserts nothing about time. ASRT_STORE_MEASURE_FULL=1 adds the 1920×1080 runs of the
-// alternatives (about a minute).
+// -----------------------------------------------------------------------------------------------
+// Paths, and what frames leave behind.
+
 namespace
 {
-struct Field
+/// Paths with the values that break careless storage, of 0 to 5000 points (a long one goes out of
+/// line into TOAST).
+std::vector<asrt::RayPath> syntheticPaths()
 {
-  const char* type;
-  int size;
-  std::uint64_t (*get)(const RayRecord&);
-};
-#define ASRT_D(e)                                                                                  \
-  Field                                                                                            \
-  {                                                                                                \
-    "float8", 8, [](const RayRecord& r) { return bitsOf(e); }                                      \
-  }
-#define ASRT_I(e)                                                                                  \
-  Field                                                                                            \
-  {                                                                                                \
-    "int4", 4, [](const RayRecord& r) { return std::uint64_t(std::uint32_t(e)); }                  \
-  }
-const Field Fields[] = { ASRT_I(r.i),
-                         ASRT_I(r.j),
-                         ASRT_D(r.origin.x()),
-                         ASRT_D(r.origin.y()),
-                         ASRT_D(r.origin.z()),
-                         ASRT_D(r.direction.x()),
-                         ASRT_D(r.direction.y()),
-                         ASRT_D(r.direction.z()),
-                         ASRT_D(r.momentum[0]),
-                         ASRT_D(r.momentum[1]),
-                         ASRT_D(r.momentum[2]),
-                         ASRT_D(r.momentum[3]),
-                         ASRT_I(int(r.termination)),
-                         ASRT_I(r.objectId),
-                         ASRT_D(r.hitPoint.x()),
-                         ASRT_D(r.hitPoint.y()),
-                         ASRT_D(r.hitPoint.z()),
-                         ASRT_D(r.hitNormal.x()),
-                         ASRT_D(r.hitNormal.y()),
-                         ASRT_D(r.hitNormal.z()),
-                         ASRT_D(r.u),
-                         ASRT_D(r.v),
-                         ASRT_D(r.chordError),
-                         ASRT_D(r.affineLength),
-                         ASRT_D(r.winding),
-                         ASRT_I(r.imageOrder),
-                         Field{ "int8", 8,
-                                [](const RayRecord& r) { return std::uint64_t(r.steps); } },
-                         ASRT_D(r.maxAbsH),
-                         ASRT_D(r.color.x()),
-                         ASRT_D(r.color.y()),
-                         ASRT_D(r.color.z()),
-                         ASRT_D(r.dudi),
-                         ASRT_D(r.dudj),
-                         ASRT_D(r.dvdi),
-                         ASRT_D(r.dvdj) };
-#undef ASRT_D
-#undef ASRT_I
-
-struct Out
-{
-  std::string s;
-  void be(std::uint64_t w, int size)
+  std::vector<asrt::RayPath> paths;
+  const int lengths[] = { 3, 0, 5000, 1, 250 };
+  const int pixels[][2] = { { 5, 7 }, { 63, 47 }, { 0, 0 }, { 10, 20 }, { 7, 5 } };
+  std::uint64_t s = 42;
+  for (int k = 0; k < 5; ++k)
   {
-    for (int k = size - 1; k >= 0; --k)
+    asrt::RayPath p;
+    p.i = pixels[k][0];
+    p.j = pixels[k][1];
+    p.termination = asrt::Termination(k % 6);
+    for (int m = 0; m < lengths[k]; ++m)
     {
-      s.push_back(char(w >> (8 * k)));
-    }
-  }
-};
-
-void must(PGresult* r, ExecStatusType want, PGconn* c)
-{
-  const ExecStatusType st = PQresultStatus(r);
-  PQclear(r);
-  if (st != want)
-  {
-    throw std::runtime_error(PQerrorMessage(c));
-  }
-}
-
-/// Writes and reads the records in one of the alternative layouts; returns {write, read} seconds.
-std::pair<double, double> measureAlternative(PGconn* c, bool arrays,
-                                             const std::vector<RayRecord>& records)
-{
-  const char* table = arrays ? "alt_arrays" : "alt_rows";
-  const auto t0 = std::chrono::steady_clock::now();
-  must(PQexec(c, "BEGIN"), PGRES_COMMAND_OK, c);
-  must(PQexec(c, (std::string("TRUNCATE ") + table).c_str()), PGRES_COMMAND_OK, c);
-  must(PQexec(c, (std::string("COPY ") + table + " FROM STDIN (FORMAT binary)").c_str()),
-       PGRES_COPY_IN, c);
-  Out o;
-  o.s.append("PGCOPY\n\377\r\n\0", 11);
-  o.be(0, 4);
-  o.be(0, 4);
-  const int nf = int(sizeof(Fields) / sizeof(Fields[0]));
-  auto flush = [&](bool force)
-  {
-    if (o.s.size() > (1u << 20) || force)
-    {
-      PQputCopyData(c, o.s.data(), int(o.s.size()));
-      o.s.clear();
-    }
-  };
-  if (!arrays)
-  {
-    for (const RayRecord& r : records)
-    {
-      o.be(std::uint64_t(nf + 1), 2);
-      o.be(8, 4);
-      o.be(1, 8);
-      for (const Field& f : Fields)
+      auto real = [&]
       {
-        o.be(std::uint64_t(f.size), 4);
-        o.be(f.get(r), f.size);
-      }
-      flush(false);
+        const std::uint64_t w = splitmix(s);
+        return w % 13 == 0   ? fromBits(0x7FF0000000000F0Full | (w & 0x8000000000000000ull))
+               : w % 13 == 1 ? -0.0
+               : w % 13 == 2 ? std::numeric_limits<double>::denorm_min()
+               : w % 13 == 3 ? -std::numeric_limits<double>::infinity()
+                             : fromBits((w >> 12) | 0x4000000000000000ull) - 3.0;
+      };
+      p.points.push_back({ asrt::Vec3(real(), real(), real()), real(), real(), real() });
     }
+    paths.push_back(p);
   }
-  else
+  return paths;
+}
+
+void expectSamePaths(const std::vector<asrt::RayPath>& a, const std::vector<asrt::RayPath>& b)
+{
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k)
   {
-    for (std::size_t first = 0, b = 0; first < records.size(); first += 4096, ++b)
+    ASSERT_EQ(a[k].i, b[k].i) << "path " << k;
+    ASSERT_EQ(a[k].j, b[k].j) << "path " << k;
+    ASSERT_EQ(a[k].termination, b[k].termination) << "path " << k;
+    ASSERT_EQ(a[k].points.size(), b[k].points.size()) << "path " << k;
+    for (std::size_t m = 0; m < a[k].points.size(); ++m)
     {
-      const std::size_t n = std::min<std::size_t>(4096, records.size() - first);
-      o.be(std::uint64_t(nf + 2), 2);
-      o.be(8, 4);
-      o.be(1, 8);
-      o.be(4, 4);
-      o.be(b, 4);
-      for (const Field& f : Fields)
-      {
-        const Oid oid = f.size == 4 ? 23 : std::strcmp(f.type, "int8") == 0 ? 20 : 701;
-        o.be(20 + n * std::size_t(4 + f.size), 4);
-        o.be(1, 4);
-        o.be(0, 4);
-        o.be(oid, 4);
-        o.be(n, 4);
-        o.be(1, 4);
-        for (std::size_t k = 0; k < n; ++k)
-        {
-          o.be(std::uint64_t(f.size), 4);
-          o.be(f.get(records[first + k]), f.size);
-        }
-      }
-      flush(false);
+      const asrt::PathPoint &p = a[k].points[m], &q = b[k].points[m];
+      const double x[] = { p.x.x(), p.x.y(), p.x.z(), p.lambda, p.r, p.absH };
+      const double y[] = { q.x.x(), q.x.y(), q.x.z(), q.lambda, q.r, q.absH };
+      for (int c = 0; c < 6; ++c)
+        ASSERT_EQ(bitsOf(x[c]), bitsOf(y[c])) << "path " << k << " point " << m << " value " << c;
     }
   }
-  o.be(0xFFFF, 2);
-  flush(true);
-  PQputCopyEnd(c, nullptr);
-  must(PQgetResult(c), PGRES_COMMAND_OK, c);
-  must(PQexec(c, "COMMIT"), PGRES_COMMAND_OK, c);
-  const double write = secondsSince(t0);
+}
 
-  const auto t1 = std::chrono::steady_clock::now();
-  must(PQexec(c, (std::string("COPY (SELECT * FROM ") + table + (arrays ? " ORDER BY b" : "") +
-                  ") TO STDOUT (FORMAT binary)")
-                   .c_str()),
-       PGRES_COPY_OUT, c);
-  // Only the transfer is timed: decoding on the client is cheap next to it.
-  char* buf = nullptr;
-  std::size_t bytes = 0;
-  int len;
-  while ((len = PQgetCopyData(c, &buf, 0)) > 0)
+/// The tables of rays attached to ray_blocks.
+std::string blockTables(Db& db)
+{
+  return db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass");
+}
+}
+
+TEST(RayStorePaths, RoundTripIsBitExactAndSqlSeesEveryPoint)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  const auto records = synthetic(300, 64);
+  const auto paths = syntheticPaths();
+  const std::int64_t id = store.writeFrame(scene(), "paths", records, paths);
+  expectSame(store.readFrame(id), records);
+  expectSamePaths(store.readPaths(id), paths);
+  EXPECT_EQ(store.frameInfo(id).pathCount, 5);
+  // A frame without paths has none.
+  const std::int64_t bare = store.writeFrame(scene(2.0), "bare", records);
+  EXPECT_TRUE(store.readPaths(bare).empty());
+  EXPECT_EQ(store.frameInfo(bare).pathCount, 0);
+  EXPECT_NE(errorOf([&] { store.readPaths(bare + 100); }).find("no frame"), std::string::npos);
+
+  // path_points_v: one row per point, each value exact (every NaN is SQL's NaN).
+  Db db(ci);
+  const auto rows = db.binaryRows("SELECT path, point, i, j, x, y, z, lambda, r, abs_h FROM "
+                                  "path_points_v WHERE frame_id = " +
+                                  std::to_string(id) + " ORDER BY path, point");
+  const PGresult* r = rows.get();
+  ASSERT_EQ(PQntuples(r), 3 + 0 + 5000 + 1 + 250);
+  auto word = [&](int row, int col) { return resultWord(r, row, col); };
+  for (int row = 0; row < PQntuples(r); ++row)
   {
-    bytes += std::size_t(len);
-    PQfreemem(buf);
+    const std::size_t path = word(row, 0), point = word(row, 1);
+    ASSERT_LT(path, paths.size());
+    const asrt::RayPath& p = paths[path];
+    ASSERT_LT(point, p.points.size());
+    ASSERT_EQ(std::int32_t(word(row, 2)), p.i);
+    ASSERT_EQ(std::int32_t(word(row, 3)), p.j);
+    const asrt::PathPoint& q = p.points[point];
+    const double expected[] = { q.x.x(), q.x.y(), q.x.z(), q.lambda, q.r, q.absH };
+    for (int c = 0; c < 6; ++c)
+      ASSERT_TRUE(sameFromSql(fromBits(word(row, 4 + c)), expected[c]))
+        << "row " << row << " column " << c;
   }
-  must(PQgetResult(c), PGRES_COMMAND_OK, c);
-  return { write, secondsSince(t1) };
-}
 }
 
-// A measurement, not a test: it asserts nothing, so it is not part of the suite. It is how the
-// block layout was chosen; run it with --gtest_also_run_disabled_tests
-// --gtest_filter='*MeasureLayouts'. bench/REPORT.md carries the store's figures.
-TEST(RayStoreLayout, DISABLED_MeasureLayouts)
+TEST(RayStorePaths, BadPathsAreRefusedBeforeTheDatabase)
 {
   const std::string ci = freshDatabase();
   RayStore store(ci);
   store.migrate();
   Db db(ci);
-  std::string rows = "CREATE TABLE alt_rows (frame_id bigint";
-  std::string arrays = "CREATE TABLE alt_arrays (frame_id bigint, b integer";
-  int k = 0;
-  for (const Field& f : Fields)
-  {
-    rows += ", c" + std::to_string(k) + " " + f.type;
-    arrays += ", c" + std::to_string(k++) + " " + f.type + "[]";
-  }
-  db.value(rows + "); CREATE INDEX ON alt_rows (frame_id);");
-  db.value(arrays + ", PRIMARY KEY (frame_id, b));");
-  // As for the store's blocks: the values do not compress.
-  for (int c = 0; c < k; ++c)
-  {
-    db.value("ALTER TABLE alt_arrays ALTER c" + std::to_string(c) + " SET STORAGE EXTERNAL");
-  }
+  const auto records = synthetic(100, 64);
+  auto paths = syntheticPaths();
+  paths[3].i = 64; // the frame is 64 × 48
+  std::string e = errorOf([&] { store.writeFrame(scene(), "outside", records, paths); });
+  EXPECT_NE(e.find("path 3 (pixel 64, 20) lies outside the 64 x 48 frame"), std::string::npos) << e;
+  paths = syntheticPaths();
+  paths[4].i = 5;
+  paths[4].j = 7;
+  e = errorOf([&] { store.writeFrame(scene(), "twice", records, paths); });
+  EXPECT_NE(e.find("path 4 (pixel 5, 7): that pixel already has a path"), std::string::npos) << e;
+  paths[4].j = -1;
+  e = errorOf([&] { store.writeFrame(scene(), "negative", records, paths); });
+  EXPECT_NE(e.find("lies outside"), std::string::npos) << e;
+  EXPECT_EQ(db.value("SELECT (SELECT count(*) FROM frames) + (SELECT count(*) FROM scenes) + "
+                     "(SELECT count(*) FROM ray_paths)"),
+            "0");
+}
 
-  const bool full = std::getenv("ASRT_STORE_MEASURE_FULL") != nullptr;
-  std::printf("%-28s %10s %12s %10s %12s\n", "layout, size", "write s", "write Mray/s", "read s",
-              "read Mray/s");
-  double mass = 1;
-  for (const auto& size : { std::pair<int, int>(200, 200), std::pair<int, int>(1920, 1080) })
-  {
-    const auto records = synthetic(std::size_t(size.first) * std::size_t(size.second), size.first);
-    const double n = double(records.size()) / 1e6;
-    const std::string tag = std::to_string(size.first) + "x" + std::to_string(size.second);
-    for (int rep = 0; rep < 2; ++rep)
-    {
-      auto t0 = std::chrono::steady_clock::now();
-      const std::int64_t id = store.writeFrame(scene(mass += 1), "measure", records);
-      const double w = secondsSince(t0);
-      t0 = std::chrono::steady_clock::now();
-      const auto back = store.readFrame(id);
-      const double r = secondsSince(t0);
-      ASSERT_EQ(back.size(), records.size());
-      std::printf("%-28s %10.3f %12.2f %10.3f %12.2f\n", ("blocks (RayStore) " + tag).c_str(), w,
-                  n / w, r, n / r);
-      t0 = std::chrono::steady_clock::now();
-      const auto some = store.readFrame(id, "object_id = 2 AND image_order = 1");
-      std::printf("%-28s %10s %12s %10.3f %12.2f  (%zu rays selected)\n",
-                  ("  with predicate " + tag).c_str(), "", "", secondsSince(t0),
-                  n / secondsSince(t0), some.size());
-      store.deleteFrame(id);
-    }
-    if (size.first == 1920 && !full)
-    {
-      continue;
-    }
-    for (int alt = 0; alt < 2; ++alt)
-    {
-      for (int rep = 0; rep < 2; ++rep)
-      {
-        const auto t = measureAlternative(db.Conn, alt == 1, records);
-        std::printf("%-28s %10.3f %12.2f %10.3f %12.2f\n",
-                    ((alt ? "float8[] per block " : "row per ray ") + tag).c_str(), t.first,
-                    n / t.first, t.second, n / t.second);
-      }
-    }
-  }
+TEST(RayStorePaths, LateFailureLeavesNeitherRaysNorPaths)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  Db db(ci);
+  // The server refuses the frame's last statement, after both COPYs went through.
+  db.value("ALTER TABLE frame_tiles ADD CONSTRAINT veto CHECK (ray_count <> 777)");
+  const auto records = synthetic(777, 64);
+  const std::string e =
+    errorOf([&] { store.writeFrame(scene(), "vetoed", records, syntheticPaths()); });
+  EXPECT_NE(e.find("recording the frame's rays failed"), std::string::npos) << e;
+  EXPECT_NE(e.find("veto"), std::string::npos) << e;
+  EXPECT_EQ(db.value("SELECT (SELECT count(*) FROM frames) || ':' || (SELECT count(*) FROM "
+                     "ray_paths) || ':' || (SELECT count(*) FROM ray_blocks) || ':' || (SELECT "
+                     "count(*) FROM scenes) || ':' || (SELECT count(*) FROM pg_class WHERE "
+                     "relname LIKE 'ray\\_blocks\\_%')"),
+            "0:0:0:0:0");
+  EXPECT_TRUE(store.listFrames().empty());
+  db.value("ALTER TABLE frame_tiles DROP CONSTRAINT veto");
+  const std::int64_t id = store.writeFrame(scene(), "allowed", records, syntheticPaths());
+  expectSame(store.readFrame(id), records);
+  expectSamePaths(store.readPaths(id), syntheticPaths());
+}
+
+TEST(RayStoreFrames, ReplacedAndDeletedFramesLeaveNothingBehind)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  Db db(ci);
+  const std::int64_t first = store.writeFrame(scene(), "first", synthetic(5000, 64), {});
+  const std::int64_t other = store.writeFrame(scene(1.5), "other", synthetic(100, 64, 2));
+  EXPECT_EQ(blockTables(db), "2");
+  // Replacing drops the old frame's table of rays once the new frame is in.
+  const std::int64_t second =
+    store.writeFrame(scene(), "second", synthetic(3000, 64, 3), syntheticPaths(), true);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(blockTables(db), "2");
+  EXPECT_EQ(db.value("SELECT sum(n) FROM ray_blocks"), "3100");
+  // Deleting drops its tables and paths; the scene row stays while another frame uses it.
+  store.deleteFrame(second);
+  EXPECT_EQ(blockTables(db), "1");
+  EXPECT_EQ(db.value("SELECT count(*) || ':' || (SELECT count(*) FROM ray_paths) FROM scenes"),
+            "1:0");
+  // A frame deleted with plain SQL is invisible at once; migrate() drops what it left.
+  db.value("DELETE FROM frames WHERE id = " + std::to_string(other));
+  EXPECT_EQ(db.value("SELECT count(*) FROM rays_v"), "0");
+  EXPECT_EQ(blockTables(db), "1");
+  store.migrate();
+  EXPECT_EQ(blockTables(db), "0");
+  EXPECT_EQ(db.value("SELECT count(*) || ':' || (SELECT count(*) FROM ray_blocks) FROM scenes"),
+            "0:0");
+  // The scene comes back with the next frame.
+  const std::int64_t again = store.writeFrame(scene(), "again", synthetic(10, 64));
+  EXPECT_EQ(store.frameInfo(again).rayCount, 10);
 }

@@ -153,7 +153,8 @@ TEST(StoreFaultsKill, WriterKilledInTheMiddleOfCopyLeavesNothing)
   RayStore store(ci);
   store.migrate();
   Db db(ci);
-  const std::size_t count = 32 * RayStore::kBlockSize;
+  // Long enough (130 MB of COPY data at the stall) to be caught in the middle.
+  const std::size_t count = 131072;
   const std::uint64_t seed = 7;
 
   const pid_t child =
@@ -176,7 +177,7 @@ TEST(StoreFaultsKill, WriterKilledInTheMiddleOfCopyLeavesNothing)
           });
   ASSERT_GT(child, 0);
 
-  // The half that was sent (16 blocks) must have reached the server inside the COPY.
+  // Some of the half that was sent must have reached the server inside the COPY.
   const auto t0 = Clock::now();
   const std::string progress = pollUntil(
     db,
@@ -224,7 +225,7 @@ TEST(StoreFaultsServer, StoppedBetweenWritesFailsClearlyAndRecovers)
   const std::string ci = pg.conninfo();
   RayStore store(ci);
   store.migrate();
-  const std::size_t count = 3 * RayStore::kBlockSize + 11;
+  const std::size_t count = 12299;
   const std::int64_t first = store.writeFrame(scene(1.0), "first", synthetic(1, count));
 
   // A fast shutdown, so that the committed frame is certainly on disk (this server runs with
@@ -285,7 +286,7 @@ void interruptedWrite(bool restart)
     // (synchronous_commit = off): make it durable first.
     Db(ci).value("CHECKPOINT");
   }
-  const std::size_t count = 16 * RayStore::kBlockSize;
+  const std::size_t count = 65536;
   const auto t0 = Clock::now();
   double stopSeconds = 0;
   const std::string e = errorOf(
@@ -326,7 +327,10 @@ void interruptedWrite(bool restart)
     pg.start();
   }
   Db db(ci);
-  EXPECT_EQ(countsOf(db), "1 frames, 1 blocks, 0 incomplete blocks");
+  EXPECT_EQ(countsOf(db),
+            "1 frames, " +
+              std::to_string((1000 + RayStore::kBlockSize - 1) / RayStore::kBlockSize) +
+              " blocks, 0 incomplete blocks");
   EXPECT_FALSE(store.findFrame(scene(2.0)).has_value());
   ASSERT_EQ(store.listFrames().size(), 1u);
   EXPECT_EQ(firstDifference(store.readFrame(kept), 1, 1000), -1);
@@ -417,7 +421,7 @@ TEST(StoreFaultsConcurrent, ManyWritersAndOneDuplicatePairAllEndIntact)
   ThrowawayPostgres pg;
   const std::string ci = pg.conninfo();
   constexpr int Writers = 4, FramesEach = 5;
-  const std::size_t count = 3 * RayStore::kBlockSize + 17;
+  const std::size_t count = 12305;
   // Every child migrates an empty database at once: migrate() must serialise them.
   StartGate gate;
   std::vector<pid_t> writers, twins;
@@ -527,7 +531,7 @@ TEST(StoreFaultsFinding, WriterOfAnotherFrameOfTheSameSceneIsNotBlocked)
   RayStore store(ci);
   store.migrate();
   Db db(ci);
-  const std::size_t count = 4 * RayStore::kBlockSize;
+  const std::size_t count = 16384;
   // The scene row exists already, as it does for every frame of a movie after the first.
   store.writeFrame(scene(1.0), "earlier frame", synthetic(1, 100));
 

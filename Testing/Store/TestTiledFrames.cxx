@@ -280,7 +280,7 @@ TEST(TiledFramesFaults, RankKilledMidCopyLeavesAnInvisibleDeletableFrame)
   store.migrate();
   Db db(ci);
   const std::uint64_t seed = 5;
-  const Tiling tiling({ 20000, 20000, 24 * RayStore::kBlockSize });
+  const Tiling tiling({ 20000, 20000, 98304 });
 
   const std::int64_t id = store.beginTiledFrame(scene(2.0), "doomed", 3);
   writeTileOf(store, id, 0, tiling, seed);
@@ -416,7 +416,9 @@ TEST(TiledFramesErrors, TileWrittenTwiceAndOtherMisusesAreRefused)
                        "written"),
             std::string::npos)
     << twice;
-  EXPECT_EQ(db.value("SELECT count(*) || ':' || sum(n) FROM ray_blocks"), "2:5000");
+  // The 5000 rays of tile 0 once: ceil(5000 / kBlockSize) rows.
+  EXPECT_EQ(db.value("SELECT count(*) || ':' || sum(n) FROM ray_blocks"),
+            std::to_string((5000 + RayStore::kBlockSize - 1) / RayStore::kBlockSize) + ":5000");
   EXPECT_TRUE(store.listFrames().empty());
 
   writeTileOf(store, id, 1, tiling, seed);
@@ -436,45 +438,170 @@ TEST(TiledFramesErrors, TileWrittenTwiceAndOtherMisusesAreRefused)
   EXPECT_TRUE(store.readFrame(fresh).empty());
 }
 
+// -----------------------------------------------------------------------------------------------
+// Migrations from databases written by earlier versions. Their layout is written out here (with
+// RecordFields), from what versions 1 and 2 stored, rather than taken from RayStore: one bytea
+// column per field, the values of a block of up to 4096 rays as big-endian words; version 2 added
+// tiles.
+
+namespace
+{
+constexpr std::size_t LegacyBlock = 4096;
+
+/// Runs a statement with text parameters (bytea ones, marked by a leading "\x" in `binary`, in
+/// binary) and returns the first value.
+std::string legacyExec(PGconn* c, const std::string& sql, const std::vector<std::string>& params,
+                       const std::vector<bool>& binary = {})
+{
+  std::vector<const char*> values;
+  std::vector<int> lengths, formats;
+  for (std::size_t k = 0; k < params.size(); ++k)
+  {
+    values.push_back(params[k].c_str());
+    lengths.push_back(int(params[k].size()));
+    formats.push_back(k < binary.size() && binary[k] ? 1 : 0);
+  }
+  PGresult* r = PQexecParams(c, sql.c_str(), int(params.size()), nullptr, values.data(),
+                             lengths.data(), formats.data(), 0);
+  const ExecStatusType st = PQresultStatus(r);
+  std::string v;
+  if (st == PGRES_TUPLES_OK && PQntuples(r) > 0)
+    v = PQgetvalue(r, 0, 0);
+  const std::string msg = PQresultErrorMessage(r);
+  PQclear(r);
+  if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
+    throw std::runtime_error(sql + ": " + msg);
+  return v;
+}
+
+/// Stores a frame as schema version `version` (1 or 2) did: its row, its tiles' rows (version 2)
+/// and the blocks of every tile. Returns the frame's id.
+std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneDescription& scene,
+                               const std::vector<std::vector<RayRecord>>& tiles,
+                               const std::string& status = "complete")
+{
+  std::size_t rays = 0;
+  for (const auto& t : tiles)
+    rays += t.size();
+  const std::string effective = asrt::effectiveSceneText(scene);
+  const std::string sceneId = legacyExec(
+    c,
+    "INSERT INTO scenes (content_hash, description, description_text) VALUES "
+    "(sha256(convert_to($1, 'UTF8')), '{}', $1) ON CONFLICT (content_hash) DO UPDATE SET "
+    "description_text = EXCLUDED.description_text RETURNING id",
+    { "the scene of " + effective });
+  auto num = [](double x)
+  {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.17g", x);
+    return std::string(b);
+  };
+  std::string cols = "scene_id, frame_hash, effective_text, name, label, mass, spin, charge, "
+                     "camera_x, camera_y, camera_z, focal_x, focal_y, focal_z, up_x, up_y, up_z, "
+                     "view_angle, width, height, method, step, relative_tolerance, "
+                     "absolute_tolerance, status, ray_count, write_seconds, completed_at";
+  std::string vals = "$1, sha256(convert_to($2, 'UTF8')), $2, $3, 'legacy', $4, $5, 0, 0, -30, "
+                     "0, 0, 0, 0, 0, 0, 1, 30, $6, $7, 'auto', 0, 1e-9, 1e-12, $8, $9, 1, "
+                     "CASE WHEN $8 = 'complete' THEN now() END";
+  if (version >= 2)
+  {
+    cols += ", tile_count";
+    vals += ", " + std::to_string(tiles.size());
+  }
+  const std::int64_t id =
+    std::stoll(legacyExec(c, "INSERT INTO frames (" + cols + ") VALUES (" + vals + ") RETURNING id",
+                          { sceneId, effective, scene.name, num(scene.mass), num(scene.spin),
+                            std::to_string(scene.camera.width), std::to_string(scene.camera.height),
+                            status, std::to_string(status == "complete" ? rays : 0) }));
+  std::string blockCols = "frame_id, block, first_ray, n", blockVals = "$1, $2, $3, $4";
+  int next = 5;
+  if (version >= 2)
+  {
+    blockCols += ", tile";
+    blockVals += ", $" + std::to_string(next++);
+  }
+  for (const RecordField& f : RecordFields)
+  {
+    blockCols += std::string(", ") + f.name;
+    blockVals += ", $" + std::to_string(next++);
+  }
+  for (std::size_t t = 0; t < tiles.size(); ++t)
+  {
+    if (version >= 2)
+      legacyExec(c, "INSERT INTO frame_tiles (frame_id, tile, ray_count) VALUES ($1, $2, $3)",
+                 { std::to_string(id), std::to_string(t), std::to_string(tiles[t].size()) });
+    for (std::size_t first = 0, b = 0; first < tiles[t].size(); first += LegacyBlock, ++b)
+    {
+      const std::size_t n = std::min(LegacyBlock, tiles[t].size() - first);
+      std::vector<std::string> params = { std::to_string(id), std::to_string(b),
+                                          std::to_string(first), std::to_string(n) };
+      if (version >= 2)
+        params.push_back(std::to_string(t));
+      std::vector<bool> binary(params.size(), false);
+      for (const RecordField& f : RecordFields)
+      {
+        std::string bytes;
+        for (std::size_t k = 0; k < n; ++k)
+        {
+          const std::uint64_t w = f.word(tiles[t][first + k]);
+          for (int m = f.size - 1; m >= 0; --m)
+            bytes.push_back(char(w >> (8 * m)));
+        }
+        params.push_back(bytes);
+        binary.push_back(true);
+      }
+      legacyExec(c, "INSERT INTO ray_blocks (" + blockCols + ") VALUES (" + blockVals + ")", params,
+                 binary);
+    }
+  }
+  return id;
+}
+
+std::vector<RayRecord> records(std::uint64_t seed, std::size_t first, std::size_t count)
+{
+  std::vector<RayRecord> out;
+  for (std::size_t k = 0; k < count; ++k)
+    out.push_back(record(seed, first + k));
+  return out;
+}
+}
+
 TEST(TiledFramesSchema, VersionOneDatabaseMigratesKeepingItsFrames)
 {
   ThrowawayPostgres pg;
   const std::string ci = pg.conninfo();
-  const std::size_t count = 3 * RayStore::kBlockSize + 11;
-  std::int64_t id = 0;
-  {
-    RayStore store(ci);
-    store.migrate();
-    id = store.writeFrame(scene(1.0), "from v1", count,
-                          [](std::size_t k, RayRecord& r) { r = record(77, k); });
-  }
-  // Back to version 1 by hand: what migration 2 added goes. The body of rays_v does not matter
-  // (migration 2 replaces the view), only that it exists and depends on ray_blocks as in v1.
-  Db db(ci);
-  db.value("BEGIN; DROP VIEW rays_v; DROP TABLE frame_tiles; "
-           "ALTER TABLE ray_blocks DROP CONSTRAINT ray_blocks_pkey; "
-           "ALTER TABLE ray_blocks DROP COLUMN tile; ALTER TABLE ray_blocks ADD PRIMARY KEY "
-           "(frame_id, block); ALTER TABLE frames DROP COLUMN tile_count; "
-           "CREATE VIEW rays_v AS SELECT b.frame_id, b.block, b.first_ray AS ray FROM ray_blocks "
-           "b; UPDATE schema_version SET version = 1; COMMIT");
-
+  const std::size_t count = 3 * LegacyBlock + 11;
   RayStore store(ci);
+  store.migrate(1);
   EXPECT_EQ(store.schemaVersion(), 1);
+  Db db(ci);
+  const std::int64_t id = insertLegacyFrame(db.Conn, 1, scene(1.0), { records(77, 0, count) });
+  const std::int64_t empty = insertLegacyFrame(db.Conn, 1, scene(1.5), { {} });
   EXPECT_NE(errorOf([&] { store.listFrames(); }).find("call migrate()"), std::string::npos);
+
   const auto t0 = Clock::now();
   store.migrate();
   const double migrateSeconds = secondsSince(t0);
-  EXPECT_EQ(store.schemaVersion(), 2);
+  EXPECT_EQ(store.schemaVersion(), 3);
   EXPECT_EQ(db.value("SELECT count(*) FROM schema_version"), "1");
-  ASSERT_EQ(store.listFrames().size(), 1u);
-  EXPECT_EQ(store.listFrames()[0].tileCount, 1);
+  ASSERT_EQ(store.listFrames().size(), 2u);
+  EXPECT_EQ(store.frameInfo(id).tileCount, 1);
+  EXPECT_EQ(store.findFrame(scene(1.0)), id);
   EXPECT_EQ(firstDifference(store.readFrame(id), 77, 0, count), -1);
-  EXPECT_EQ(db.value("SELECT tile || ':' || ray_count FROM frame_tiles"),
-            "0:" + std::to_string(count));
+  EXPECT_TRUE(store.readFrame(empty).empty());
+  EXPECT_EQ(db.value("SELECT string_agg(tile || ':' || ray_count, ',' ORDER BY frame_id) FROM "
+                     "frame_tiles"),
+            "0:" + std::to_string(count) + ",0:0");
   EXPECT_EQ(db.value("SELECT count(*) || ':' || max(ray) || ':' || max(tile) FROM rays_v"),
             std::to_string(count) + ":" + std::to_string(count - 1) + ":0");
   const std::vector<RayRecord> some = store.readFrame(id, "ray >= " + std::to_string(count - 3));
   EXPECT_EQ(firstDifference(some, 77, count - 3, 3), -1);
+  // The rays moved into the new layout: rows of kBlockSize, one table for the frame.
+  EXPECT_EQ(db.value("SELECT count(*) || ':' || sum(n) || ':' || max(n) FROM ray_blocks"),
+            std::to_string((count + RayStore::kBlockSize - 1) / RayStore::kBlockSize) + ":" +
+              std::to_string(count) + ":" + std::to_string(RayStore::kBlockSize));
+  EXPECT_EQ(db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass"),
+            "1");
 
   // The upgraded database takes tiled frames, and migrate() stays idempotent.
   const std::int64_t tiled = store.beginTiledFrame(scene(2.0), "tiled", 2);
@@ -482,13 +609,51 @@ TEST(TiledFramesSchema, VersionOneDatabaseMigratesKeepingItsFrames)
   store.writeTile(tiled, 0, std::vector<RayRecord>{ record(1, 0) });
   EXPECT_EQ(firstDifference(store.readFrame(tiled), 1, 0, 2), -1);
   store.migrate();
-  EXPECT_EQ(store.listFrames().size(), 2u);
+  EXPECT_EQ(store.listFrames().size(), 3u);
 
-  // A newer schema is still refused.
-  db.value("UPDATE schema_version SET version = 3");
+  // Migrations never go back, and a newer schema is refused.
+  EXPECT_NE(errorOf([&] { store.migrate(2); }).find("never go back"), std::string::npos);
+  EXPECT_NE(errorOf([&] { store.migrate(4); }).find("knows versions 1 to 3"), std::string::npos);
+  db.value("UPDATE schema_version SET version = 4");
   RayStore later(ci);
-  EXPECT_NE(errorOf([&] { later.migrate(); }).find("found 3, this build knows 2"),
+  EXPECT_NE(errorOf([&] { later.migrate(); }).find("found 4, this build knows 3"),
             std::string::npos);
   std::printf("[ tiles ] migrating a version 1 database with %zu rays took %.3f s\n", count,
               migrateSeconds);
+}
+
+TEST(TiledFramesSchema, VersionTwoTiledFramesMigrateWhetherCompleteOrNot)
+{
+  ThrowawayPostgres pg;
+  const std::string ci = pg.conninfo();
+  RayStore store(ci);
+  store.migrate(2);
+  Db db(ci);
+  // A complete frame of three tiles (the middle one empty), and a frame whose second tile was
+  // never written.
+  const std::vector<std::size_t> sizes = { 5000, 0, 4200 };
+  std::vector<std::vector<RayRecord>> tiles;
+  for (std::size_t t = 0, first = 0; t < sizes.size(); first += sizes[t++])
+    tiles.push_back(records(31, first, sizes[t]));
+  const std::int64_t whole = insertLegacyFrame(db.Conn, 2, scene(1.0), tiles);
+  const std::int64_t half =
+    insertLegacyFrame(db.Conn, 2, scene(2.0), { records(32, 0, 700) }, "writing");
+  db.value("UPDATE frames SET tile_count = 2 WHERE id = " + std::to_string(half));
+
+  store.migrate();
+  EXPECT_EQ(store.schemaVersion(), 3);
+  ASSERT_EQ(store.listFrames().size(), 1u);
+  EXPECT_EQ(firstDifference(store.readFrame(whole), 31, 0, 9200), -1);
+  EXPECT_EQ(db.value("SELECT min(ray) || '-' || max(ray) || ':' || count(*) FROM rays_v WHERE "
+                     "tile = 2"),
+            "5000-9199:4200");
+  // The abandoned frame is still abandoned; finishing it completes it with both tiles exact.
+  EXPECT_EQ(store.abandonedFrames(std::chrono::seconds(0)), std::vector<std::int64_t>{ half });
+  store.writeTile(half, 1, records(32, 700, 300));
+  EXPECT_EQ(firstDifference(store.readFrame(half), 32, 0, 1000), -1);
+  EXPECT_EQ(db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass"),
+            "4");
+  store.deleteFrame(whole);
+  EXPECT_EQ(db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass"),
+            "2");
 }
