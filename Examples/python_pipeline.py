@@ -6,7 +6,7 @@
 # `vtkmodules.util.numpy_support`). Run it as a script or cell by cell (`# %%` cells, as in
 # Jupyter or VS Code):
 #
-#     PYTHONPATH=build/lib/python3.11/site-packages /usr/bin/python3 \
+#     PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 \
 #         Examples/python_pipeline.py OUTPUT_DIR [WIDTH] [CONNINFO]
 #
 # With a CONNINFO ("" for the PG* variables or the private server of `asrt db`), the frame is
