@@ -379,10 +379,13 @@ int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVec
     if (!run.agree(failure))
       return fail(failure.message);
   }
-  // Whatever fails from here on, a begun frame must not stay behind half-written.
+  // Whatever fails from here on, a begun frame must not stay behind half-written. Except when
+  // the frame we joined already had tiles: another run is writing it (or was, and died), and
+  // only its owner, or whoever cleans up abandoned frames, may delete it.
   auto failAndForget = [&](const std::string& message)
   {
-    if (store && run.Rank == 0)
+    const bool othersFrame = message.find("already written") != std::string::npos;
+    if (store && run.Rank == 0 && !othersFrame)
     {
       try
       {
@@ -393,6 +396,10 @@ int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVec
         // The frame stays 'writing', invisible; abandonedFrames() finds it.
       }
     }
+    if (othersFrame)
+      return fail(message + " (frame " + std::to_string(frameId) +
+                  " was begun by another run: if that run died, RayStore::abandonedFrames finds "
+                  "it and deleteFrame removes it)");
     return fail(message);
   };
 

@@ -36,6 +36,12 @@ test "$written" -ge 3
 test "$written" -lt 48
 test "$("$check" visible-rays "$db" "$id")" -eq 0
 
+step "a rerun joins the abandoned frame, finds its tiles written, and leaves it to be deleted"
+"$expect" 3 "already written.*abandonedFrames" -- \
+  "${mpi[@]}" 2 "$asrt" trace "$scene" -r 64x48 -q --mpi --store --db "$db" -o joined
+test "$("$check" tiles "$db" "$id")" = "$tiles"
+test "$("$check" frames "$db")" = "0 complete:"
+
 step "deleted, the frame is traced and stored again, whole and equal to the single-process one"
 "$check" delete "$db" "$id"
 test -z "$("$check" abandoned "$db" | tr -d ' ')"
