@@ -154,14 +154,14 @@ struct vtkGeodesicDistributedSource::Run
     return all;
   }
 
-  /// Collective: the rows that neighbour ours, from the processes that traced them, as records
-  /// carrying what the Jacobians read. Pairs of processes exchange in ascending order of the
+  /// Collective: what the Jacobians read of the rows that neighbour ours, from the processes
+  /// that traced them. Pairs of processes exchange in ascending order of the
   /// pair, which every process follows, so blocking sends cannot wait on each other in a cycle.
-  std::vector<asrt::RayRecord> exchangeNeighbourRows(const asrt::RowPartition& partition,
-                                                     const std::vector<asrt::RayRecord>& records,
-                                                     int width) const
+  std::vector<asrt::JacobianSample> exchangeNeighbourRows(
+    const asrt::RowPartition& partition, const std::vector<asrt::RayRecord>& records,
+    int width) const
   {
-    std::vector<asrt::RayRecord> neighbours;
+    std::vector<asrt::JacobianSample> neighbours;
     if (!this->Controller)
       return neighbours;
     for (int peer = 0; peer < this->Size; ++peer)
@@ -432,7 +432,7 @@ int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVec
     return failAndForget(failure.message);
 
   // The Jacobians across the rows other processes traced.
-  asrt::computeJacobiansWith(records, run.exchangeNeighbourRows(*partition, records, W));
+  asrt::FrameTracer::computeJacobians(records, run.exchangeNeighbourRows(*partition, records, W));
   this->UpdateProgress(0.82);
 
   // Our tiles, one per block of rows, each in its own transaction.

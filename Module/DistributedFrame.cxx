@@ -108,7 +108,7 @@ void packJacobianSamples(const std::vector<RayRecord>& records, const std::vecto
 }
 
 void unpackJacobianSamples(const std::vector<double>& samples, const std::vector<int>& rows,
-                           int width, std::vector<RayRecord>& out)
+                           int width, std::vector<JacobianSample>& out)
 {
   if (samples.size() != rows.size() * static_cast<std::size_t>(width) * kJacobianSampleSize)
     throw InvalidParameter("unpackJacobianSamples: " + std::to_string(samples.size()) +
@@ -117,32 +117,9 @@ void unpackJacobianSamples(const std::vector<double>& samples, const std::vector
   const double* s = samples.data();
   for (int j : rows)
     for (int i = 0; i < width; ++i, s += kJacobianSampleSize)
-    {
-      RayRecord r;
-      r.i = i;
-      r.j = j;
-      r.u = s[0];
-      r.v = s[1];
-      r.objectId = static_cast<std::int32_t>(s[2]);
-      r.imageOrder = static_cast<std::int32_t>(s[3]);
-      r.termination = static_cast<Termination>(static_cast<int>(s[4]));
-      out.push_back(r);
-    }
-}
-
-void computeJacobiansWith(std::vector<RayRecord>& records, const std::vector<RayRecord>& neighbours)
-{
-  if (neighbours.empty())
-  {
-    FrameTracer::computeJacobians(records);
-    return;
-  }
-  // computeJacobians reads a neighbour's fields only, so the neighbours' own (incomplete)
-  // Jacobians computed alongside are simply dropped.
-  const std::size_t own = records.size();
-  records.insert(records.end(), neighbours.begin(), neighbours.end());
-  FrameTracer::computeJacobians(records);
-  records.resize(own);
+      out.push_back({ i, j, s[0], s[1], static_cast<std::int32_t>(s[2]),
+                      static_cast<std::int32_t>(s[3]),
+                      static_cast<Termination>(static_cast<int>(s[4])) });
 }
 
 void packImageSamples(const std::vector<RayRecord>& records, std::vector<double>& out)

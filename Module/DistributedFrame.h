@@ -69,17 +69,12 @@ constexpr int kImageSampleSize = 9;
 ASRTCORE_EXPORT void packJacobianSamples(const std::vector<RayRecord>& records,
                                          const std::vector<int>& rows, int width,
                                          std::vector<double>& out);
-/// The inverse: records of rows `rows` (width pixels each) carrying only what the Jacobians of
-/// their neighbours read (i, j, u, v, objectId, imageOrder, termination), appended to `out`.
+/// The inverse: the samples of rows `rows` (width pixels each), appended to `out`, for
+/// FrameTracer::computeJacobians(records, neighbours), which then gives every record whose
+/// vertical neighbours are among the records or the samples its whole-frame Jacobians.
 ASRTCORE_EXPORT void unpackJacobianSamples(const std::vector<double>& samples,
                                            const std::vector<int>& rows, int width,
-                                           std::vector<RayRecord>& out);
-/// Recomputes the Jacobians of `records` with `neighbours` (records of other ranks' rows, as
-/// unpackJacobianSamples gives them) beside them: the result is bit for bit that of
-/// FrameTracer::computeJacobians over the whole frame, for every record whose vertical
-/// neighbours are among `records` or `neighbours`.
-ASRTCORE_EXPORT void computeJacobiansWith(std::vector<RayRecord>& records,
-                                          const std::vector<RayRecord>& neighbours);
+                                           std::vector<JacobianSample>& out);
 
 /// Appends what the image of `records` needs, kImageSampleSize doubles per record.
 ASRTCORE_EXPORT void packImageSamples(const std::vector<RayRecord>& records,

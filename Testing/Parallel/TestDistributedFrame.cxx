@@ -196,7 +196,7 @@ TEST(DistributedFrame, SimulatedProcessesAssembleTheSingleProcessFrameBitForBit)
     std::vector<std::vector<RayRecord>> done = own;
     for (int r = 0; r < s.ranks; ++r)
     {
-      std::vector<RayRecord> neighbours;
+      std::vector<asrt::JacobianSample> neighbours;
       for (int q = 0; q < s.ranks; ++q)
       {
         const std::vector<int> rows = p.rowsBordering(q, r);
@@ -204,7 +204,7 @@ TEST(DistributedFrame, SimulatedProcessesAssembleTheSingleProcessFrameBitForBit)
         asrt::packJacobianSamples(own[q], rows, kW, message);
         asrt::unpackJacobianSamples(message, rows, kW, neighbours);
       }
-      asrt::computeJacobiansWith(done[r], neighbours);
+      asrt::FrameTracer::computeJacobians(done[r], neighbours);
     }
     // The tiles in tile order, each from the process that owns it.
     std::vector<RayRecord> assembled;

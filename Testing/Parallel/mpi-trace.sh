@@ -56,4 +56,7 @@ step "an unreachable database and a bad scene end every process, with their exit
 "$expect" 4 "exceeds the mass" -- "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --spin 1.5 \
   -o none
 test ! -e none.png
+step "a failure of one process alone (process 0 cannot write the picture) ends the job"
+"$expect" 1 "cannot" -- "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi \
+  -o /proc/asrt-out
 echo "mpi-trace: all steps passed"
