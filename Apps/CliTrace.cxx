@@ -234,8 +234,8 @@ std::pair<int, int> parseSplit(const std::string& split)
   if (split.rfind("interleaved:", 0) == 0)
     return { vtkGeodesicDistributedSource::INTERLEAVED,
              parsePositiveInteger("--mpi-split", split.substr(12)) };
-  throw UsageError("--mpi-split: expected interleaved, interleaved:K or contiguous, got '" +
-                   split + "'");
+  throw UsageError("--mpi-split: expected interleaved, interleaved:K or contiguous, got '" + split +
+                   "'");
 }
 
 /// Traces a frame on every process. The source agrees on any failure across the processes, so

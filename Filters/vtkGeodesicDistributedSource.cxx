@@ -506,4 +506,7 @@ void vtkGeodesicDistributedSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Label: " << (this->Label ? this->Label : "") << "\n";
   os << indent << "ReplaceExisting: " << this->ReplaceExisting << "\n";
   os << indent << "FrameId: " << this->FrameId << "\n";
+  os << indent << "StoreFailed: " << this->StoreFailed << "\n";
+  os << indent << "Interrupted: " << this->Interrupted << "\n";
+  os << indent << "RankWork: " << this->RankWork->GetNumberOfTuples() << " processes\n";
 }
