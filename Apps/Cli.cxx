@@ -289,15 +289,20 @@ const std::vector<OptionSpec>& databaseSpecs()
   return specs;
 }
 
-std::string databaseConnection(const Options& options)
+std::string databaseGiven(const Options& options)
 {
   std::string given = options.get("db");
   if (given.empty())
     if (const char* env = std::getenv("ASRT_DB"))
       given = env;
+  return given;
+}
+
+std::string databaseConnection(const Options& options)
+{
   try
   {
-    return asrt::storeConnection(given.c_str());
+    return asrt::storeConnection(databaseGiven(options).c_str());
   }
   catch (const std::exception& e)
   {

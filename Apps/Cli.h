@@ -10,6 +10,7 @@
 #include <vector>
 
 class vtkGeodesicSource;
+class vtkMultiProcessController;
 
 namespace asrt
 {
@@ -107,6 +108,8 @@ void applySceneOverrides(const Options& options, vtkGeodesicSource* source);
 /// --db, --quiet
 const std::vector<OptionSpec>& databaseSpecs();
 extern const char* const kDatabaseHelp;
+/// --db, else $ASRT_DB, else "" (what the user named, unresolved).
+std::string databaseGiven(const Options& options);
 /// The conninfo from --db, else $ASRT_DB, else the PG* variables, else the private embedded
 /// server (started if needed). Throws DatabaseError.
 std::string databaseConnection(const Options& options);
@@ -132,6 +135,31 @@ std::string printable(const std::string& text);
 /// The directory of the scene presets (Data/scenes): $ASRT_DATA_DIR/scenes, else the source
 /// tree this program was built from.
 std::string scenesDirectory();
+
+/// MPI runs (asrt trace --mpi under mpirun): every process runs the same command; process 0
+/// writes the files and speaks. Without MPI in this build, startParallelRun throws UsageError.
+struct ParallelRun
+{
+  int rank = 0;
+  int size = 1;
+  /// The vtkMPIController, also VTK's global controller.
+  vtkMultiProcessController* controller = nullptr;
+};
+/// Initializes MPI once and returns the run (also later calls); throws UsageError when this asrt
+/// was built without MPI.
+const ParallelRun& startParallelRun();
+/// The active run, or null outside `--mpi`.
+const ParallelRun* parallelRun();
+/// Marks the failure being thrown as one every process reports together (the distributed
+/// source agreed on it): the processes then end together instead of aborting the job.
+void markSharedFailure();
+/// Whether this process should stay silent about the failure it reports (a shared failure is
+/// reported by process 0 alone).
+bool silentParallelFailure();
+/// Ends an MPI run, if any, with `code`: MPI_Finalize on success or after a shared failure;
+/// otherwise the other processes may be waiting for this one, so MPI_Abort ends the whole job.
+/// Returns `code`.
+int finishParallelRun(int code);
 
 // The subcommands: each parses its arguments and returns an exit code, or throws one of the
 // errors above (or std::exception: a runtime failure).

@@ -7,6 +7,7 @@
 #include "PvdCollection.h"
 #include "RayStore.h"
 #include "VtkMessages.h"
+#include "vtkGeodesicDistributedSource.h"
 #include "vtkGeodesicPostgreSQLWriter.h"
 #include "vtkGeodesicSource.h"
 
@@ -15,10 +16,12 @@
 #include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
 #include "vtkStringArray.h"
 
 #include <vtksys/SystemTools.hxx>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -62,6 +65,18 @@ Storing (accumulation):
   --store[=LABEL]       also store every frame in PostgreSQL, with an optional label
   --replace             replace a stored frame with the same scene and parameters (storing
                         it again is an error otherwise)
+
+Distributed (MPI): run as  mpirun -np N asrt trace SCENE.json --mpi [options]
+  --mpi                 every process traces a share of the rows (on its own OpenMP threads:
+                        set OMP_NUM_THREADS per process); with --store each streams its rows
+                        to PostgreSQL as tiles of one frame, visible only once every tile is
+                        in; process 0 assembles the frame and writes the files (png, vti; the
+                        hits are in the store). The frame equals the single-process one bit
+                        for bit. Prints the work of every process (integration steps, time).
+  --mpi-split SPLIT     how rows are dealt: interleaved (row j to process j mod N, the
+                        default: rays near the photon sphere cost far more, and interleaving
+                        spreads them evenly), interleaved:K (blocks of K rows) or contiguous
+                        (one band per process)
 )";
 
 const char* const kExamples = R"(
@@ -71,6 +86,7 @@ Examples:
   asrt trace Data/scenes/fig4-mass-start.json --sweep mass=0.1:1.2:12 -o out/ramp
   asrt trace Data/scenes/kerr-disk.json --orbit 8 -o out/orbit
   asrt trace Data/scenes/fig5-mass-end.json --store="mass ramp"
+  OMP_NUM_THREADS=1 mpirun -np 4 asrt trace Data/scenes/kerr-disk.json -r 1920x1080 --mpi --store
 )";
 
 /// One frame of a series: what differs from the scene.
@@ -183,6 +199,15 @@ Formats parseFormats(const std::string& list)
   return f;
 }
 
+/// The store's advice names its API; say what the command line offers instead.
+std::string withCommandLineAdvice(std::string why)
+{
+  const std::size_t api = why.find("; pass replace = true");
+  if (why.find("duplicate frame") != std::string::npos)
+    why = why.substr(0, api) + " (add --replace to store it again)";
+  return why;
+}
+
 vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::string& label,
                      bool replace)
 {
@@ -195,15 +220,72 @@ vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::
   writer->SetInputData(hits);
   writer->Write();
   if (messages.failed())
-  {
-    std::string why = messages.firstError();
-    // The store's own advice names its API; say what the command line offers instead.
-    const std::size_t api = why.find("; pass replace = true");
-    if (why.find("duplicate frame") != std::string::npos)
-      why = why.substr(0, api) + " (add --replace to store it again)";
-    throw DatabaseError(why);
-  }
+    throw DatabaseError(withCommandLineAdvice(messages.firstError()));
   return writer->GetFrameId();
+}
+
+/// --mpi-split: the row layout and the rows per interleaved block.
+std::pair<int, int> parseSplit(const std::string& split)
+{
+  if (split == "contiguous")
+    return { vtkGeodesicDistributedSource::CONTIGUOUS, 1 };
+  if (split == "interleaved")
+    return { vtkGeodesicDistributedSource::INTERLEAVED, 1 };
+  if (split.rfind("interleaved:", 0) == 0)
+    return { vtkGeodesicDistributedSource::INTERLEAVED,
+             parsePositiveInteger("--mpi-split", split.substr(12)) };
+  throw UsageError("--mpi-split: expected interleaved, interleaved:K or contiguous, got '" + split +
+                   "'");
+}
+
+/// Traces a frame on every process. The source agrees on any failure across the processes, so
+/// whatever it throws every process throws together.
+void traceSharedFrame(vtkGeodesicDistributedSource* source, const std::string& label, bool quiet)
+{
+  try
+  {
+    traceFrame(source, label, quiet);
+  }
+  catch (const InputError& e)
+  {
+    markSharedFailure();
+    if (source->GetInterrupted())
+      throw Interrupted();
+    if (source->GetStoreFailed())
+      throw DatabaseError(withCommandLineAdvice(e.what()));
+    throw;
+  }
+  catch (...)
+  {
+    markSharedFailure();
+    throw;
+  }
+}
+
+/// The work of every process, from process 0: how even the split was.
+void printRankWork(vtkGeodesicDistributedSource* source, const std::string& split)
+{
+  vtkDoubleArray* work = source->GetRankWork();
+  const vtkIdType n = work->GetNumberOfTuples();
+  double maxSteps = 0, sumSteps = 0, maxTrace = 0, minTrace = 1e300, maxStore = 0;
+  for (vtkIdType p = 0; p < n; ++p)
+  {
+    maxSteps = std::max(maxSteps, work->GetComponent(p, 0));
+    sumSteps += work->GetComponent(p, 0);
+    maxTrace = std::max(maxTrace, work->GetComponent(p, 2));
+    minTrace = std::min(minTrace, work->GetComponent(p, 2));
+    maxStore = std::max(maxStore, work->GetComponent(p, 3));
+  }
+  std::printf("  %lld processes, %s rows: steps max/mean %.3f, tracing %.2f to %.2f s",
+              n > 0 ? static_cast<long long>(n) : 0LL, split.c_str(),
+              sumSteps > 0 ? maxSteps * n / sumSteps : 1.0, minTrace, maxTrace);
+  if (source->GetStoreFrame())
+    std::printf(", storing up to %.2f s", maxStore);
+  std::printf("\n");
+  for (vtkIdType p = 0; p < n; ++p)
+    std::printf("    process %lld: %.0f steps, %.0f rays, %.2f s tracing, %.2f s storing\n",
+                static_cast<long long>(p), work->GetComponent(p, 0), work->GetComponent(p, 1),
+                work->GetComponent(p, 2), work->GetComponent(p, 3));
 }
 }
 
@@ -216,7 +298,9 @@ int runTrace(const std::vector<std::string>& args)
                                                  { "sweep", OptionSpec::Value },
                                                  { "orbit", OptionSpec::Value },
                                                  { "store", OptionSpec::OptionalValue },
-                                                 { "replace", OptionSpec::Flag } } +
+                                                 { "replace", OptionSpec::Flag },
+                                                 { "mpi", OptionSpec::Flag },
+                                                 { "mpi-split", OptionSpec::Value } } +
                           sceneOverrideSpecs() + databaseSpecs(),
                         args);
   if (options.help())
@@ -227,7 +311,15 @@ int runTrace(const std::vector<std::string>& args)
   }
   options.expectPositional(1, 1, "the scene file (asrt trace SCENE.json)");
   const std::string scenePath = options.positional()[0];
-  const Formats formats = parseFormats(options.get("formats", "png,vti,vtp"));
+  const bool mpi = options.has("mpi");
+  if (mpi && options.has("polylines"))
+    throw UsageError("--polylines cannot be combined with --mpi");
+  if (options.has("mpi-split") && !mpi)
+    throw UsageError("--mpi-split only makes sense with --mpi");
+  const Formats formats = parseFormats(options.get("formats", mpi ? "png,vti" : "png,vti,vtp"));
+  if (mpi && formats.vtp)
+    throw UsageError("--mpi writes png and vti; the hits of a distributed frame are read back "
+                     "from the store (--store, then asrt show ID --vtp)");
   const bool polylines = options.has("polylines");
   const int stride = options.get("polylines").empty()
                        ? 10
@@ -238,7 +330,20 @@ int runTrace(const std::vector<std::string>& args)
   if (options.has("replace") && !options.has("store"))
     throw UsageError("--replace only makes sense with --store");
 
-  vtkNew<vtkGeodesicSource> source;
+  // Under --mpi every process runs this; process 0 writes the files and speaks. The command line
+  // is checked before MPI starts, so that every process refuses it alike.
+  const std::pair<int, int> split = parseSplit(options.get("mpi-split", "interleaved"));
+  vtkSmartPointer<vtkGeodesicSource> source;
+  vtkSmartPointer<vtkGeodesicDistributedSource> distributed;
+  if (mpi)
+  {
+    distributed = vtkSmartPointer<vtkGeodesicDistributedSource>::New();
+    distributed->SetRowLayout(split.first);
+    distributed->SetRowsPerBlock(split.second);
+    source = distributed;
+  }
+  else
+    source = vtkSmartPointer<vtkGeodesicSource>::New();
   source->SetSceneFileName(scenePath.c_str());
   applySceneOverrides(options, source);
   source->SetGeneratePolylines(polylines);
@@ -253,9 +358,22 @@ int runTrace(const std::vector<std::string>& args)
   if (!series)
     frames.push_back({ std::string(), [](vtkGeodesicSource*) {} });
 
-  // Connect before tracing: an unreachable database should not cost a trace first.
+  const ParallelRun* parallel = mpi ? &startParallelRun() : nullptr;
+  const bool speaks = !parallel || parallel->rank == 0;
+  if (parallel)
+    distributed->SetController(parallel->controller);
+
+  // Connect before tracing: an unreachable database should not cost a trace first (the
+  // distributed source does this itself, process 0 resolving the connection for all).
   std::string conninfo;
-  if (options.has("store"))
+  if (options.has("store") && distributed)
+  {
+    distributed->SetStoreFrame(true);
+    distributed->SetConnectionString(databaseGiven(options).c_str());
+    distributed->SetLabel(options.get("store").c_str());
+    distributed->SetReplaceExisting(options.has("replace"));
+  }
+  else if (options.has("store"))
   {
     conninfo = databaseConnection(options);
     RayStore(conninfo).migrate();
@@ -273,7 +391,12 @@ int runTrace(const std::vector<std::string>& args)
     const std::string label =
       series ? name + " [" + std::to_string(k + 1) + "/" + std::to_string(frames.size()) + "]"
              : name;
-    traceFrame(source, "trace " + label, quiet);
+    if (distributed)
+      traceSharedFrame(distributed, "trace " + label, quiet || !speaks);
+    else
+      traceFrame(source, "trace " + label, quiet);
+    if (!speaks)
+      continue;
 
     vtkImageData* image = source->GetImageOutput();
     vtkPolyData* hits = source->GetHitsOutput();
@@ -307,14 +430,19 @@ int runTrace(const std::vector<std::string>& args)
                 fieldValue(hits, "Spin"), fieldString(hits, "IntegrationMethod").c_str());
     for (const std::string& file : written)
       std::printf("  wrote %s\n", file.c_str());
+    if (distributed)
+      printRankWork(distributed, options.get("mpi-split", "interleaved"));
     if (options.has("store"))
     {
-      const vtkIdType id = storeFrame(hits, conninfo, options.get("store"), options.has("replace"));
-      std::printf("  stored as frame %lld\n", static_cast<long long>(id));
+      const vtkIdType id =
+        distributed ? distributed->GetFrameId()
+                    : storeFrame(hits, conninfo, options.get("store"), options.has("replace"));
+      std::printf("  stored as frame %lld%s\n", static_cast<long long>(id),
+                  distributed ? " (one tile per block of rows)" : "");
     }
     std::fflush(stdout);
   }
-  if (series)
+  if (series && speaks)
   {
     const std::pair<tools::PvdCollection*, std::string> collections[] = {
       { &images, prefix + ".pvd" },

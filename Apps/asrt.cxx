@@ -50,14 +50,23 @@ void usage(std::FILE* out)
                "  asrt trace Data/scenes/fig4-mass-start.json --store=ramp\n"
                "  asrt list\n"
                "  asrt show 1 --png frame1.png\n"
-               "  asrt bundle Data/scenes/fig1-cylinders.json -o bundle.png\n\n%s",
+               "  asrt bundle Data/scenes/fig1-cylinders.json -o bundle.png\n"
+               "  mpirun -np 4 asrt trace Data/scenes/kerr-disk.json --mpi --store\n\n%s",
                kExitCodeHelp);
 }
 
 int report(const char* command, const char* kind, const std::string& message, int code)
 {
-  std::fprintf(stderr, "asrt %s: %s%s\n", command, kind, message.c_str());
-  return code;
+  if (!silentParallelFailure())
+  {
+    const ParallelRun* run = parallelRun();
+    if (run && run->rank != 0)
+      std::fprintf(stderr, "asrt %s (process %d): %s%s\n", command, run->rank, kind,
+                   message.c_str());
+    else
+      std::fprintf(stderr, "asrt %s: %s%s\n", command, kind, message.c_str());
+  }
+  return finishParallelRun(code);
 }
 }
 
@@ -94,13 +103,13 @@ int main(int argc, char* argv[])
   const std::vector<std::string> args(argv + 2, argv + argc);
   try
   {
-    return command->run(args);
+    return finishParallelRun(command->run(args));
   }
   catch (const UsageError& e)
   {
     std::fprintf(stderr, "asrt %s: %s\nTry 'asrt %s --help'.\n", command->name, e.what(),
                  command->name);
-    return kUsage;
+    return finishParallelRun(kUsage);
   }
   catch (const InputError& e)
   {

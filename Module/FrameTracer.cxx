@@ -179,21 +179,59 @@ std::vector<RayRecord> FrameTracer::traceRows(int rowBegin, int rowEnd,
   return records;
 }
 
-void FrameTracer::computeJacobians(std::vector<RayRecord>& records)
+void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
+                                   const std::vector<JacobianSample>& neighbours)
 {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::unordered_map<std::int64_t, size_t> index;
-  index.reserve(records.size());
+  std::vector<JacobianSample> samples;
+  samples.reserve(records.size() + neighbours.size());
+  for (const RayRecord& r : records)
+    samples.push_back({ r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination });
+  samples.insert(samples.end(), neighbours.begin(), neighbours.end());
+  if (samples.empty())
+    return;
+  // Pixels by (i, j): a dense grid over their bounding box when they fill much of it (a frame,
+  // bands or interleaved rows of one), a hash map when they are scattered (a pixel subset).
+  int iMin = samples[0].i, iMax = iMin, jMin = samples[0].j, jMax = jMin;
+  for (const JacobianSample& s : samples)
+  {
+    iMin = std::min(iMin, s.i);
+    iMax = std::max(iMax, s.i);
+    jMin = std::min(jMin, s.j);
+    jMax = std::max(jMax, s.j);
+  }
+  const std::int64_t boxWidth = std::int64_t(iMax) - iMin + 1;
+  const std::int64_t box = boxWidth * (std::int64_t(jMax) - jMin + 1);
+  const bool dense = box <= 4 * static_cast<std::int64_t>(samples.size());
+  std::vector<std::int64_t> grid(dense ? static_cast<std::size_t>(box) : 0, -1);
+  std::unordered_map<std::int64_t, std::size_t> index;
   auto key = [](int i, int j)
   { return (static_cast<std::int64_t>(j) << 32) ^ static_cast<std::uint32_t>(i); };
-  for (size_t k = 0; k < records.size(); ++k)
-    index.emplace(key(records[k].i, records[k].j), k);
-  auto at = [&](int i, int j) -> const RayRecord*
+  for (std::size_t k = 0; k < samples.size(); ++k)
   {
+    if (dense)
+    {
+      std::int64_t& slot =
+        grid[static_cast<std::size_t>((samples[k].j - jMin) * boxWidth + (samples[k].i - iMin))];
+      if (slot < 0)
+        slot = static_cast<std::int64_t>(k);
+    }
+    else
+      index.emplace(key(samples[k].i, samples[k].j), k);
+  }
+  auto at = [&](int i, int j) -> const JacobianSample*
+  {
+    if (dense)
+    {
+      if (i < iMin || i > iMax || j < jMin || j > jMax)
+        return nullptr;
+      const std::int64_t k = grid[static_cast<std::size_t>((j - jMin) * boxWidth + (i - iMin))];
+      return k < 0 ? nullptr : &samples[static_cast<std::size_t>(k)];
+    }
     const auto it = index.find(key(i, j));
-    return it == index.end() ? nullptr : &records[it->second];
+    return it == index.end() ? nullptr : &samples[it->second];
   };
-  auto same = [](const RayRecord& a, const RayRecord* b)
+  auto same = [](const RayRecord& a, const JacobianSample* b)
   {
     return b && b->termination != Termination::Running && b->objectId == a.objectId &&
            b->imageOrder == a.imageOrder;
@@ -207,7 +245,8 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records)
       r.dudi = r.dudj = r.dvdi = r.dvdj = nan;
       continue;
     }
-    auto derivative = [&](const RayRecord* minus, const RayRecord* plus, double& dU, double& dV)
+    auto derivative =
+      [&](const JacobianSample* minus, const JacobianSample* plus, double& dU, double& dV)
     {
       const bool m = same(r, minus), p = same(r, plus);
       if (m && p)

@@ -36,6 +36,16 @@ struct RayRecord
   double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;
 };
 
+/// What the Jacobians of a pixel's neighbours read of its record.
+struct JacobianSample
+{
+  std::int32_t i = 0, j = 0;
+  double u = 0, v = 0;
+  std::int32_t objectId = -1;
+  std::int32_t imageOrder = 0;
+  Termination termination = Termination::Running;
+};
+
 /// One point of a traced ray's polyline.
 struct PathPoint
 {
@@ -86,8 +96,11 @@ public:
   std::vector<RayRecord> traceRows(int rowBegin, int rowEnd,
                                    const std::function<bool(double)>& progress = nullptr) const;
 
-  /// Fills the screen-space Jacobians of the records from their neighbours among them.
-  static void computeJacobians(std::vector<RayRecord>& records);
+  /// Fills the screen-space Jacobians of the records from their neighbours among them and among
+  /// `neighbours` (pixels traced elsewhere, e.g. by another process). Where a pixel appears
+  /// twice, its first appearance counts, records before neighbours.
+  static void computeJacobians(std::vector<RayRecord>& records,
+                               const std::vector<JacobianSample>& neighbours = {});
 
 private:
   SceneDescription Desc;

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# asrt trace --mpi under mpirun against a throwaway server (asrtWithThrowawayPostgres started it
+# and set ASRT_TEST_CONNINFO): the distributed frame is the single-process frame bit for bit (the
+# PNG, the VTI with every image array, and the stored records in order), for 2 and 4 processes
+# and other splits; failures end every process with the right exit code, never a hang.
+# Usage: mpi-trace.sh MPIEXEC ASRT STORECHECK EXPECT SCENES_DIR WORK_DIR
+set -euo pipefail
+mpiexec="$1"; asrt="$2"; check="$3"; expect="$4"; scenes="$5"; work="$6"
+rm -rf "$work"; mkdir -p "$work"; cd "$work"
+step() { echo "== $*"; }
+# Bounded: mpirun ends its processes on SIGTERM; -k kills it if it does not.
+mpi=(timeout -k 10 120 "$mpiexec" --oversubscribe -np)
+scene="$scenes/kerr-disk.json"
+size=61x47 # odd: rows do not divide evenly among the processes
+
+step "the single-process frame"
+serial="$("$check" createdb serial)"
+"$expect" 0 "stored as frame 1" -- "$asrt" trace "$scene" -r $size -q --store --db "$serial" \
+  -o serial
+
+for n in 2 4; do
+  step "$n processes: the same picture, image arrays and stored records"
+  db="$("$check" createdb "np$n")"
+  "$expect" 0 "$n processes, interleaved rows: steps max/mean" -- \
+    "${mpi[@]}" "$n" "$asrt" trace "$scene" -r $size -q --mpi --store --db "$db" -o "np$n"
+  cmp serial.png "np$n.png"
+  cmp serial.vti "np$n.vti"
+  "$check" same "$serial" "$db"
+  test "$("$check" tiles "$db" 1)" = "47/47"
+done
+
+step "3 processes, contiguous bands, and 2 with blocks of 5 rows: the same frame"
+"$expect" 0 "3 processes, contiguous rows" -- \
+  "${mpi[@]}" 3 "$asrt" trace "$scene" -r $size -q --mpi --mpi-split contiguous -o contiguous
+cmp serial.png contiguous.png
+cmp serial.vti contiguous.vti
+db="$("$check" createdb blocks)"
+"$expect" 0 "stored as frame 1" -- \
+  "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --mpi-split interleaved:5 --store --db "$db" \
+  -o blocks
+cmp serial.vti blocks.vti
+"$check" same "$serial" "$db"
+test "$("$check" tiles "$db" 1)" = "10/10"
+
+step "storing it again is refused by every process alike; --replace replaces it"
+db2="${serial/dbname=serial/dbname=np2}"
+"$expect" 3 "already stored.*--replace" -- \
+  "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --store --db "$db2" -o again
+"$expect" 0 "stored as frame [0-9]+ \(one tile" -- \
+  "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --store --replace --db "$db2" -o again
+"$check" same "$serial" "$db2"
+
+step "an unreachable database and a bad scene end every process, with their exit codes"
+"$expect" 3 "cannot connect" -- "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --store \
+  --db "host=/nonexistent port=1 connect_timeout=2" -o none
+"$expect" 4 "exceeds the mass" -- "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --spin 1.5 \
+  -o none
+test ! -e none.png
+step "a failure of one process alone (process 0 cannot write the picture) ends the job"
+"$expect" 1 "cannot" -- "${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi \
+  -o /proc/asrt-out
+echo "mpi-trace: all steps passed"
