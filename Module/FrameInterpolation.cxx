@@ -138,11 +138,13 @@ void buildSide(const FrameSamples& self, const FrameSamples& other,
     }
     sp.margin = static_cast<float>(opt.depthTolerance * std::abs(s.pathLength) + slope);
 
+    // Only matched pixels know how their neighbourhood maps; a pixel seen in one frame keeps a
+    // one-pixel footprint (its motion is a guess: spreading it would smear the guess).
     float deviation = 0;
     for (int k = 0; k < 4; ++k)
       deviation = std::max(deviation, std::abs(m.jacobian[k] - ((k == 0 || k == 3) ? 1.0f : 0.0f)));
     sp.footprint = -1;
-    if (deviation > kBilinearDeviation && std::isfinite(deviation))
+    if (m.kind == MatchKind::Matched && deviation > kBilinearDeviation && std::isfinite(deviation))
     {
       sp.footprint = static_cast<std::int32_t>(out.jacobians.size());
       out.jacobians.push_back(m.jacobian);

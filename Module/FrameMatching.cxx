@@ -493,15 +493,42 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
         q = byLength[0].second;
       }
 
-      // Sub-pixel position of the point near q, and the map of the neighbourhood.
+      // Sub-pixel position of the point near q. The nearest hit in space need not be the nearest
+      // pixel where an image is squeezed: step to the pixel the local map points at (up to 3 px
+      // at a time) while that brings the point closer, within the same image.
+      Vec2 delta = to.offset(static_cast<std::size_t>(q), s);
+      bool leavesView = false;
+      for (int step = 0; step < 8 && delta.allFinite() && delta.cwiseAbs().maxCoeff() > 0.5; ++step)
+      {
+        const int ni = q % W + static_cast<int>(std::clamp(std::lround(delta.x()), -3L, 3L));
+        const int nj = q / W + static_cast<int>(std::clamp(std::lround(delta.y()), -3L, 3L));
+        if (ni < 0 || ni >= W || nj < 0 || nj >= H)
+        {
+          leavesView = true;
+          break;
+        }
+        const std::size_t next = static_cast<std::size_t>(nj) * W + ni;
+        if (!to.sameImage(static_cast<std::size_t>(q), next))
+          break;
+        const Vec2 d = to.offset(next, s);
+        if (!d.allFinite() || d.cwiseAbs().maxCoeff() >= delta.cwiseAbs().maxCoeff())
+          break;
+        q = static_cast<std::int32_t>(next);
+        delta = d;
+      }
+      if (!delta.allFinite())
+        delta.setZero();
+      // A point the local map puts beyond the frame's edge has left the view; one it puts more
+      // than a pixel beyond the image's last ray is not seen there either (the nearest ray was
+      // merely close): both are one-sided.
+      if (delta.cwiseAbs().maxCoeff() > 1.0 || (leavesView && delta.cwiseAbs().maxCoeff() > 0.5))
+        continue;
+      // Otherwise the point stays within the pixel's cell.
+      delta = delta.cwiseMax(-0.5).cwiseMin(0.5);
       Mat2 Jq = Mat2::Zero(), Jp = Mat2::Zero();
       Eigen::Matrix<double, 3, 2> Tq = Eigen::Matrix<double, 3, 2>::Zero(), Tp = Tq;
       const bool uvq = to.uvJacobian(static_cast<std::size_t>(q), Jq);
       const bool tq = to.tangents(static_cast<std::size_t>(q), Tq);
-      Vec2 delta = to.offset(static_cast<std::size_t>(q), s);
-      if (!delta.allFinite())
-        delta.setZero();
-      delta = delta.cwiseMax(-1.0).cwiseMin(1.0);
       m.x = static_cast<float>(static_cast<double>(q % W) + delta.x());
       m.y = static_cast<float>(static_cast<double>(q / W) + delta.y());
       m.partner = q;
