@@ -1,5 +1,7 @@
 #include "GeodesicFrameMatching.h"
 
+#include "GeodesicRecordArrays.h"
+
 #include "vtkDataArray.h"
 #include "vtkIdList.h"
 #include "vtkPointData.h"
@@ -51,12 +53,14 @@ private:
 vtkDataArray* pointArray(vtkPolyData* hits, const char* name, int components,
                          const std::string& which)
 {
-  vtkDataArray* a = hits->GetPointData()->GetArray(name);
-  if (!a || a->GetNumberOfComponents() != components ||
-      a->GetNumberOfTuples() != hits->GetNumberOfPoints())
-    throw InvalidParameter(which + ": the hit points lack a valid \"" + name + "\" array (" +
-                           std::to_string(components) + " components, one tuple per point)");
-  return a;
+  try
+  {
+    return requirePointArray(hits, name, components);
+  }
+  catch (const InvalidParameter& e)
+  {
+    throw InvalidParameter(which + ": the " + e.what());
+  }
 }
 }
 
@@ -102,12 +106,7 @@ FrameSamples frameSamplesFromHits(vtkPolyData* hits, const SceneDescription& sce
       if (!c.allFinite())
         throw InvalidParameter("its colour is not finite");
       s.rgb = imageColor(c);
-      double jac[4];
-      jacobian->GetTuple(id, jac);
-      s.dudi = jac[0];
-      s.dudj = jac[1];
-      s.dvdi = jac[2];
-      s.dvdj = jac[3];
+      jacobian->GetTuple(id, s.jacobian.data());
     },
     which);
 }

@@ -51,16 +51,6 @@ public:
   std::string Text;
 };
 
-template<class A>
-vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
-{
-  auto a = vtkSmartPointer<A>::New();
-  a->SetName(name);
-  a->SetNumberOfComponents(components);
-  a->SetNumberOfTuples(tuples);
-  return a;
-}
-
 void addField(vtkFieldData* fd, const char* name, std::initializer_list<double> values)
 {
   auto a = vtkSmartPointer<vtkDoubleArray>::New();
@@ -419,12 +409,12 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
 
     const int W = f.width, H = f.height;
     const vtkIdType n = static_cast<vtkIdType>(W) * H;
-    auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
-    auto cls = makeArray<vtkUnsignedCharArray>("InterpolationClass", 1, n);
-    auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
-    auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
-    auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
-    auto termination = makeArray<vtkIntArray>("Termination", 1, n);
+    auto colors = asrt::makeArray<vtkUnsignedCharArray>("Colors", 3, n);
+    auto cls = asrt::makeArray<vtkUnsignedCharArray>("InterpolationClass", 1, n);
+    auto objectId = asrt::makeArray<vtkIntArray>("ObjectId", 1, n);
+    auto order = asrt::makeArray<vtkIntArray>("ImageOrder", 1, n);
+    auto pathLength = asrt::makeArray<vtkDoubleArray>("PathLength", 1, n);
+    auto termination = asrt::makeArray<vtkIntArray>("Termination", 1, n);
     int ext[6] = { 0, W - 1, 0, H - 1, 0, 0 };
     image->Initialize();
     image->SetExtent(ext);
@@ -458,7 +448,7 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
         termination->SetValue(p, static_cast<int>(r.termination));
       }
       this->LastRetracedCount = static_cast<vtkIdType>(records.size());
-      auto disagreement = makeArray<vtkUnsignedCharArray>("Disagreement", 1, n);
+      auto disagreement = asrt::makeArray<vtkUnsignedCharArray>("Disagreement", 1, n);
       std::copy(this->Impl->Disagreement.begin(), this->Impl->Disagreement.end(),
                 disagreement->GetPointer(0));
       image->GetPointData()->AddArray(disagreement);

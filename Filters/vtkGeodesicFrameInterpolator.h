@@ -11,9 +11,10 @@
  * k = 0 … N + 1 (N = NumberOfIntermediateFrames; t = 0 is A, t = 1 is B) and TIME_RANGE [0, 1];
  * any requested time in [0, 1] is rendered as such (the interpolation is continuous in t), times
  * outside are clamped. The image has the source's arrays ("Colors" RGB as scalars, "ObjectId",
- * "ImageOrder", "PathLength", "Termination", taken from the ray that dominates each pixel) plus
- * "InterpolationClass" (0 matched, 1 one-sided, 2 hole-filled, 3 ambiguous, 4 re-traced) and
- * "Disagreement" (max channel difference between A's and B's estimate of the pixel). Field data:
+ * "ImageOrder", "PathLength", "Termination", taken from the ray in front at each pixel) plus
+ * "InterpolationClass" (0 matched, 1 one-sided, 2 hole-filled, 3 ambiguous, 4 re-traced) and, in
+ * exact mode, "Disagreement" (the largest channel difference between what A's splats alone and
+ * B's splats alone show at the pixel, 255 where only one of them reaches it). Field data:
  * "InterpolationTime", "InterpolationFractions" (the five classes' shares of the pixels),
  * "HolePixels", "RetracedPixels", and the parameters at t ("Mass", "Spin", "Charge",
  * "CameraPosition", "FocalPoint", "ViewUp").

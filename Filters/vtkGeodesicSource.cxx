@@ -52,16 +52,6 @@ double physicalMemory()
   const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && size > 0 ? static_cast<double>(pages) * size : 8e9;
 }
-
-template<class A>
-vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
-{
-  auto a = vtkSmartPointer<A>::New();
-  a->SetName(name);
-  a->SetNumberOfComponents(components);
-  a->SetNumberOfTuples(tuples);
-  return a;
-}
 }
 
 vtkCxxSetSmartPointerMacro(vtkGeodesicSource, PixelSubset, vtkIntArray);
@@ -405,11 +395,11 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       auto linePoints = vtkSmartPointer<vtkPoints>::New();
       linePoints->SetDataTypeToDouble();
       auto cells = vtkSmartPointer<vtkCellArray>::New();
-      auto lambda = makeArray<vtkDoubleArray>("Lambda", 1, 0);
-      auto radius = makeArray<vtkDoubleArray>("R", 1, 0);
-      auto absH = makeArray<vtkDoubleArray>("AbsH", 1, 0);
-      auto linePixel = makeArray<vtkIntArray>("Pixel", 2, 0);
-      auto lineTermination = makeArray<vtkIntArray>("Termination", 1, 0);
+      auto lambda = asrt::makeArray<vtkDoubleArray>("Lambda", 1, 0);
+      auto radius = asrt::makeArray<vtkDoubleArray>("R", 1, 0);
+      auto absH = asrt::makeArray<vtkDoubleArray>("AbsH", 1, 0);
+      auto linePixel = asrt::makeArray<vtkIntArray>("Pixel", 2, 0);
+      auto lineTermination = asrt::makeArray<vtkIntArray>("Termination", 1, 0);
       std::vector<asrt::PathPoint> path;
       for (const auto& [i, j] : chosen)
       {

@@ -32,10 +32,7 @@ PixelSample sampleOf(const RayRecord& r)
   s.point = r.hitPoint;
   s.u = r.u;
   s.v = r.v;
-  s.dudi = r.dudi;
-  s.dudj = r.dudj;
-  s.dvdi = r.dvdi;
-  s.dvdj = r.dvdj;
+  s.jacobian = { { r.dudi, r.dudj, r.dvdi, r.dvdj } };
   s.pathLength = r.affineLength;
   s.objectId = r.objectId;
   s.imageOrder = r.imageOrder;
@@ -264,7 +261,7 @@ struct FrameView
     const PixelSample& s = f.pixels[p];
     if (kind[p] != SampleKind::Surface)
       return false;
-    J << s.dudi, s.dudj, s.dvdi, s.dvdj;
+    J << s.jacobian[0], s.jacobian[1], s.jacobian[2], s.jacobian[3];
     if (!J.allFinite())
       return false;
     const double scale = J.squaredNorm();
@@ -407,7 +404,7 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
       // pixel grid, one connected patch per image (a small ball's preimage under a locally smooth
       // map): patches not connected to q0's are other images, if one of their hits is within
       // tolerance of the point.
-      g->index->within(s.point, 2.0 * tol * to.footprint[q0], near);
+      g->index->within(s.point, tol * to.footprint[q0], near);
       // The patch lives in dense per-thread arrays, stamped with this pixel's index, so that
       // membership costs O(1) (patches are large where an image is squeezed).
       const std::int32_t query = static_cast<std::int32_t>(p);

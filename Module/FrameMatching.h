@@ -24,8 +24,9 @@ struct PixelSample
 {
   Vec3 point = Vec3::Zero(); ///< hit point, or where the ray ended
   double u = 0, v = 0;       ///< surface coordinates of the hit
-  /// Screen-space Jacobian ∂(u, v)/∂(i, j) of the record (NaN where the tracer had no neighbour).
-  double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;
+  /// Screen-space Jacobian ∂(u, v)/∂(i, j) of the record, row-major (∂u/∂i, ∂u/∂j, ∂v/∂i,
+  /// ∂v/∂j; NaN where the tracer had no neighbour).
+  std::array<double, 4> jacobian{ { 0, 0, 0, 0 } };
   double pathLength = 0;
   std::int32_t objectId = -1;
   std::int32_t imageOrder = 0;
@@ -125,7 +126,9 @@ struct MatchOptions
 ///    nested images of the same order: the one whose path length is closest wins, a tie is
 ///    ambiguous. The position is refined to sub-pixel with the partner's (u, v) Jacobian
 ///    (Δ(i, j) = J⁻¹ Δ(u, v), u the short way round), or with its neighbours' hit points where
-///    (u, v) has no Jacobian. The neighbourhood maps by D = J_B⁻¹ J_A;
+///    (u, v) has no Jacobian, stepping to the pixel that map points at while that brings the
+///    point closer; a point it still puts more than a pixel away, or beyond the frame's edge, is
+///    not seen there (one-sided). The neighbourhood maps by D = J_B⁻¹ J_A;
 ///  - the shadow (captured rays) is one region in each frame: its pixels map by the similarity
 ///    that takes A's shadow (centroid, radius √(area/π)) onto B's;
 ///  - the rest is one-sided, moving as its matched neighbours do.

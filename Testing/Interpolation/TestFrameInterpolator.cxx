@@ -33,20 +33,21 @@ std::string textureDirectory()
   return std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
 }
 
-/// The paper's Fig. 4 scene at kSize², at a given mass; traced once per mass.
-const TracedFrame& rampFrame(double mass)
+/// The paper's Fig. 4 scene at size², at a given mass; traced once per mass and size.
+const TracedFrame& rampFrame(double mass, int size = kSize)
 {
-  static std::map<double, TracedFrame> frames;
-  auto it = frames.find(mass);
+  static std::map<std::pair<double, int>, TracedFrame> frames;
+  auto it = frames.find({ mass, size });
   if (it == frames.end())
     it = frames
-           .emplace(mass, traceWith(
-                            [mass](vtkGeodesicSource* s)
-                            {
-                              s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-                              s->SetResolution(kSize, kSize);
-                              s->SetMass(mass);
-                            }))
+           .emplace(std::pair{ mass, size },
+                    traceWith(
+                      [mass, size](vtkGeodesicSource* s)
+                      {
+                        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+                        s->SetResolution(size, size);
+                        s->SetMass(mass);
+                      }))
            .first;
   return it->second;
 }
@@ -122,6 +123,34 @@ Quality quality(vtkImageData* truth, vtkImageData* image)
   truth->GetDimensions(dims);
   return { asrt::psnr(view(a, dims[0], dims[1]), view(b, dims[0], dims[1])),
            asrt::ssim(view(a, dims[0], dims[1]), view(b, dims[0], dims[1])) };
+}
+
+/// The middle frame, plain and exact, and the two ends, each against the traced truth.
+struct MiddleFrame
+{
+  vtkSmartPointer<vtkImageData> plain, exact;
+  Quality qp, qe, qa, qb;
+  double retraced = 0;
+};
+
+MiddleFrame middleFrame(const char* what, const TracedFrame& a, const TracedFrame& b,
+                        const TracedFrame& truth)
+{
+  MiddleFrame m;
+  m.plain = interpolate(a, b, 0.5);
+  m.exact = interpolate(a, b, 0.5, exactMode);
+  m.qp = quality(truth.image, m.plain);
+  m.qe = quality(truth.image, m.exact);
+  m.qa = quality(truth.image, a.image);
+  m.qb = quality(truth.image, b.image);
+  m.retraced = fieldValue(m.exact, "InterpolationFractions", 4);
+  std::printf("%s: plain %.2f dB / %.4f, exact %.2f dB / %.4f (%.3f re-traced), A %.2f dB, "
+              "B %.2f dB\n",
+              what, m.qp.psnr, m.qp.ssim, m.qe.psnr, m.qe.ssim, m.retraced, m.qa.psnr, m.qb.psnr);
+  dump(truth.image, std::string(what) + "-truth");
+  dump(m.plain, std::string(what) + "-plain");
+  dump(m.exact, std::string(what) + "-exact");
+  return m;
 }
 
 /// Exact mode re-traces pixels at the intermediate parameters: they must be the traced truth.
@@ -235,26 +264,17 @@ TEST(FrameInterpolator, MassRampKeyFramesAgainstTracedFrames)
   // fifth of the pixels re-traced; the frames A and B themselves score 12.0 and 11.6 dB against
   // it. Thresholds leave ~1 dB and 0.03 of room.
   const TracedFrame &a = rampFrame(0.1), &b = rampFrame(0.3), &truth = rampFrame(0.2);
-  const auto plain = interpolate(a, b, 0.5);
-  const auto exact = interpolate(a, b, 0.5, exactMode);
-  const Quality qp = quality(truth.image, plain), qe = quality(truth.image, exact);
-  const Quality qa = quality(truth.image, a.image), qb = quality(truth.image, b.image);
-  std::printf("ramp plain %.2f %.4f exact %.2f %.4f A %.2f B %.2f retraced %.3f\n", qp.psnr,
-              qp.ssim, qe.psnr, qe.ssim, qa.psnr, qb.psnr,
-              fieldValue(exact, "InterpolationFractions", 4));
-  EXPECT_GE(qp.psnr, 19.0);
-  EXPECT_GE(qp.ssim, 0.80);
-  EXPECT_GT(qp.psnr, std::max(qa.psnr, qb.psnr) + 5.0); // far better than either end
-  EXPECT_GE(qe.psnr, 22.0);
-  EXPECT_GE(qe.ssim, 0.84);
-  EXPECT_GT(qe.psnr, qp.psnr);
-  EXPECT_GT(qe.ssim, qp.ssim);
-  EXPECT_LT(fieldValue(exact, "InterpolationFractions", 4), 0.4); // a fraction of the cost
-  expectRetracedPixelsAreTheTruth(exact, truth.image);
-  EXPECT_DOUBLE_EQ(fieldValue(plain, "Mass"), 0.2);
-  dump(truth.image, "ramp-truth");
-  dump(plain, "ramp-plain");
-  dump(exact, "ramp-exact");
+  const MiddleFrame m = middleFrame("ramp", a, b, truth);
+  EXPECT_GE(m.qp.psnr, 19.0);
+  EXPECT_GE(m.qp.ssim, 0.80);
+  EXPECT_GT(m.qp.psnr, std::max(m.qa.psnr, m.qb.psnr) + 5.0); // far better than either end
+  EXPECT_GE(m.qe.psnr, 22.0);
+  EXPECT_GE(m.qe.ssim, 0.84);
+  EXPECT_GT(m.qe.psnr, m.qp.psnr);
+  EXPECT_GT(m.qe.ssim, m.qp.ssim);
+  EXPECT_LT(m.retraced, 0.4); // a fraction of the cost
+  expectRetracedPixelsAreTheTruth(m.exact, truth.image);
+  EXPECT_DOUBLE_EQ(fieldValue(m.plain, "Mass"), 0.2);
 }
 
 TEST(FrameInterpolator, CameraOrbitAgainstTracedFrames)
@@ -269,27 +289,18 @@ TEST(FrameInterpolator, CameraOrbitAgainstTracedFrames)
   const asrt::Vec3 ea = turnedEye(0), eb = turnedEye(4);
   const asrt::Vec3 middle = (ea + eb).normalized() * ea.norm();
   const TracedFrame a = orbitFrame(ea), b = orbitFrame(eb), truth = orbitFrame(middle);
-  const auto plain = interpolate(a, b, 0.5);
-  const auto exact = interpolate(a, b, 0.5, exactMode);
+  const MiddleFrame m = middleFrame("orbit", a, b, truth);
   for (int k = 0; k < 3; ++k)
-    EXPECT_NEAR(fieldValue(plain, "CameraPosition", k), middle[k], 1e-9);
-  const Quality qp = quality(truth.image, plain), qe = quality(truth.image, exact);
-  const Quality qa = quality(truth.image, a.image), qb = quality(truth.image, b.image);
-  std::printf("orbit plain %.2f %.4f exact %.2f %.4f A %.2f B %.2f retraced %.3f\n", qp.psnr,
-              qp.ssim, qe.psnr, qe.ssim, qa.psnr, qb.psnr,
-              fieldValue(exact, "InterpolationFractions", 4));
-  EXPECT_GE(qp.psnr, 14.0);
-  EXPECT_GE(qp.ssim, 0.65);
-  EXPECT_GT(qp.psnr, std::max(qa.psnr, qb.psnr) + 1.5);
-  EXPECT_GE(qe.psnr, 18.5);
-  EXPECT_GE(qe.ssim, 0.80);
-  EXPECT_GT(qe.psnr, qp.psnr);
-  EXPECT_GT(qe.ssim, qp.ssim);
-  EXPECT_LT(fieldValue(exact, "InterpolationFractions", 4), 0.4);
-  expectRetracedPixelsAreTheTruth(exact, truth.image);
-  dump(truth.image, "orbit-truth");
-  dump(plain, "orbit-plain");
-  dump(exact, "orbit-exact");
+    EXPECT_NEAR(fieldValue(m.plain, "CameraPosition", k), middle[k], 1e-9);
+  EXPECT_GE(m.qp.psnr, 14.0);
+  EXPECT_GE(m.qp.ssim, 0.65);
+  EXPECT_GT(m.qp.psnr, std::max(m.qa.psnr, m.qb.psnr) + 1.5);
+  EXPECT_GE(m.qe.psnr, 18.5);
+  EXPECT_GE(m.qe.ssim, 0.80);
+  EXPECT_GT(m.qe.psnr, m.qp.psnr);
+  EXPECT_GT(m.qe.ssim, m.qp.ssim);
+  EXPECT_LT(m.retraced, 0.4);
+  expectRetracedPixelsAreTheTruth(m.exact, truth.image);
 }
 
 namespace
@@ -534,23 +545,6 @@ TEST(FrameInterpolator, TemporalPipeline)
 
 namespace
 {
-const TracedFrame& smallRampFrame(double mass)
-{
-  static std::map<double, TracedFrame> frames;
-  auto it = frames.find(mass);
-  if (it == frames.end())
-    it = frames
-           .emplace(mass, traceWith(
-                            [mass](vtkGeodesicSource* s)
-                            {
-                              s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-                              s->SetResolution(24, 24);
-                              s->SetMass(mass);
-                            }))
-           .first;
-  return it->second;
-}
-
 /// Runs the interpolator on (a, b) and expects it to fail with an error mentioning `needle`,
 /// leaving an empty output.
 void expectError(vtkPolyData* a, vtkPolyData* b, const std::string& needle,
@@ -579,8 +573,8 @@ vtkSmartPointer<vtkPolyData> copyOf(vtkPolyData* hits)
 
 TEST(FrameInterpolator, BadInputGivesClearErrors)
 {
-  vtkPolyData* a = smallRampFrame(0.1).hits;
-  vtkPolyData* b = smallRampFrame(0.3).hits;
+  vtkPolyData* a = rampFrame(0.1, 24).hits;
+  vtkPolyData* b = rampFrame(0.3, 24).hits;
   ASSERT_TRUE(runInterpolator(a, b, 0.5, nullptr).errors.empty());
 
   // Another scene: one cylinder thicker.
