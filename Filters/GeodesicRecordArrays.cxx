@@ -21,19 +21,7 @@
 
 namespace asrt
 {
-namespace
-{
-template<class A>
-vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
-{
-  auto a = vtkSmartPointer<A>::New();
-  a->SetName(name);
-  a->SetNumberOfComponents(components);
-  a->SetNumberOfTuples(tuples);
-  return a;
-}
-
-vtkDataArray* requireArray(vtkPolyData* hits, const char* name, int components)
+vtkDataArray* requirePointArray(vtkPolyData* hits, const char* name, int components)
 {
   vtkDataArray* a = hits->GetPointData()->GetArray(name);
   if (!a || a->GetNumberOfComponents() != components ||
@@ -43,6 +31,8 @@ vtkDataArray* requireArray(vtkPolyData* hits, const char* name, int components)
   return a;
 }
 
+namespace
+{
 std::string requireString(vtkFieldData* fd, const char* name)
 {
   auto* a = vtkStringArray::SafeDownCast(fd->GetAbstractArray(name));
@@ -153,22 +143,22 @@ void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits)
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
 {
   const vtkIdType m = hits->GetNumberOfPoints();
-  vtkDataArray* pixel = requireArray(hits, "Pixel", 2);
-  vtkDataArray* origin = requireArray(hits, "Origin", 3);
-  vtkDataArray* direction = requireArray(hits, "Direction", 3);
-  vtkDataArray* momentum = requireArray(hits, "Momentum", 4);
-  vtkDataArray* term = requireArray(hits, "Termination", 1);
-  vtkDataArray* object = requireArray(hits, "ObjectId", 1);
-  vtkDataArray* normal = requireArray(hits, "HitNormal", 3);
-  vtkDataArray* uv = requireArray(hits, "UV", 2);
-  vtkDataArray* chord = requireArray(hits, "ChordError", 1);
-  vtkDataArray* length = requireArray(hits, "PathLength", 1);
-  vtkDataArray* winding = requireArray(hits, "Winding", 1);
-  vtkDataArray* imageOrder = requireArray(hits, "ImageOrder", 1);
-  vtkDataArray* steps = requireArray(hits, "Steps", 1);
-  vtkDataArray* maxH = requireArray(hits, "MaxAbsH", 1);
-  vtkDataArray* color = requireArray(hits, "Color", 3);
-  vtkDataArray* jacobian = requireArray(hits, "Jacobian", 4);
+  vtkDataArray* pixel = requirePointArray(hits, "Pixel", 2);
+  vtkDataArray* origin = requirePointArray(hits, "Origin", 3);
+  vtkDataArray* direction = requirePointArray(hits, "Direction", 3);
+  vtkDataArray* momentum = requirePointArray(hits, "Momentum", 4);
+  vtkDataArray* term = requirePointArray(hits, "Termination", 1);
+  vtkDataArray* object = requirePointArray(hits, "ObjectId", 1);
+  vtkDataArray* normal = requirePointArray(hits, "HitNormal", 3);
+  vtkDataArray* uv = requirePointArray(hits, "UV", 2);
+  vtkDataArray* chord = requirePointArray(hits, "ChordError", 1);
+  vtkDataArray* length = requirePointArray(hits, "PathLength", 1);
+  vtkDataArray* winding = requirePointArray(hits, "Winding", 1);
+  vtkDataArray* imageOrder = requirePointArray(hits, "ImageOrder", 1);
+  vtkDataArray* steps = requirePointArray(hits, "Steps", 1);
+  vtkDataArray* maxH = requirePointArray(hits, "MaxAbsH", 1);
+  vtkDataArray* color = requirePointArray(hits, "Color", 3);
+  vtkDataArray* jacobian = requirePointArray(hits, "Jacobian", 4);
   std::vector<RayRecord> records(static_cast<size_t>(m));
   for (vtkIdType k = 0; k < m; ++k)
   {

@@ -5,14 +5,30 @@
 
 #include "FrameTracer.h"
 
+#include "vtkSmartPointer.h"
+
 #include <vector>
 
+class vtkDataArray;
 class vtkFieldData;
 class vtkImageData;
 class vtkPolyData;
 
 namespace asrt
 {
+/// A named array of `tuples` tuples of `components` values (uninitialised).
+template<class A>
+vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
+{
+  auto a = vtkSmartPointer<A>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(tuples);
+  return a;
+}
+/// The point array `name` of the hit points, if it has `components` components and a tuple per
+/// point; throws InvalidParameter naming it otherwise.
+vtkDataArray* requirePointArray(vtkPolyData* hits, const char* name, int components);
 /// The frame rows [rowBegin, rowEnd) as an image: RGB "Colors" and "ObjectId", "ImageOrder",
 /// "PathLength", "Termination"; pixels without a record stay black, id −1, termination 0.
 void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,

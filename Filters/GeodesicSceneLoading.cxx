@@ -14,10 +14,11 @@ ImageLoader vtkImageFileLoader()
   };
 }
 
-SceneDescription loadScene(const char* text, const char* fileName)
+SceneDescription loadScene(const char* text, const char* fileName, const char* textDirectory)
 {
   if (text && *text)
-    return parseScene(text, ".", vtkImageFileLoader());
+    return parseScene(text, textDirectory && *textDirectory ? textDirectory : ".",
+                      vtkImageFileLoader());
   if (fileName && *fileName)
     return loadSceneFile(fileName, vtkImageFileLoader());
   throw InvalidParameter("no scene: set SceneFileName or SceneText");

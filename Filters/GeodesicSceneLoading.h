@@ -9,9 +9,11 @@ namespace asrt
 /// An ImageLoader on vtkImageReader2Factory; throws InvalidParameter for missing or unreadable
 /// files.
 ImageLoader vtkImageFileLoader();
-/// The scene from JSON text if given (relative paths against the working directory), else from
-/// the file; throws InvalidParameter if neither is set or the scene is invalid.
-SceneDescription loadScene(const char* text, const char* fileName);
+/// The scene from JSON text if given (relative texture paths against `textDirectory`, the working
+/// directory if null or empty), else from the file; throws InvalidParameter if neither is set or
+/// the scene is invalid.
+SceneDescription loadScene(const char* text, const char* fileName,
+                           const char* textDirectory = nullptr);
 }
 
 #endif

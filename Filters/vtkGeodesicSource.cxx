@@ -80,6 +80,7 @@ vtkGeodesicSource::~vtkGeodesicSource()
 {
   this->SetSceneFileName(nullptr);
   this->SetSceneText(nullptr);
+  this->SetTextureDirectory(nullptr);
   this->SetIntegrationMethod(nullptr);
   this->SetIntegrationPreset(nullptr);
 }
@@ -162,7 +163,8 @@ struct vtkGeodesicSource::Internals
   /// The scene with this filter's overrides applied.
   static asrt::SceneDescription Load(vtkGeodesicSource* self)
   {
-    asrt::SceneDescription d = asrt::loadScene(self->SceneText, self->SceneFileName);
+    asrt::SceneDescription d =
+      asrt::loadScene(self->SceneText, self->SceneFileName, self->TextureDirectory);
     if (isSet(self->Mass))
       d.mass = self->Mass;
     if (isSet(self->Spin))
@@ -200,9 +202,35 @@ struct vtkGeodesicSource::Internals
       os << "resolution must be positive, got " << d.camera.width << " x " << d.camera.height;
       throw asrt::InvalidParameter(os.str());
     }
+    // A frame of only some pixels is a frame of its own (see SetPixelSubset).
+    d.subset = asrt::PixelSubsetId();
+    if (self->PixelSubset)
+    {
+      std::vector<std::pair<int, int>> pixels;
+      pixels.reserve(static_cast<size_t>(self->PixelSubset->GetNumberOfTuples()));
+      for (vtkIdType k = 0; k < self->PixelSubset->GetNumberOfTuples(); ++k)
+        pixels.emplace_back(self->PixelSubset->GetTypedComponent(k, 0),
+                            self->PixelSubset->GetNumberOfComponents() > 1
+                              ? self->PixelSubset->GetTypedComponent(k, 1)
+                              : 0);
+      d.subset = asrt::pixelSubsetId(std::move(pixels));
+    }
     return d;
   }
 };
+
+std::string vtkGeodesicSource::GetFrameSceneText()
+{
+  try
+  {
+    return asrt::effectiveSceneText(Internals::Load(this));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return std::string();
+  }
+}
 
 int vtkGeodesicSource::RequestInformation(vtkInformation*, vtkInformationVector**,
                                           vtkInformationVector* outputVector)
@@ -390,6 +418,8 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SceneFileName: " << (this->SceneFileName ? this->SceneFileName : "(none)")
      << "\n";
   os << indent << "SceneText: " << (this->SceneText ? "(set)" : "(none)") << "\n";
+  os << indent << "TextureDirectory: "
+     << (this->TextureDirectory ? this->TextureDirectory : "(working directory)") << "\n";
   os << indent << "Mass: " << this->Mass << "\n";
   os << indent << "Spin: " << this->Spin << "\n";
   os << indent << "Charge: " << this->Charge << "\n";

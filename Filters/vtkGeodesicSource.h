@@ -52,6 +52,14 @@ public:
   ///@}
 
   ///@{
+  /// The directory against which relative texture paths in SceneText are resolved; empty (the
+  /// default) means the working directory. (A SceneFileName's own directory is always used for
+  /// its textures.) Stored frames keep their scene text as written, so re-tracing one needs this.
+  vtkSetStringMacro(TextureDirectory);
+  vtkGetStringMacro(TextureDirectory);
+  ///@}
+
+  ///@{
   /// Per-frame overrides of the scene. NaN (the default) keeps the scene's value.
   vtkSetMacro(Mass, double);
   vtkGetMacro(Mass, double);
@@ -93,10 +101,18 @@ public:
 
   ///@{
   /// Trace only these pixels: a 2-component array of (i, j). Null traces the whole frame.
-  /// Untraced pixels of the image are black with Termination 0 ("running").
+  /// Untraced pixels of the image are black with Termination 0 ("running"). The frame's scene
+  /// (field data "SceneJSON") then names the subset ("subset": count and digest of the pixels),
+  /// so that a subset stored in PostgreSQL is a frame of its own, never the whole frame at the
+  /// same parameters.
   void SetPixelSubset(vtkIntArray* ij);
   vtkIntArray* GetPixelSubset();
   ///@}
+
+  /// The effective scene text of the frame this source traces with its current settings
+  /// (overrides and subset applied): the frame's identity in the store, as the "SceneJSON" field
+  /// data will hold it. Nothing is traced. Empty, with an error, if the scene is invalid.
+  std::string GetFrameSceneText();
 
   ///@{
   /// Output the rays as polylines (port 2), for every PolylineStride-th pixel in i and j, or for
@@ -136,6 +152,7 @@ protected:
 
   char* SceneFileName = nullptr;
   char* SceneText = nullptr;
+  char* TextureDirectory = nullptr;
   double Mass;
   double Spin;
   double Charge;

@@ -41,17 +41,17 @@ FrameTracer::~FrameTracer() = default;
 
 namespace
 {
-RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOptions& opts, int i,
-                    int j, std::vector<PathPoint>* path)
+RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOptions& opts, double x,
+                    double y, std::vector<PathPoint>* path)
 {
   const Spacetime& st = tracer.spacetime();
   const Scene& scene = *tracer.description().scene;
   RayRecord rec;
-  rec.i = i;
-  rec.j = j;
-  const PhasePoint z = tracer.camera().pixelRay(i, j);
+  rec.i = static_cast<std::int32_t>(std::lround(x));
+  rec.j = static_cast<std::int32_t>(std::lround(y));
+  const PhasePoint z = tracer.camera().pixelRay(x, y);
   rec.origin = z.x.tail<3>();
-  rec.direction = tracer.camera().localDirection(i, j);
+  rec.direction = tracer.camera().localDirection(x, y);
   rec.momentum = z.p;
 
   SurfaceHit hit;
@@ -121,6 +121,14 @@ RayRecord FrameTracer::tracePixel(int i, int j, std::vector<PathPoint>* path) co
 {
   auto prop = makePropagator(*this->St, this->Desc.integrator);
   return traceWith(*this, *prop, this->Tracing, i, j, path);
+}
+
+RayRecord FrameTracer::traceAt(double x, double y) const
+{
+  auto prop = makePropagator(*this->St, this->Desc.integrator);
+  RayRecord r = traceWith(*this, *prop, this->Tracing, x, y, nullptr);
+  r.dudi = r.dudj = r.dvdi = r.dvdj = std::numeric_limits<double>::quiet_NaN();
+  return r;
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,

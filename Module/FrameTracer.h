@@ -82,6 +82,11 @@ public:
   /// Traces one pixel; appends its polyline to `path` if given.
   RayRecord tracePixel(int i, int j, std::vector<PathPoint>* path = nullptr) const;
 
+  /// Traces the ray through the continuous screen position (x, y), where pixel (i, j) is the
+  /// position (i, j) (Camera::localDirection's convention): sub-pixel rays, e.g. to check where
+  /// an interpolated point should be. The record's pixel is (x, y) rounded; no Jacobian (NaN).
+  RayRecord traceAt(double x, double y) const;
+
   /// Traces the given pixels (i, j) with OpenMP, dynamically scheduled (rays near the photon
   /// sphere cost far more than the rest). The result is in the order given and identical for any
   /// number of threads. `progress` is called now and then with the fraction done; if it returns

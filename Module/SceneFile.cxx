@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -376,7 +377,7 @@ public:
     SceneDescription d;
     Fields root(doc, "",
                 { "name", "description", "spacetime", "camera", "integrator", "tracing",
-                  "background", "horizonColor", "objects" });
+                  "background", "horizonColor", "objects", "subset" });
     if (const json* v = root.get("name"))
       d.name = str(*v, "name");
     if (const json* v = root.get("description"))
@@ -394,11 +395,28 @@ public:
     if (const json* v = root.get("horizonColor"))
       d.scene->horizonColor = color(*v, "horizonColor");
     this->objects(root.require("objects"), d);
+    if (const json* v = root.get("subset"))
+      d.subset = subset(*v);
     d.sourceText = doc.dump();
     return d;
   }
 
 private:
+  static PixelSubsetId subset(const json& j)
+  {
+    Fields f(j, "subset", { "pixels", "digest" });
+    PixelSubsetId s;
+    s.count = integer(f.require("pixels"), f.sub("pixels"), 1, maxPixels);
+    s.digest = str(f.require("digest"), f.sub("digest"));
+    const bool hex =
+      s.digest.size() == 16 &&
+      std::all_of(s.digest.begin(), s.digest.end(),
+                  [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+    if (!hex)
+      fail(f.sub("digest"), "must be 16 hexadecimal digits, got " + show(f.require("digest")));
+    return s;
+  }
+
   void spacetime(const json& j, SceneDescription& d)
   {
     Fields f(j, "spacetime", { "mass", "spin", "charge" });
@@ -794,8 +812,43 @@ std::string effectiveSceneText(const SceneDescription& d)
                    { "maxSteps", t.maxSteps },
                    { "horizonEpsilon", t.horizonEpsilon },
                    { "maxHamiltonianError", t.maxHamiltonianError } };
+  // Whole frames keep exactly the text they always had; a subset frame is a frame of its own.
+  if (d.subset.count > 0)
+    j["subset"] = { { "pixels", d.subset.count }, { "digest", d.subset.digest } };
+  else
+    j.erase("subset");
   return j.dump();
 }
+PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels)
+{
+  std::sort(pixels.begin(), pixels.end());
+  pixels.erase(std::unique(pixels.begin(), pixels.end()), pixels.end());
+  PixelSubsetId id;
+  id.count = static_cast<std::int64_t>(pixels.size());
+  if (pixels.empty())
+    return id;
+  // FNV-1a, 64 bits, over the little-endian bytes of each (i, j) as two int32.
+  std::uint64_t h = 14695981039346656037ULL;
+  auto feed = [&h](std::int32_t v)
+  {
+    const auto u = static_cast<std::uint32_t>(v);
+    for (int b = 0; b < 4; ++b)
+    {
+      h ^= (u >> (8 * b)) & 0xffu;
+      h *= 1099511628211ULL;
+    }
+  };
+  for (const auto& [i, j] : pixels)
+  {
+    feed(i);
+    feed(j);
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  id.digest = hex;
+  return id;
+}
+
 SceneDescription parseSceneWithoutImages(const std::string& jsonText)
 {
   const ImageLoader neutral = [](const std::string&)

@@ -674,3 +674,54 @@ TEST(SceneFile, EffectiveSceneTextCarriesOverridesAndParsesBack)
   EXPECT_EQ(back.scene->objects()[0]->id(), 3);
   EXPECT_EQ(effectiveSceneText(back), effectiveSceneText(d)); // a fixed point: stable for hashing
 }
+
+TEST(SceneFile, SubsetFramesHaveAnIdentityOfTheirOwn)
+{
+  // A frame of only some pixels must never share its identity (its effective text) with the
+  // whole frame at the same parameters, nor with another subset; whole frames keep their text.
+  const ImageLoader none = [](const std::string& path) -> ImagePixels
+  { throw InvalidParameter("no images in this test: " + path); };
+  const SceneDescription whole = parseScene(R"({"spacetime": {"mass": 1},
+      "camera": {"position": [0, -30, 0], "focalPoint": [0, 0, 0], "resolution": [8, 8]},
+      "objects": []})",
+                                            ".", none);
+  const std::string wholeText = effectiveSceneText(whole);
+  EXPECT_EQ(json::parse(wholeText).count("subset"), 0u);
+  EXPECT_EQ(whole.subset.count, 0);
+
+  const PixelSubsetId id = pixelSubsetId({ { 3, 4 }, { 1, 2 }, { 3, 4 } });
+  EXPECT_EQ(id.count, 2); // distinct pixels
+  EXPECT_EQ(id.digest.size(), 16u);
+  EXPECT_EQ(pixelSubsetId({ { 1, 2 }, { 3, 4 } }), id); // order and repetition do not matter
+  EXPECT_NE(pixelSubsetId({ { 1, 2 }, { 3, 5 } }).digest, id.digest);
+  EXPECT_NE(pixelSubsetId({ { 2, 1 }, { 4, 3 } }).digest, id.digest); // i and j are not swapped
+  EXPECT_EQ(pixelSubsetId({}).count, 0);
+
+  SceneDescription part = whole;
+  part.subset = id;
+  const std::string partText = effectiveSceneText(part);
+  EXPECT_NE(partText, wholeText);
+  const SceneDescription back = parseScene(partText, ".", none);
+  EXPECT_EQ(back.subset, id);
+  EXPECT_EQ(effectiveSceneText(back), partText);
+  // Clearing it gives the whole frame's text back.
+  SceneDescription cleared = back;
+  cleared.subset = PixelSubsetId();
+  EXPECT_EQ(effectiveSceneText(cleared), wholeText);
+
+  for (const char* bad : { R"({"pixels": 0, "digest": "0123456789abcdef"})",
+                           R"({"pixels": 3, "digest": "xyz"})", R"({"pixels": 3})" })
+  {
+    json doc = json::parse(wholeText);
+    doc["subset"] = json::parse(bad);
+    try
+    {
+      parseScene(doc.dump(), ".", none);
+      ADD_FAILURE() << bad;
+    }
+    catch (const InvalidParameter& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("subset"), std::string::npos) << e.what();
+    }
+  }
+}
