@@ -31,6 +31,8 @@ const Command kCommands[] = {
   { "trace", "trace a scene to PNG, VTI and VTP files (and store it in PostgreSQL)", runTrace },
   { "list", "list the frames stored in PostgreSQL", runList },
   { "show", "show a stored frame's parameters; export it to PNG, VTI, VTP", runShow },
+  { "interpolate", "the movie frames between two stored frames: PNG, VTI, .pvd, a movie",
+    runInterpolate },
   { "bundle", "render a 3D view of rays around the hole (PNG, or a window)", runBundle },
   { "bench", "measure time and accuracy of the integrator presets on a small frame", runBench },
   { "db", "start, inspect, stop or delete the private PostgreSQL server", runDb },
@@ -42,7 +44,7 @@ void usage(std::FILE* out)
                     "Black-hole ray tracing with accumulation in PostgreSQL (ASRT).\n\n"
                     "Commands:\n");
   for (const Command& c : kCommands)
-    std::fprintf(out, "  %-8s %s\n", c.name, c.summary);
+    std::fprintf(out, "  %-11s %s\n", c.name, c.summary);
   std::fprintf(out,
                "\nExamples:\n"
                "  asrt trace Data/scenes/fig1-cylinders.json -o out/\n"
@@ -50,6 +52,7 @@ void usage(std::FILE* out)
                "  asrt trace Data/scenes/fig4-mass-start.json --store=ramp\n"
                "  asrt list\n"
                "  asrt show 1 --png frame1.png\n"
+               "  asrt interpolate 1 2 -n 28 -o movie/\n"
                "  asrt bundle Data/scenes/fig1-cylinders.json -o bundle.png\n"
                "  mpirun -np 4 asrt trace Data/scenes/kerr-disk.json --mpi --store\n\n%s",
                kExitCodeHelp);

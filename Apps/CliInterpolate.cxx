@@ -1,0 +1,247 @@
+// asrt interpolate: two frames stored in PostgreSQL to the movie frames between them, by matching
+// their rays (vtkGeodesicFrameInterpolator), written as PNG and VTI sequences, a .pvd time series
+// and a movie.
+#include "Cli.h"
+
+#include "DataFiles.h"
+#include "MovieWriter.h"
+#include "Progress.h"
+#include "PvdCollection.h"
+#include "VtkMessages.h"
+#include "vtkGeodesicFrameInterpolator.h"
+#include "vtkGeodesicPostgreSQLReader.h"
+#include "vtkGeodesicSource.h"
+
+#include "vtkDataArray.h"
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkNew.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <array>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace asrt
+{
+namespace cli
+{
+namespace
+{
+const char* const kHelp = R"(Usage: asrt interpolate A_ID B_ID [options]
+       asrt interpolate --scenes A.json B.json [options]
+
+Makes the movie frames between two frames stored in PostgreSQL (asrt trace --store; asrt list
+shows the ids) without tracing them again: rays of A and B that hit the same scene point are
+matched, and every intermediate frame is drawn from the matched rays at the parameters of its
+time t (mass, spin and charge linear in t; the camera on an orbit about the hole). A and B must be
+whole frames of one scene at one resolution; they may differ in mass, spin, charge and camera.
+Writes, for the N + 2 frames (t = 0 is A, t = 1 is B):
+  PREFIX-000.png ...  the pictures
+  PREFIX-000.vti ...  the frames as VTK image data, with InterpolationClass per pixel
+  PREFIX.pvd          a ParaView time series of the .vti files (time = t)
+  PREFIX.ogv          the movie (or the file --movie names)
+and prints, per frame, the shares of its pixels that were matched, seen by one frame only,
+filled as holes, ambiguous, or re-traced (--exact).
+
+Options:
+  -n, --frames N        N intermediate frames (default 8; the paper's movie: 28)
+  -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/') gets
+                        the name "interpolated": -o out/ gives out/interpolated-000.png
+  --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
+  --fps F               the movie's frames per second (default 10)
+  --exact               re-trace the pixels the matching cannot vouch for (holes, ambiguous
+                        pixels, and those where A and B disagree); slower, exact there
+  --textures DIR        where the scene's relative texture paths lie, for --exact (default:
+                        the scenes directory, Data/scenes)
+  -q, --quiet           no progress on stderr
+
+Without the store:
+  --scenes              the two arguments are scene files, traced first (nothing is stored)
+  -r, --resolution WxH  with --scenes: the size of both frames (default: the scenes' own)
+)";
+
+const char* const kExamples = R"(
+Examples:
+  asrt trace Data/scenes/fig4-mass-start.json --store=ramp     (stored as frame 1)
+  asrt trace Data/scenes/fig5-mass-end.json --store=ramp       (stored as frame 2)
+  asrt interpolate 1 2 -n 28 -o movie/ --movie movie/mass-ramp.ogv
+  asrt interpolate --scenes Data/scenes/fig4-mass-start.json Data/scenes/fig5-mass-end.json \
+    -r 100x100 -n 28 -o movie/
+)";
+
+std::int64_t frameId(const std::string& text)
+{
+  try
+  {
+    return parsePositiveInteger("frame id", text);
+  }
+  catch (const UsageError&)
+  {
+    throw UsageError("'" + text + "' is not a frame id (a positive integer; see asrt list)");
+  }
+}
+
+const char* const kClassNames[] = { "matched", "one-sided", "holes", "ambiguous", "re-traced" };
+
+std::array<double, 5> fractions(vtkImageData* frame)
+{
+  std::array<double, 5> shares{};
+  if (vtkDataArray* a = frame->GetFieldData()->GetArray("InterpolationFractions"))
+    for (int k = 0; k < 5 && k < a->GetNumberOfComponents() * a->GetNumberOfTuples(); ++k)
+      shares[k] = a->GetComponent(k / a->GetNumberOfComponents(), k % a->GetNumberOfComponents());
+  return shares;
+}
+
+double fieldValue(vtkImageData* frame, const char* name)
+{
+  vtkDataArray* a = frame->GetFieldData()->GetArray(name);
+  return a && a->GetNumberOfTuples() > 0 ? a->GetComponent(0, 0) : 0.0;
+}
+}
+
+int runInterpolate(const std::vector<std::string>& args)
+{
+  const Options options(std::vector<OptionSpec>{ { "frames", OptionSpec::Value, 'n' },
+                                                 { "output", OptionSpec::Value, 'o' },
+                                                 { "movie", OptionSpec::Value },
+                                                 { "fps", OptionSpec::Value },
+                                                 { "exact", OptionSpec::Flag },
+                                                 { "textures", OptionSpec::Value },
+                                                 { "quiet", OptionSpec::Flag, 'q' },
+                                                 { "scenes", OptionSpec::Flag },
+                                                 { "resolution", OptionSpec::Value, 'r' } } +
+                          databaseSpecs(),
+                        args);
+  if (options.help())
+  {
+    std::printf("%s\n%s%s\n%s", kHelp, kDatabaseHelp, kExamples, kExitCodeHelp);
+    return kOk;
+  }
+  const bool fromScenes = options.has("scenes");
+  options.expectPositional(2, 2,
+                           fromScenes
+                             ? "the two scene files (asrt interpolate --scenes A.json B.json)"
+                             : "the two frame ids (asrt interpolate A_ID B_ID)");
+  if (options.has("resolution") && !fromScenes)
+    throw UsageError("--resolution only goes with --scenes (stored frames keep their size)");
+  std::string names[2];
+  for (int k = 0; k < 2; ++k)
+    names[k] =
+      fromScenes ? options.positional()[k] : std::to_string(frameId(options.positional()[k]));
+  const int intermediate = options.positiveInteger("frames").value_or(8);
+  if (intermediate > vtkGeodesicFrameInterpolator::kMaxIntermediateFrames)
+    throw UsageError("--frames: at most " +
+                     std::to_string(vtkGeodesicFrameInterpolator::kMaxIntermediateFrames));
+  const int fps = options.positiveInteger("fps").value_or(10);
+  const std::string prefix = outputPath(options, "interpolated", "");
+  const std::string moviePath = options.get("movie", prefix + ".ogv");
+  // The movie's format and rate are checked before any work is done.
+  std::unique_ptr<tools::MovieWriter> movie;
+  try
+  {
+    movie = std::make_unique<tools::MovieWriter>(moviePath, fps);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw UsageError(std::string("--movie/--fps: ") + e.what());
+  }
+  const bool quiet = options.has("quiet");
+  // The two ends: traced from their scene files, or read from the store.
+  const std::string conninfo = fromScenes ? std::string() : databaseConnection(options);
+  vtkSmartPointer<vtkAlgorithm> ends[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    if (fromScenes)
+    {
+      auto source = vtkSmartPointer<vtkGeodesicSource>::New();
+      source->SetSceneFileName(names[k].c_str());
+      if (const auto size = options.size("resolution"))
+        source->SetResolution(size->first, size->second);
+      traceFrame(source, "trace " + names[k], quiet);
+      ends[k] = source;
+      continue;
+    }
+    auto reader = vtkSmartPointer<vtkGeodesicPostgreSQLReader>::New();
+    tools::VtkMessageCatcher messages;
+    messages.watchAlgorithm(reader);
+    reader->SetConnectionString(conninfo.c_str());
+    reader->SetFrameId(static_cast<vtkIdType>(std::stoll(names[k])));
+    reader->Update();
+    if (messages.failed())
+      throw DatabaseError(messages.firstError());
+    ends[k] = reader;
+  }
+
+  vtkNew<vtkGeodesicFrameInterpolator> interpolator;
+  interpolator->SetFrameAConnection(ends[0]->GetOutputPort(1));
+  interpolator->SetFrameBConnection(ends[1]->GetOutputPort(1));
+  interpolator->SetNumberOfIntermediateFrames(intermediate);
+  interpolator->SetExactMode(options.has("exact"));
+  interpolator->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
+  tools::VtkMessageCatcher messages;
+  messages.watchAlgorithm(interpolator);
+  // Everything the readers returned is valid; what fails here is the pair itself (different
+  // scenes or resolutions) or, in exact mode, the re-tracing of the scene.
+  auto check = [&messages]()
+  {
+    if (tools::interruptRequested())
+      throw Interrupted();
+    if (messages.failed())
+      throw InputError(messages.firstError());
+  };
+  interpolator->UpdateInformation();
+  check();
+
+  const int count = intermediate + 2;
+  tools::ProgressBar bar("interpolate " + names[0] + " -> " + names[1],
+                         quiet ? tools::ProgressBar::Style::Silent
+                               : tools::ProgressBar::Style::Automatic);
+  tools::PvdCollection series;
+  std::vector<std::string> lines;
+  for (int k = 0; k < count; ++k)
+  {
+    const double t = static_cast<double>(k) / (count - 1);
+    interpolator->UpdateTimeStep(t);
+    check();
+    vtkImageData* frame = interpolator->GetOutput();
+    char number[32];
+    std::snprintf(number, sizeof number, "-%03d", k);
+    tools::writePng(frame, prefix + number + ".png");
+    tools::writeVti(frame, prefix + number + ".vti");
+    series.add(t, prefix + number + ".vti");
+    movie->addFrame(frame);
+
+    const std::array<double, 5> shares = fractions(frame);
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, t,
+                  fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
+                  100 * shares[3], 100 * shares[4]);
+    lines.push_back(line);
+    bar.update(static_cast<double>(k + 1) / count);
+  }
+  series.write(prefix + ".pvd");
+  movie->close();
+  bar.finish("-> " + prefix + "-*.png");
+
+  std::printf("%s %s -> %s: %d frames (%d intermediate)%s\n", fromScenes ? "scenes" : "frames",
+              printable(names[0]).c_str(), printable(names[1]).c_str(), count, intermediate,
+              options.has("exact") ? ", exact mode" : "");
+  std::printf("%5s %7s %8s", "frame", "t", "M");
+  for (const char* name : kClassNames)
+    std::printf(" %8s%%", name);
+  std::printf("\n");
+  for (const std::string& line : lines)
+    std::printf("%s\n", line.c_str());
+  std::printf("  wrote %s-%03d.png ... %s-%03d.png (and .vti)\n", prefix.c_str(), 0, prefix.c_str(),
+              count - 1);
+  std::printf("  wrote %s (ParaView time series of %d frames)\n", (prefix + ".pvd").c_str(), count);
+  std::printf("  wrote %s (%d frames at %d per second)\n", moviePath.c_str(), count, fps);
+  return kOk;
+}
+}
+}
