@@ -310,6 +310,18 @@ std::string databaseConnection(const Options& options)
   }
 }
 
+std::int64_t parseFrameId(const std::string& text)
+{
+  try
+  {
+    return parsePositiveInteger("frame id", text);
+  }
+  catch (const UsageError&)
+  {
+    throw UsageError("'" + text + "' is not a frame id (a positive integer; see asrt list)");
+  }
+}
+
 std::string outputPath(const Options& options, const std::string& scenePath,
                        const std::string& suffix)
 {

@@ -3,6 +3,7 @@
 #ifndef asrt_cli_Cli_h
 #define asrt_cli_Cli_h
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -98,6 +99,9 @@ int parsePositiveInteger(const std::string& option, const std::string& text);
 std::vector<double> parseNumbers(const std::string& option, const std::string& text,
                                  std::size_t count, char separator);
 std::pair<int, int> parseSize(const std::string& option, const std::string& text);
+
+/// A stored frame's id as typed on the command line; UsageError unless a positive integer.
+std::int64_t parseFrameId(const std::string& text);
 
 /// The options that change the traced scene, and how the help describes them.
 const std::vector<OptionSpec>& sceneOverrideSpecs();

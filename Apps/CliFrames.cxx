@@ -49,18 +49,6 @@ Examples:
   asrt show 3 --where "image_order >= 1" --png rings.png
 )";
 
-std::int64_t parseFrameId(const std::string& text)
-{
-  try
-  {
-    return parsePositiveInteger("frame id", text);
-  }
-  catch (const UsageError&)
-  {
-    throw UsageError("'" + text + "' is not a frame id (a positive integer; see asrt list)");
-  }
-}
-
 std::string seconds(double s)
 {
   if (std::isnan(s))

@@ -74,18 +74,6 @@ Examples:
     -r 100x100 -n 28 -o movie/
 )";
 
-std::int64_t frameId(const std::string& text)
-{
-  try
-  {
-    return parsePositiveInteger("frame id", text);
-  }
-  catch (const UsageError&)
-  {
-    throw UsageError("'" + text + "' is not a frame id (a positive integer; see asrt list)");
-  }
-}
-
 const char* const kClassNames[] = { "matched", "one-sided", "holes", "ambiguous", "re-traced" };
 
 std::array<double, 5> fractions(vtkImageData* frame)
@@ -132,7 +120,7 @@ int runInterpolate(const std::vector<std::string>& args)
   std::string names[2];
   for (int k = 0; k < 2; ++k)
     names[k] =
-      fromScenes ? options.positional()[k] : std::to_string(frameId(options.positional()[k]));
+      fromScenes ? options.positional()[k] : std::to_string(parseFrameId(options.positional()[k]));
   const int intermediate = options.positiveInteger("frames").value_or(8);
   if (intermediate > vtkGeodesicFrameInterpolator::kMaxIntermediateFrames)
     throw UsageError("--frames: at most " +
