@@ -44,7 +44,7 @@ void usage(std::FILE* out)
                     "Black-hole ray tracing with accumulation in PostgreSQL (ASRT).\n\n"
                     "Commands:\n");
   for (const Command& c : kCommands)
-    std::fprintf(out, "  %-11s %s\n", c.name, c.summary);
+    std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
   std::fprintf(out,
                "\nExamples:\n"
                "  asrt trace Data/scenes/fig1-cylinders.json -o out/\n"
