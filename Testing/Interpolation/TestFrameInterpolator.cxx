@@ -667,6 +667,34 @@ TEST(FrameInterpolator, BadInputGivesClearErrors)
   EXPECT_TRUE(catcher->Mentions("connections")) << catcher->AllErrors();
 }
 
+TEST(FrameInterpolator, SpinAndItsIntegratorMayDiffer)
+{
+  // A spin ramp: Schwarzschild at one end, Kerr at the other, so that "auto" resolved to a
+  // different integration method at each end. That is one scene; the spin in between is linear,
+  // and exact mode re-traces with the method "auto" picks for the spacetime at t.
+  vtkPolyData* a = rampFrame(0.1, 24).hits;
+  const TracedFrame kerr = traceWith(
+    [](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+      s->SetResolution(24, 24);
+      s->SetSpin(0.08);
+    });
+  auto method = [](vtkPolyData* hits)
+  {
+    auto* m =
+      vtkStringArray::SafeDownCast(hits->GetFieldData()->GetAbstractArray("IntegrationMethod"));
+    return m ? m->GetValue(0) : std::string();
+  };
+  EXPECT_NE(method(a), method(kerr.hits));
+  const Interpolated r =
+    runInterpolator(a, kerr.hits, 0.25, [](vtkGeodesicFrameInterpolator* f) { f->ExactModeOn(); });
+  ASSERT_TRUE(r.errors.empty()) << r.errors.front();
+  EXPECT_DOUBLE_EQ(fieldValue(r.image, "Spin"), 0.02);
+  EXPECT_DOUBLE_EQ(fieldValue(r.image, "Mass"), 0.1);
+  EXPECT_GT(fieldValue(r.image, "RetracedPixels"), 0);
+}
+
 TEST(FrameInterpolator, SourceNamesItsPixelSubset)
 {
   // What exact mode relies on to store re-traced rays apart from whole frames.
