@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -54,6 +55,54 @@ inline std::uint64_t bitsOf(double d)
 }
 
 /// Every stored field of a record as bits (NaN payloads and −0 included), integers first.
+// ---------------------------------------------------------------------------------------------
+// Deterministic synthetic records: record k of a seed is a pure function of (seed, k), so that a
+// child can stream it and the parent can regenerate it for a bit-exact comparison.
+
+inline RayRecord syntheticRecord(std::uint64_t seed, std::size_t k, int width)
+{
+  std::uint64_t s = seed * 0x100000001B3ull + k;
+  // Values that careless storage loses: NaN payloads, −0, denormals, extremes, infinities.
+  const double specials[] = {
+    fromBits(0x7FF8DEADBEEF0001ull),           -0.0,
+    std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::max(),
+    -std::numeric_limits<double>::infinity(),  1e-310
+  };
+  auto real = [&]
+  {
+    const std::uint64_t w = splitmix(s);
+    if (w % 13 == 0)
+    {
+      return specials[(w >> 8) % 6];
+    }
+    return fromBits((w >> 12) | 0x4000000000000000ull) - 3.0; // in [-1, 1)
+  };
+  RayRecord r;
+  r.i = int(k % std::size_t(width));
+  r.j = int(k / std::size_t(width));
+  r.origin = asrt::Vec3(real(), real(), real());
+  r.direction = asrt::Vec3(real(), real(), real());
+  r.momentum = asrt::Vec4(real(), real(), real(), real());
+  r.termination = asrt::Termination(splitmix(s) % 6);
+  r.objectId = int(splitmix(s) % 5) - 1;
+  r.hitPoint = asrt::Vec3(real(), real(), real());
+  r.hitNormal = asrt::Vec3(real(), real(), real());
+  r.u = real();
+  r.v = real();
+  r.chordError = real();
+  r.affineLength = real();
+  r.winding = real();
+  r.imageOrder = int(splitmix(s) % 3);
+  r.steps = std::int64_t(splitmix(s));
+  r.maxAbsH = real();
+  r.color = asrt::Vec3(real(), real(), real());
+  r.dudi = real();
+  r.dudj = real();
+  r.dvdi = real();
+  r.dvdj = real();
+  return r;
+}
+
 inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
 {
   std::vector<std::uint64_t> b = { std::uint64_t(std::uint32_t(r.i)),

@@ -39,46 +39,7 @@ constexpr int Width = 101;
 /// and parent agree without talking. Includes values that careless storage loses.
 RayRecord record(std::uint64_t seed, std::size_t k)
 {
-  std::uint64_t s = seed * 0x100000001B3ull + k;
-  auto real = [&]
-  {
-    const std::uint64_t w = splitmix(s);
-    switch (w % 11)
-    {
-      case 0:
-        return fromBits(0x7FF8DEADBEEF0001ull);
-      case 1:
-        return -0.0;
-      case 2:
-        return std::numeric_limits<double>::denorm_min();
-      default:
-        return fromBits((w >> 12) | 0x4000000000000000ull) - 3.0;
-    }
-  };
-  RayRecord r;
-  r.i = int(k % Width);
-  r.j = int(k / Width);
-  r.origin = asrt::Vec3(real(), real(), real());
-  r.direction = asrt::Vec3(real(), real(), real());
-  r.momentum = asrt::Vec4(real(), real(), real(), real());
-  r.termination = asrt::Termination(splitmix(s) % 6);
-  r.objectId = int(splitmix(s) % 5) - 1;
-  r.hitPoint = asrt::Vec3(real(), real(), real());
-  r.hitNormal = asrt::Vec3(real(), real(), real());
-  r.u = real();
-  r.v = real();
-  r.chordError = real();
-  r.affineLength = real();
-  r.winding = real();
-  r.imageOrder = int(splitmix(s) % 3);
-  r.steps = std::int64_t(splitmix(s));
-  r.maxAbsH = real();
-  r.color = asrt::Vec3(real(), real(), real());
-  r.dudi = real();
-  r.dudj = real();
-  r.dvdi = real();
-  r.dvdj = real();
-  return r;
+  return syntheticRecord(seed, k, Width);
 }
 
 /// The first index at which `got` differs from records [first, first + count) of `seed`, or -1.
