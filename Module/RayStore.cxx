@@ -4,10 +4,13 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <memory>
 #include <set>
+#include <thread>
 #include <utility>
 
 namespace asrt
@@ -897,12 +900,12 @@ void rollback(PGconn* conn)
   }
 }
 
-/// Writes the records of one tile (a whole frame is tile 0) into a table of its own, created
-/// here, loaded in one COPY FREEZE and attached to ray_blocks. The caller's transaction must be
-/// READ COMMITTED (COPY FREEZE refuses a transaction that holds a snapshot). An empty tile has
-/// no table.
-void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t count,
-              const std::function<void(std::size_t, RayRecord&)>& next)
+/// Writes the records of one tile into a table of its own, created here and loaded in one COPY
+/// FREEZE, records [first, first + count) of `next`; not attached to ray_blocks (see copyTile).
+/// The caller's transaction must be READ COMMITTED (COPY FREEZE refuses a transaction that holds a
+/// snapshot). An empty tile has no table.
+void loadTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t first0,
+              std::size_t count, const std::function<void(std::size_t, RayRecord&)>& next)
 {
   if (count == 0)
   {
@@ -922,7 +925,7 @@ void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t
     const int n = int(std::min(blockSize, count - first));
     for (int m = 0; m < n; ++m)
     {
-      next(first + std::size_t(m), block[m]);
+      next(first0 + first + std::size_t(m), block[m]);
     }
     writer.row(6);
     writer.i64(frameId);
@@ -937,7 +940,17 @@ void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t
     }
   }
   writer.finish();
-  exec(conn, attachBlockTable("ray_blocks", frameId, tile), "attaching the rays failed");
+}
+
+/// loadTile() and the attachment of its table to ray_blocks, in the caller's transaction.
+void copyTile(PGconn* conn, std::int64_t frameId, std::int32_t tile, std::size_t count,
+              const std::function<void(std::size_t, RayRecord&)>& next)
+{
+  if (count > 0)
+  {
+    loadTile(conn, frameId, tile, 0, count, next);
+    exec(conn, attachBlockTable("ray_blocks", frameId, tile), "attaching the rays failed");
+  }
 }
 
 /// Refuses paths that the frame cannot hold: a pixel outside it, two paths of one pixel, more
@@ -1076,6 +1089,47 @@ void decodePoints(const char* p, std::size_t count, std::vector<PathPoint>& poin
 }
 }
 
+namespace
+{
+/// A connection set up as every connection of the store is (UTF8, notices silenced), or null
+/// with libpq's reason in `error`.
+PGconn* openConnection(const std::string& conninfo, std::string& error)
+{
+  // Keywords before "dbname" are overridden by what the expanded conninfo sets itself.
+  std::vector<const char*> keys, values;
+  if (!std::getenv("PGCONNECT_TIMEOUT"))
+  {
+    keys.push_back("connect_timeout");
+    values.push_back("10");
+  }
+  keys.push_back("fallback_application_name");
+  values.push_back("asrt");
+  keys.push_back("dbname");
+  values.push_back(conninfo.c_str());
+  keys.push_back(nullptr);
+  values.push_back(nullptr);
+  PGconn* conn = PQconnectdbParams(keys.data(), values.data(), 1);
+  if (!conn || PQstatus(conn) != CONNECTION_OK)
+  {
+    error =
+      "cannot connect to PostgreSQL: " + (conn ? trimmed(PQerrorMessage(conn)) : "out of memory");
+    PQfinish(conn);
+    return nullptr;
+  }
+  if (PQsetClientEncoding(conn, "UTF8") != 0)
+  {
+    error = "cannot set the client encoding to UTF8: " + trimmed(PQerrorMessage(conn));
+    PQfinish(conn);
+    return nullptr;
+  }
+  // The server's notices ("table does not exist, skipping", ...) are not the caller's business;
+  // libpq would print them on stderr.
+  PQsetNoticeProcessor(
+    conn, [](void*, const char*) {}, nullptr);
+  return conn;
+}
+}
+
 // -----------------------------------------------------------------------------------------------
 
 namespace
@@ -1084,12 +1138,207 @@ namespace
 /// its row locking, and COPY FREEZE refuses a transaction that holds a snapshot.
 const char* const WriteBegin = "BEGIN ISOLATION LEVEL READ COMMITTED";
 const char* const ReadBegin = "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY";
+
+/// The advisory lock (two-key form: this class, the frame id's low 31 bits) that a parallel
+/// write's main transaction holds from its frame's insertion to its end. The tables that its
+/// helper connections commit are not attached until the main transaction attaches them just
+/// before its commit; until then the lock tells dropUnattachedTiles() that they are not orphans.
+constexpr int WriterLockClass = 1095979605;
+
+std::string writerLock(const char* function)
+{
+  return std::string("SELECT ") + function + "(" + std::to_string(WriterLockClass) +
+         ", ($1::bigint & 2147483647)::integer)";
+}
+
+/// Drops the tables of tiles that a parallel write's helper connection committed but whose frame
+/// never committed (the writer failed or died): tables ray_blocks_<frame>_<tile> that are not
+/// partitions, whose writer's lock is free and whose frame does not exist. The lock is taken
+/// before the frame is looked for, in separate statements, so that the look sees a writer's
+/// commit that came before the lock. Those tables are no partitions of ray_blocks, so dropping
+/// them waits for nobody's reads. `ownFrame` >= 0: only that frame's, by its own writer after a
+/// failure, waiting a moment for its main backend to let go (a terminated backend may still be
+/// exiting). Best effort: never throws (left for a later call).
+void dropUnattachedTiles(PGconn* conn, std::int64_t ownFrame = -1) noexcept
+{
+  if (PQstatus(conn) != CONNECTION_OK || PQtransactionStatus(conn) != PQTRANS_IDLE)
+  {
+    return;
+  }
+  try
+  {
+    Result r = Params().i64(ownFrame).exec(
+      conn,
+      "SELECT m[1]::bigint, m[2]::integer FROM pg_class c CROSS JOIN LATERAL "
+      "regexp_match(c.relname::text, '^ray_blocks_([0-9]+)_([0-9]+)$') AS m WHERE c.relkind = "
+      "'r' AND NOT c.relispartition AND pg_table_is_visible(c.oid) AND ($1 < 0 OR m[1]::bigint = "
+      "$1)",
+      "looking for the rays of failed writes failed");
+    if (PQntuples(r.get()) == 0)
+    {
+      return;
+    }
+    exec(conn, WriteBegin, "starting a transaction failed");
+    if (ownFrame >= 0)
+    {
+      exec(conn, "SET LOCAL lock_timeout = '2s'", "setting a lock timeout failed");
+    }
+    for (int row = 0; row < PQntuples(r.get()); ++row)
+    {
+      const std::int64_t frame = getI64(r.get(), row, 0);
+      const std::string table = blockTable(frame, getI32(r.get(), row, 1));
+      if (ownFrame >= 0)
+      {
+        Params().i64(frame).exec(conn, writerLock("pg_advisory_xact_lock"), "locking failed");
+      }
+      else if (Result locked = Params().i64(frame).exec(
+                 conn, writerLock("pg_try_advisory_xact_lock"), "locking failed");
+               PQgetvalue(locked.get(), 0, 0)[0] == 0)
+      {
+        continue; // its writer is still at work
+      }
+      Result orphan = Params().i64(frame).text(table).exec(
+        conn,
+        "SELECT NOT EXISTS (SELECT 1 FROM frames WHERE id = $1) AND EXISTS (SELECT 1 FROM "
+        "pg_class WHERE oid = to_regclass($2) AND NOT relispartition)",
+        "looking for the frame failed");
+      if (PQgetvalue(orphan.get(), 0, 0)[0] != 0)
+      {
+        exec(conn, "DROP TABLE IF EXISTS " + table, "dropping the rays of a failed write failed");
+      }
+    }
+    exec(conn, "COMMIT", "committing failed");
+  }
+  catch (const StoreError&)
+  {
+    rollback(conn);
+  }
+}
+
+/// The tiles of a parallel write other than the main connection's: each loaded and committed by
+/// a helper connection on a thread of its own, not attached (the main transaction attaches them).
+/// Any failure stops the others (and the main connection's load, through failed()).
+class HelperLoads
+{
+public:
+  HelperLoads(const std::vector<PGconn*>& conns, std::int64_t frameId,
+              const std::vector<std::size_t>& bounds,
+              const std::function<void(std::size_t, RayRecord&)>& next)
+    : Errors(conns.size())
+  {
+    for (std::size_t k = 0; k < conns.size(); ++k)
+    {
+      const auto tile = std::int32_t(k + 1);
+      this->Threads.emplace_back(
+        [this, k, tile, frameId, &bounds, &next, conn = conns[k]]
+        {
+          try
+          {
+            exec(conn, WriteBegin, "starting a transaction failed");
+            loadTile(conn, frameId, tile, bounds[k + 1], bounds[k + 2] - bounds[k + 1],
+                     this->checked(next));
+            exec(conn, "COMMIT", "committing the rays failed");
+          }
+          catch (...)
+          {
+            rollback(conn);
+            this->Errors[k] = std::current_exception();
+            this->Failed = true;
+          }
+        });
+    }
+  }
+  ~HelperLoads()
+  {
+    this->fail();
+    this->join();
+  }
+  HelperLoads(const HelperLoads&) = delete;
+  HelperLoads& operator=(const HelperLoads&) = delete;
+
+  /// `next`, stopped (by an exception) once any load has failed.
+  std::function<void(std::size_t, RayRecord&)> checked(
+    const std::function<void(std::size_t, RayRecord&)>& next)
+  {
+    return [this, &next](std::size_t k, RayRecord& r)
+    {
+      if (this->Failed.load(std::memory_order_relaxed))
+      {
+        throw StoreError("writing the rays failed: another connection of the write failed");
+      }
+      next(k, r);
+    };
+  }
+  void fail() { this->Failed = true; }
+  void join()
+  {
+    for (std::thread& t : this->Threads)
+    {
+      if (t.joinable())
+      {
+        t.join();
+      }
+    }
+  }
+  /// After join(): rethrows the first helper's error, if any.
+  void rethrow()
+  {
+    for (const std::exception_ptr& e : this->Errors)
+    {
+      if (e)
+      {
+        std::rethrow_exception(e);
+      }
+    }
+  }
+
+private:
+  std::atomic<bool> Failed{ false };
+  std::vector<std::exception_ptr> Errors;
+  std::vector<std::thread> Threads;
+};
 }
 
 struct RayStore::Impl
 {
   PGconn* Conn = nullptr;
   bool SchemaChecked = false;
+  std::string Conninfo;
+  /// The other connections of a parallel write (see writeFrameTiles), opened when first needed.
+  std::vector<PGconn*> Helpers;
+  int WriteConnections = RayStore::kDefaultWriteConnections;
+
+  /// Up to `wanted` helper connections, connected; fewer if the server refuses more (e.g. at
+  /// max_connections): a parallel write then uses the ones it got.
+  std::vector<PGconn*> helpers(int wanted)
+  {
+    std::vector<PGconn*> out;
+    for (std::size_t k = 0; int(out.size()) < wanted; ++k)
+    {
+      if (k == this->Helpers.size())
+      {
+        std::string error;
+        PGconn* c = openConnection(this->Conninfo, error);
+        if (!c)
+        {
+          break;
+        }
+        this->Helpers.push_back(c);
+      }
+      PGconn* c = this->Helpers[k];
+      if (PQstatus(c) != CONNECTION_OK)
+      {
+        PQreset(c);
+        if (PQstatus(c) != CONNECTION_OK)
+        {
+          break;
+        }
+        PQsetClientEncoding(c, "UTF8");
+      }
+      out.push_back(c);
+    }
+    return out;
+  }
 
   /// Reconnects once after the connection broke (server restart, terminated backend).
   void ensureConnected()
@@ -1234,6 +1483,7 @@ struct RayStore::Impl
     {
       return;
     }
+    dropUnattachedTiles(this->Conn);
     try
     {
       this->transaction(
@@ -1313,44 +1563,23 @@ void runMigration(PGconn* conn, int version)
 RayStore::RayStore(const std::string& conninfo)
   : P(new Impl)
 {
-  // Keywords before "dbname" are overridden by what the expanded conninfo sets itself.
-  std::vector<const char*> keys, values;
-  if (!std::getenv("PGCONNECT_TIMEOUT"))
+  std::string error;
+  this->P->Conn = openConnection(conninfo, error);
+  if (!this->P->Conn)
   {
-    keys.push_back("connect_timeout");
-    values.push_back("10");
-  }
-  keys.push_back("fallback_application_name");
-  values.push_back("asrt");
-  keys.push_back("dbname");
-  values.push_back(conninfo.c_str());
-  keys.push_back(nullptr);
-  values.push_back(nullptr);
-  this->P->Conn = PQconnectdbParams(keys.data(), values.data(), 1);
-  if (!this->P->Conn || PQstatus(this->P->Conn) != CONNECTION_OK)
-  {
-    const std::string msg =
-      this->P->Conn ? trimmed(PQerrorMessage(this->P->Conn)) : "out of memory";
-    PQfinish(this->P->Conn);
     delete this->P;
-    throw StoreError("cannot connect to PostgreSQL: " + msg);
+    throw StoreError(error);
   }
-  if (PQsetClientEncoding(this->P->Conn, "UTF8") != 0)
-  {
-    const std::string msg = trimmed(PQerrorMessage(this->P->Conn));
-    PQfinish(this->P->Conn);
-    delete this->P;
-    throw StoreError("cannot set the client encoding to UTF8: " + msg);
-  }
-  // The server's notices ("table does not exist, skipping", ...) are not the caller's business;
-  // libpq would print them on stderr.
-  PQsetNoticeProcessor(
-    this->P->Conn, [](void*, const char*) {}, nullptr);
+  this->P->Conninfo = conninfo;
 }
 
 RayStore::~RayStore()
 {
   PQfinish(this->P->Conn);
+  for (PGconn* c : this->P->Helpers)
+  {
+    PQfinish(c);
+  }
   delete this->P;
 }
 
@@ -1429,14 +1658,14 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
 {
   return this->writeFrame(
     scene, label, records.size(), [&records](std::size_t k, RayRecord& r) { r = records[k]; },
-    replace, traceSeconds, paths);
+    replace, traceSeconds, paths, true);
 }
 
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
                                   std::size_t count,
                                   const std::function<void(std::size_t, RayRecord&)>& next,
                                   bool replace, double traceSeconds,
-                                  const std::vector<RayPath>& paths)
+                                  const std::vector<RayPath>& paths, bool concurrentProducer)
 {
   const auto start = std::chrono::steady_clock::now();
   requireText(label, "the label");
@@ -1445,10 +1674,28 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
   checkPaths(scene, paths);
   this->P->requireSchema();
   PGconn* conn = this->P->Conn;
+  // A large frame from a producer that any thread may call goes in as several tiles, each over a
+  // connection of its own: one backend alone is the bottleneck of a write (bench/REPORT.md).
+  std::vector<PGconn*> helpers;
+  if (concurrentProducer && count >= kParallelMinRays)
+  {
+    helpers = this->P->helpers(
+      int(std::min<std::size_t>(std::size_t(this->P->WriteConnections), count / kParallelMinRays)) -
+      1);
+  }
+  std::vector<std::size_t> bounds;
+  for (std::size_t k = 0; k <= helpers.size(); ++k)
+  {
+    // Whole rows of kBlockSize rays in every tile but the last.
+    bounds.push_back(count * k / (helpers.size() + 1) / kBlockSize * kBlockSize);
+  }
+  bounds.push_back(count);
+  const int tiles = int(helpers.size()) + 1;
   for (int attempt = 0;; ++attempt)
   {
     const std::int64_t sceneId = this->P->sceneRow(texts);
     bool replaced = false;
+    std::int64_t writingId = -1; // the frame of a parallel write, once it has an id
     try
     {
       const std::int64_t frameId = this->P->transaction(
@@ -1478,7 +1725,7 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
 
           try
           {
-            r = insertFrame(conn, sceneId, texts, scene, label, 1, false);
+            r = insertFrame(conn, sceneId, texts, scene, label, tiles, false);
           }
           catch (const StoreError& e)
           {
@@ -1492,16 +1739,55 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
             throw;
           }
           const std::int64_t id = getI64(r.get(), 0, 0);
+          if (tiles > 1)
+          {
+            writingId = id;
+          }
 
-          copyTile(conn, id, 0, count, next);
+          if (tiles == 1)
+          {
+            copyTile(conn, id, 0, count, next);
+          }
+          else
+          {
+            Params().i64(id).exec(conn, writerLock("pg_advisory_xact_lock"),
+                                  "locking the frame failed");
+            {
+              HelperLoads others(helpers, id, bounds, next);
+              try
+              {
+                loadTile(conn, id, 0, 0, bounds[1], others.checked(next));
+              }
+              catch (...)
+              {
+                others.fail();
+                throw;
+              }
+              others.join();
+              others.rethrow();
+            }
+            // Attached together at the end: ATTACH PARTITION locks ray_blocks against other
+            // writers' attachments, so it waits for no COPY.
+            for (int tile = 0; tile < tiles; ++tile)
+            {
+              if (bounds[std::size_t(tile) + 1] > bounds[std::size_t(tile)])
+              {
+                exec(conn, attachBlockTable("ray_blocks", id, tile), "attaching the rays failed");
+              }
+            }
+          }
           copyPaths(conn, id, paths);
-          Params()
-            .i64(id)
-            .i64(std::int64_t(count))
-            .exec(conn,
-                  "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, 0, "
-                  "$2, clock_timestamp())",
-                  "recording the frame's rays failed");
+          for (int tile = 0; tile < tiles; ++tile)
+          {
+            Params()
+              .i64(id)
+              .i32(tile)
+              .i64(std::int64_t(bounds[std::size_t(tile) + 1] - bounds[std::size_t(tile)]))
+              .exec(conn,
+                    "INSERT INTO frame_tiles (frame_id, tile, ray_count, written_at) VALUES ($1, "
+                    "$2, $3, clock_timestamp())",
+                    "recording the frame's rays failed");
+          }
 
           const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1534,10 +1820,29 @@ std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::stri
     }
     catch (...)
     {
+      if (writingId >= 0)
+      {
+        // What the helpers committed (the main connection may be the one that broke).
+        dropUnattachedTiles(PQstatus(conn) == CONNECTION_OK ? conn : helpers.front(), writingId);
+      }
       this->P->dropUnusedScenes(sceneId);
       throw;
     }
   }
+}
+
+void RayStore::setWriteConnections(int n)
+{
+  if (n < 1)
+  {
+    throw StoreError("a write needs at least one connection (got " + std::to_string(n) + ")");
+  }
+  this->P->WriteConnections = n;
+}
+
+int RayStore::writeConnections() const
+{
+  return this->P->WriteConnections;
 }
 
 std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std::string& label,

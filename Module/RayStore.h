@@ -90,10 +90,9 @@ struct FrameInfo
   double traceSeconds = 0; ///< NaN when the writer did not say
   std::string createdAt;   ///< ISO 8601, UTC
   std::int64_t rayCount = 0;
-  int tileCount = 1;          ///< tiles it was written in (1 for writeFrame)
+  int tileCount = 1;          ///< tiles it was written in (writeFrame: one per connection)
   std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
-
 
 class ASRTCORE_EXPORT RayStore
 {
@@ -104,6 +103,12 @@ public:
   static constexpr int kRecordBytes = 260;
   /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page.
   static constexpr int kBlockSize = 31;
+  /// A parallel write gives each connection at least this many rays (smaller frames are written
+  /// over one: another connection's table and commit would cost more than they save).
+  static constexpr std::size_t kParallelMinRays = 65536;
+  /// Two: on two cores, the server's two backends take the write's CPU time in parallel (one
+  /// backend alone takes twice the time of the fsync'd file; bench/REPORT.md, "store").
+  static constexpr int kDefaultWriteConnections = 2;
 
   /// Connects. `conninfo` is a libpq connection string or URI; empty means libpq's defaults and
   /// the PG* environment variables. A connect_timeout of 10 s applies unless the conninfo or
@@ -140,12 +145,28 @@ public:
   /// As above, with the records produced one at a time by `next(index, record)` for index in
   /// [0, count), e.g. straight from a tracer. If it throws, the transaction is rolled back (no
   /// trace of the frame remains) and the exception propagates.
+  ///
+  /// With `concurrentProducer` (the overloads above pass it: their records are in memory), `next`
+  /// may be called from several threads at once, for different indices (each thread in
+  /// increasing order), and a frame of at least 2 × kParallelMinRays rays is written over up to
+  /// writeConnections() connections at once, as that many tiles of consecutive rays (FrameInfo's
+  /// tileCount). It is still one frame, made visible by one commit: the other connections load
+  /// their tiles into tables that nothing shows until the main transaction attaches them just
+  /// before it commits; if anything fails, those tables are dropped (by this call, or by the next
+  /// migrate() if this process dies). Without it, `next` is called in index order from the
+  /// calling thread, and the frame is one tile.
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
                           std::size_t count,
                           const std::function<void(std::size_t, RayRecord&)>& next,
                           bool replace = false,
                           double traceSeconds = std::numeric_limits<double>::quiet_NaN(),
-                          const std::vector<RayPath>& paths = {});
+                          const std::vector<RayPath>& paths = {}, bool concurrentProducer = false);
+
+  /// Connections a parallel write uses at most (see writeFrame); default kDefaultWriteConnections.
+  /// 1 writes every frame over this store's own connection. The others are opened when first
+  /// needed and kept; if the server refuses some (max_connections), a write uses those it got.
+  void setWriteConnections(int n);
+  int writeConnections() const;
 
   /// Starts (or joins) a frame written as `tileCount` tiles by writeTile(), possibly from several
   /// processes at once: the frame row is created and committed with status 'writing'. Every rank

@@ -16,6 +16,7 @@
 #include <libpq-fe.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -650,4 +651,259 @@ TEST(StoreFaultsFinding, SceneWithNulInDescriptionIsStoredOrRefusedUpFront)
   // the name ("... it was not stored").
   EXPECT_TRUE(e == "(no error)" || e.find("it was not stored") != std::string::npos) << e;
   EXPECT_EQ(Db(ci).value("SELECT count(*) FROM frames"), e == "(no error)" ? "1" : "0");
+}
+
+// -----------------------------------------------------------------------------------------------
+// 7. Parallel writes: a large frame goes in over several connections, as that many tiles, and is
+// still one frame made visible by one commit. The tables that helper connections commit before it
+// are dropped when the write fails, and by the next migrate() when the writer died.
+
+namespace
+{
+/// Tables of rays that are not (yet, or any more) partitions of ray_blocks.
+std::string unattachedTables(Db& db)
+{
+  return db.value("SELECT count(*) FROM pg_class WHERE relname ~ '^ray_blocks_[0-9]+_[0-9]+$' AND "
+                  "relkind = 'r' AND NOT relispartition");
+}
+
+/// Waits until a helper connection has committed its tile (tile 1); "1" once it has.
+std::string helperTileCommitted(Db& db)
+{
+  return pollUntil(
+    db, "SELECT count(*) FROM pg_class WHERE relname ~ '^ray_blocks_[0-9]+_1$'",
+    [](const std::string& v) { return v == "1"; }, 20);
+}
+
+/// The first tile's size in a write of `count` rays over `tiles` connections, as the header
+/// promises: consecutive rays, whole rows of kBlockSize in every tile but the last.
+std::size_t firstTile(std::size_t count, std::size_t tiles)
+{
+  return count / tiles / RayStore::kBlockSize * RayStore::kBlockSize;
+}
+
+/// A write over two connections in a thread of its own, whose producer stalls at ray `stallAt`
+/// (in the tile of the connection that should stall) until released.
+struct StalledWrite
+{
+  StalledWrite(RayStore& store, std::uint64_t seed, std::size_t count, std::size_t stallAt)
+    : Thread(
+        [this, &store, seed, count, stallAt]
+        {
+          this->Error = errorOf(
+            [&]
+            {
+              this->Id = store.writeFrame(
+                scene(1.0), "stalled", count,
+                [&](std::size_t k, RayRecord& r)
+                {
+                  while (k == stallAt && !this->Released)
+                    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+                  r = syntheticRecord(seed, k, 97);
+                },
+                false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+            });
+        })
+  {
+  }
+  ~StalledWrite() { this->finish(); }
+  void finish()
+  {
+    this->Released = true;
+    if (this->Thread.joinable())
+      this->Thread.join();
+  }
+  std::atomic<bool> Released{ false };
+  std::int64_t Id = -1;
+  std::string Error;
+  std::thread Thread;
+};
+}
+
+/// A throwaway server with the schema, a store and a plain connection to look behind its back.
+/// After a failure: the frame can be written again, as two tiles, and reads back bit-exact.
+void expectWrittenAgain(RayStore& store, std::uint64_t seed, std::size_t count)
+{
+  const std::int64_t id = store.writeFrame(scene(1.0), "again", synthetic(seed, count));
+  EXPECT_EQ(firstDifference(store.readFrame(id), seed, count), -1);
+  EXPECT_EQ(store.frameInfo(id).tileCount, 2);
+}
+
+class StoreParallelWrite : public ::testing::Test
+{
+protected:
+  void SetUp() override { this->Store.migrate(); }
+  ThrowawayPostgres Pg;
+  const std::string Ci = Pg.conninfo();
+  RayStore Store{ Ci };
+  Db Database{ Ci };
+};
+
+TEST_F(StoreParallelWrite, LargeFrameIsOneFrameOfOneTilePerConnection)
+{
+  RayStore& store = this->Store;
+  Db& db = this->Database;
+  EXPECT_EQ(store.writeConnections(), 2);
+  EXPECT_NE(errorOf([&] { store.setWriteConnections(0); }).find("at least one connection"),
+            std::string::npos);
+
+  const std::size_t count = 2 * RayStore::kParallelMinRays + 45;
+  const std::vector<RayRecord> recs = synthetic(3, count);
+  const std::int64_t two = store.writeFrame(scene(1.0), "two", recs);
+  EXPECT_EQ(store.frameInfo(two).tileCount, 2);
+  EXPECT_EQ(store.frameInfo(two).rayCount, std::int64_t(count));
+  EXPECT_EQ(firstDifference(store.readFrame(two), 3, count), -1);
+  const std::size_t half = firstTile(count, 2);
+  const std::string id = std::to_string(two);
+  EXPECT_EQ(db.value("SELECT string_agg(tile || ':' || ray_count, ',' ORDER BY tile) FROM "
+                     "frame_tiles WHERE frame_id = " +
+                     id),
+            "0:" + std::to_string(half) + ",1:" + std::to_string(count - half));
+  // SQL numbers the rays of the frame straight through the tiles.
+  EXPECT_EQ(
+    db.value("SELECT count(*) || ':' || min(ray) || ':' || max(ray) || ':' || count(DISTINCT "
+             "ray) FROM rays_v WHERE frame_id = " +
+             id),
+    std::to_string(count) + ":0:" + std::to_string(count - 1) + ":" + std::to_string(count));
+  const std::vector<RayRecord> across = store.readFrame(
+    two, "ray BETWEEN " + std::to_string(half - 2) + " AND " + std::to_string(half + 1));
+  ASSERT_EQ(across.size(), 4u);
+  for (std::size_t k = 0; k < 4; ++k)
+    EXPECT_EQ(recordBits(across[k]), recordBits(syntheticRecord(3, half - 2 + k, 97))) << k;
+  EXPECT_EQ(unattachedTables(db), "0");
+
+  // One connection: the same rays as one tile. Four: four tiles.
+  RayStore one(this->Ci);
+  one.setWriteConnections(1);
+  const std::int64_t single = one.writeFrame(scene(2.0), "one", recs);
+  EXPECT_EQ(one.frameInfo(single).tileCount, 1);
+  EXPECT_EQ(firstDifference(one.readFrame(single), 3, count), -1);
+  RayStore four(this->Ci);
+  four.setWriteConnections(4);
+  const std::size_t count4 = 4 * RayStore::kParallelMinRays + 7;
+  const std::int64_t quad = four.writeFrame(scene(3.0), "four", synthetic(4, count4));
+  EXPECT_EQ(four.frameInfo(quad).tileCount, 4);
+  EXPECT_EQ(firstDifference(four.readFrame(quad), 4, count4), -1);
+  // A frame too small to share goes over one connection whatever the setting.
+  const std::int64_t small = four.writeFrame(scene(4.0), "small", synthetic(5, 1000));
+  EXPECT_EQ(four.frameInfo(small).tileCount, 1);
+  EXPECT_EQ(unattachedTables(db), "0");
+  EXPECT_EQ(db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass"),
+            "8");
+}
+
+TEST_F(StoreParallelWrite, KilledWriterLeavesNothingVisibleAndMigrateSweepsItsCommittedTile)
+{
+  RayStore& store = this->Store;
+  Db& db = this->Database;
+  const std::size_t count = 2 * RayStore::kParallelMinRays;
+  const std::size_t half = firstTile(count, 2);
+  const std::uint64_t seed = 11;
+
+  // The main connection's tile stalls half-way; the helper's runs through and commits.
+  const pid_t child = spawnChild(60, "",
+                                 [&]
+                                 {
+                                   RayStore s(this->Ci);
+                                   s.writeFrame(
+                                     scene(1.0), "doomed", count,
+                                     [&](std::size_t k, RayRecord& r)
+                                     {
+                                       if (k >= half / 2 && k < half)
+                                         std::this_thread::sleep_for(std::chrono::milliseconds(10));
+                                       r = syntheticRecord(seed, k, 97);
+                                     },
+                                     false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+                                   return int(Ok);
+                                 });
+  ASSERT_GT(child, 0);
+  const std::string committed = helperTileCommitted(db);
+  const std::string mainBackend = pollUntil(
+    db,
+    "SELECT coalesce(max(pid), 0) FROM pg_stat_activity WHERE query LIKE 'COPY ray_blocks%' AND "
+    "state = 'active'",
+    [](const std::string& v) { return v != "0"; }, 20);
+  kill(child, SIGKILL);
+  EXPECT_EQ(waitChild(child, Clock::now() + std::chrono::seconds(10)), 128 + SIGKILL);
+  ASSERT_EQ(committed, "1") << "the helper connection never committed its tile";
+  ASSERT_NE(mainBackend, "0") << "the main connection's COPY was not under way";
+  EXPECT_EQ(pollUntil(
+              db, "SELECT count(*) FROM pg_stat_activity WHERE pid = " + mainBackend,
+              [](const std::string& v) { return v == "0"; }, 10),
+            "0");
+
+  // Nothing of the frame is visible; the committed tile is a table that nothing shows.
+  EXPECT_TRUE(store.listFrames().empty());
+  EXPECT_EQ(countsOf(db), "0 frames, 0 blocks, 0 incomplete blocks");
+  EXPECT_EQ(db.value("SELECT count(*) FROM rays_v"), "0");
+  EXPECT_EQ(unattachedTables(db), "1");
+  store.migrate();
+  EXPECT_EQ(unattachedTables(db), "0") << "migrate() left the dead writer's tile";
+
+  expectWrittenAgain(store, seed, count);
+}
+
+TEST_F(StoreParallelWrite, SweepDuringAWriteLeavesItsCommittedTileAlone)
+{
+  RayStore& store = this->Store;
+  Db& db = this->Database;
+  const std::size_t count = 2 * RayStore::kParallelMinRays + 3;
+  StalledWrite write(store, 12, count, firstTile(count, 2) / 2);
+  ASSERT_EQ(helperTileCommitted(db), "1");
+  EXPECT_EQ(unattachedTables(db), "1");
+  // Another process's sweep: the tile's frame does not exist for it yet, but its writer lives.
+  RayStore other(this->Ci);
+  other.migrate();
+  EXPECT_EQ(unattachedTables(db), "1") << "a sweep dropped the tile of a write under way";
+  write.finish();
+  ASSERT_EQ(write.Error, "(no error)");
+  EXPECT_EQ(firstDifference(store.readFrame(write.Id), 12, count), -1);
+  EXPECT_EQ(store.frameInfo(write.Id).tileCount, 2);
+  EXPECT_EQ(unattachedTables(db), "0");
+}
+
+TEST_F(StoreParallelWrite, BrokenHelperConnectionFailsTheWriteCleanlyAndRetrySucceeds)
+{
+  RayStore& store = this->Store;
+  Db& db = this->Database;
+  const std::size_t count = 2 * RayStore::kParallelMinRays + 3;
+  const std::size_t half = firstTile(count, 2);
+  const std::string mainPid = std::to_string(store.backendPid());
+  {
+    // The helper's tile stalls; its backend is terminated in the middle of the COPY.
+    StalledWrite write(store, 13, count, half + (count - half) / 2);
+    const std::string helper = pollUntil(
+      db,
+      "SELECT coalesce(max(pid), 0) FROM pg_stat_activity WHERE query LIKE 'COPY ray_blocks%' "
+      "AND state = 'active' AND pid <> " +
+        mainPid,
+      [](const std::string& v) { return v != "0"; }, 20);
+    ASSERT_NE(helper, "0");
+    db.value("SELECT pg_terminate_backend(" + helper + ")");
+    write.finish();
+    EXPECT_NE(write.Error, "(no error)");
+    EXPECT_NE(write.Error.find("writing the rays failed"), std::string::npos) << write.Error;
+  }
+  EXPECT_TRUE(store.listFrames().empty());
+  EXPECT_EQ(countsOf(db), "0 frames, 0 blocks, 0 incomplete blocks");
+  EXPECT_EQ(unattachedTables(db), "0");
+  expectWrittenAgain(store, 13, count);
+}
+
+TEST_F(StoreParallelWrite, BrokenMainConnectionDropsTheCommittedTileAndRetrySucceeds)
+{
+  RayStore& store = this->Store;
+  Db& db = this->Database;
+  const std::size_t count = 2 * RayStore::kParallelMinRays + 3;
+  {
+    StalledWrite write(store, 14, count, firstTile(count, 2) / 2);
+    ASSERT_EQ(helperTileCommitted(db), "1");
+    db.value("SELECT pg_terminate_backend(" + std::to_string(store.backendPid()) + ")");
+    write.finish();
+    EXPECT_NE(write.Error, "(no error)");
+  }
+  EXPECT_EQ(countsOf(db), "0 frames, 0 blocks, 0 incomplete blocks");
+  // Dropped by the failed write itself, through the connection that still worked.
+  EXPECT_EQ(unattachedTables(db), "0");
+  expectWrittenAgain(store, 14, count);
 }
