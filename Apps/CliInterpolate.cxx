@@ -1,6 +1,6 @@
-// asrt interpolate: two frames stored in PostgreSQL to the movie frames between them, by matching
-// their rays (vtkGeodesicFrameInterpolator), written as PNG and VTI sequences, a .pvd time series
-// and a movie.
+// asrt interpolate: frames stored in PostgreSQL (two, or a chain of key frames) to the movie
+// frames between them, by matching their rays (vtkGeodesicFrameInterpolator, one per consecutive
+// pair), written as PNG and VTI sequences, a .pvd time series and a movie.
 #include "Cli.h"
 
 #include "DataFiles.h"
@@ -21,6 +21,7 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <memory>
@@ -32,8 +33,8 @@ namespace cli
 {
 namespace
 {
-const char* const kHelp = R"(Usage: asrt interpolate A_ID B_ID [options]
-       asrt interpolate --scenes A.json B.json [options]
+const char* const kHelp = R"(Usage: asrt interpolate A_ID B_ID [C_ID ...] [options]
+       asrt interpolate --scenes A.json B.json [C.json ...] [options]
 
 Makes the movie frames between two frames stored in PostgreSQL (asrt trace --store; asrt list
 shows the ids) without tracing them again: rays of A and B that hit the same scene point are
@@ -48,8 +49,14 @@ Writes, for the N + 2 frames (t = 0 is A, t = 1 is B):
 and prints, per frame, the shares of its pixels that were matched, seen by one frame only,
 filled as holes, ambiguous, or re-traced (--exact).
 
+More than two frames are key frames of one movie: N frames are made between each consecutive
+pair and the sequence runs through every key frame (time k at key frame k). Interpolation is good
+between close frames: accumulate key frames along a long ramp (asrt trace --sweep ... --store)
+rather than interpolating its two ends.
+
 Options:
-  -n, --frames N        N intermediate frames (default 8; the paper's movie: 28)
+  -n, --frames N        N intermediate frames between each pair (default 8; the paper's movie
+                        between its two ends: 28)
   -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/') gets
                         the name "interpolated": -o out/ gives out/interpolated-000.png
   --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
@@ -73,6 +80,9 @@ Examples:
   asrt interpolate --scenes Data/scenes/fig4-mass-start.json Data/scenes/fig5-mass-end.json \
     -r 100x100 -n 28 -o movie/
 )";
+
+/// Key frames one command takes (each pair keeps its correspondence in memory).
+constexpr std::size_t kMaxKeyFrames = 1000;
 
 const char* const kClassNames[] = { "matched", "one-sided", "holes", "ambiguous", "re-traced" };
 
@@ -111,14 +121,15 @@ int runInterpolate(const std::vector<std::string>& args)
     return kOk;
   }
   const bool fromScenes = options.has("scenes");
-  options.expectPositional(2, 2,
-                           fromScenes
-                             ? "the two scene files (asrt interpolate --scenes A.json B.json)"
-                             : "the two frame ids (asrt interpolate A_ID B_ID)");
+  options.expectPositional(
+    2, kMaxKeyFrames,
+    fromScenes ? "at least two scene files (asrt interpolate --scenes A.json B.json [C.json ...])"
+               : "at least two frame ids (asrt interpolate A_ID B_ID [C_ID ...])");
   if (options.has("resolution") && !fromScenes)
     throw UsageError("--resolution only goes with --scenes (stored frames keep their size)");
-  std::string names[2];
-  for (int k = 0; k < 2; ++k)
+  const std::size_t keys = options.positional().size();
+  std::vector<std::string> names(keys);
+  for (std::size_t k = 0; k < keys; ++k)
     names[k] =
       fromScenes ? options.positional()[k] : std::to_string(parseFrameId(options.positional()[k]));
   const int intermediate = options.positiveInteger("frames").value_or(8);
@@ -141,8 +152,8 @@ int runInterpolate(const std::vector<std::string>& args)
   const bool quiet = options.has("quiet");
   // The two ends: traced from their scene files, or read from the store.
   const std::string conninfo = fromScenes ? std::string() : databaseConnection(options);
-  vtkSmartPointer<vtkAlgorithm> ends[2];
-  for (int k = 0; k < 2; ++k)
+  std::vector<vtkSmartPointer<vtkAlgorithm>> ends(keys);
+  for (std::size_t k = 0; k < keys; ++k)
   {
     if (fromScenes)
     {
@@ -165,15 +176,10 @@ int runInterpolate(const std::vector<std::string>& args)
     ends[k] = reader;
   }
 
-  vtkNew<vtkGeodesicFrameInterpolator> interpolator;
-  interpolator->SetFrameAConnection(ends[0]->GetOutputPort(1));
-  interpolator->SetFrameBConnection(ends[1]->GetOutputPort(1));
-  interpolator->SetNumberOfIntermediateFrames(intermediate);
-  interpolator->SetExactMode(options.has("exact"));
-  interpolator->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
+  // One interpolator per consecutive pair, each checked (same scene, same size) before any
+  // frame is written.
   tools::VtkMessageCatcher messages;
-  messages.watchAlgorithm(interpolator);
-  // Everything the readers returned is valid; what fails here is the pair itself (different
+  // Everything the readers returned is valid; what fails here is a pair itself (different
   // scenes or resolutions) or, in exact mode, the re-tracing of the scene.
   auto check = [&messages]()
   {
@@ -182,18 +188,35 @@ int runInterpolate(const std::vector<std::string>& args)
     if (messages.failed())
       throw InputError(messages.firstError());
   };
-  interpolator->UpdateInformation();
-  check();
+  std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>> pairs;
+  std::string chain = names[0];
+  for (std::size_t k = 0; k + 1 < keys; ++k)
+  {
+    auto interpolator = vtkSmartPointer<vtkGeodesicFrameInterpolator>::New();
+    interpolator->SetFrameAConnection(ends[k]->GetOutputPort(1));
+    interpolator->SetFrameBConnection(ends[k + 1]->GetOutputPort(1));
+    interpolator->SetNumberOfIntermediateFrames(intermediate);
+    interpolator->SetExactMode(options.has("exact"));
+    interpolator->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
+    messages.watchAlgorithm(interpolator);
+    interpolator->UpdateInformation();
+    check();
+    pairs.push_back(interpolator);
+    chain += " -> " + names[k + 1];
+  }
 
-  const int count = intermediate + 2;
-  tools::ProgressBar bar("interpolate " + names[0] + " -> " + names[1],
-                         quiet ? tools::ProgressBar::Style::Silent
-                               : tools::ProgressBar::Style::Automatic);
+  // Key frame k is frame k (N + 1) of the sequence; a key frame between two pairs is written once.
+  const int count = static_cast<int>(pairs.size()) * (intermediate + 1) + 1;
+  tools::ProgressBar bar("interpolate " + chain, quiet ? tools::ProgressBar::Style::Silent
+                                                       : tools::ProgressBar::Style::Automatic);
   tools::PvdCollection series;
   std::vector<std::string> lines;
   for (int k = 0; k < count; ++k)
   {
-    const double t = static_cast<double>(k) / (count - 1);
+    const int pair = std::min(k / (intermediate + 1), static_cast<int>(pairs.size()) - 1);
+    const double t = static_cast<double>(k - pair * (intermediate + 1)) / (intermediate + 1);
+    const double time = pair + t;
+    vtkGeodesicFrameInterpolator* interpolator = pairs[static_cast<std::size_t>(pair)];
     interpolator->UpdateTimeStep(t);
     check();
     vtkImageData* frame = interpolator->GetOutput();
@@ -201,12 +224,12 @@ int runInterpolate(const std::vector<std::string>& args)
     std::snprintf(number, sizeof number, "-%03d", k);
     tools::writePng(frame, prefix + number + ".png");
     tools::writeVti(frame, prefix + number + ".vti");
-    series.add(t, prefix + number + ".vti");
+    series.add(time, prefix + number + ".vti");
     movie->addFrame(frame);
 
     const std::array<double, 5> shares = fractions(frame);
     char line[160];
-    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, t,
+    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, time,
                   fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
                   100 * shares[3], 100 * shares[4]);
     lines.push_back(line);
@@ -216,10 +239,10 @@ int runInterpolate(const std::vector<std::string>& args)
   movie->close();
   bar.finish("-> " + prefix + "-*.png");
 
-  std::printf("%s %s -> %s: %d frames (%d intermediate)%s\n", fromScenes ? "scenes" : "frames",
-              printable(names[0]).c_str(), printable(names[1]).c_str(), count, intermediate,
+  std::printf("%s %s: %d frames (%d intermediate%s)%s\n", fromScenes ? "scenes" : "frames",
+              printable(chain).c_str(), count, intermediate, keys > 2 ? " between each pair" : "",
               options.has("exact") ? ", exact mode" : "");
-  std::printf("%5s %7s %8s", "frame", "t", "M");
+  std::printf("%5s %7s %8s", "frame", keys > 2 ? "time" : "t", "M");
   for (const char* name : kClassNames)
     std::printf(" %8s%%", name);
   std::printf("\n");

@@ -47,6 +47,20 @@ step "two scene files, traced first, nothing stored"
 "$check" scenes/interpolated-003.png=24x24 scenes/interpolated.ogv=4
 test "$("$asrt" list | tail -n +2 | wc -l)" -eq 4
 
+step "a chain of key frames 1 (M = 0.4), 5 (M = 0.5), 2 (M = 0.6): the sequence runs through each"
+"$expect" 0 "stored as frame 5" -- "$asrt" trace "$scenes/fig4-mass-start.json" -r 48x48 -q \
+  --mass 0.5 --store=ramp -o mid
+"$expect" 0 "frames 1 -> 5 -> 2: 5 frames" -- "$asrt" interpolate 1 5 2 -n 1 -o chain/ -q
+"$check" chain/interpolated-004.png=48x48 '!chain/interpolated-005.png' chain/interpolated.pvd=5 \
+  chain/interpolated.ogv=5
+"$asrt" show 5 --png mid-stored.png > /dev/null
+cmp chain/interpolated-000.png a-stored.png
+cmp chain/interpolated-002.png mid-stored.png
+cmp chain/interpolated-004.png b-stored.png
+"$asrt" interpolate 1 5 2 -n 1 -o chain/ -q > chain.txt
+grep -E "^ +1 +0\.5000 +0\.45 " chain.txt > /dev/null
+grep -E "^ +3 +1\.5000 +0\.55 " chain.txt > /dev/null
+
 step "errors: usage (2), the database (3), a pair that cannot be interpolated (4); nothing written"
 "$expect" 2 "two frame ids" -- "$asrt" interpolate 1
 "$expect" 2 "not a frame id" -- "$asrt" interpolate 1 two
@@ -57,6 +71,7 @@ step "errors: usage (2), the database (3), a pair that cannot be interpolated (4
   --db "host=/nonexistent port=1 connect_timeout=2"
 "$expect" 4 "different resolutions" -- "$asrt" interpolate 1 3 -o bad/
 "$expect" 4 "different scenes" -- "$asrt" interpolate 1 4 -o bad/
+"$expect" 4 "different resolutions" -- "$asrt" interpolate 1 2 3 -o bad/
 "$expect" 2 "--resolution only" -- "$asrt" interpolate 1 2 -r 8x8 -o bad/
 "$expect" 4 "cannot read scene file" -- "$asrt" interpolate --scenes no-such.json \
   "$scenes/fig5-mass-end.json" -r 8x8 -o bad/
