@@ -2176,40 +2176,132 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
                            " rays, its tiles " + std::to_string(base));
         }
         records.resize(std::size_t(rayCount));
-        // A parallel plan would only copy the rows once more, between processes.
-        exec(conn, "SELECT set_config('max_parallel_workers_per_gather', '0', true)",
-             "reading the rays failed");
+        // Tiles of a large frame are read over several connections at once, from one snapshot
+        // (exported by this transaction), each decoded on a thread of its own; the tiles are
+        // shared out by their rays.
+        std::vector<PGconn*> helpers;
+        if (tiles.size() > 1 && rayCount >= std::int64_t(2 * kParallelMinRays))
+        {
+          helpers = this->P->helpers(
+            int(std::min<std::size_t>(std::size_t(this->P->WriteConnections), tiles.size())) - 1);
+        }
+        std::vector<std::string> groups(helpers.size() + 1);
+        {
+          std::vector<std::int64_t> load(groups.size(), 0);
+          for (const auto& t : tiles)
+          {
+            const std::size_t g =
+              std::size_t(std::min_element(load.begin(), load.end()) - load.begin());
+            groups[g] += (groups[g].empty() ? "" : ",") + std::to_string(t.first);
+            load[g] += t.second.count;
+          }
+        }
+        std::string snapshot;
+        if (!helpers.empty())
+        {
+          r = exec(conn, "SELECT pg_export_snapshot()", "reading the rays failed");
+          snapshot = getText(r.get(), 0, 0);
+          // The server's name for it; checked all the same before it goes into SQL.
+          if (snapshot.empty() ||
+              snapshot.find_first_not_of("0123456789ABCDEFabcdef-") != std::string::npos)
+          {
+            throw StoreError("reading the rays failed: unexpected snapshot name \"" + snapshot +
+                             "\"");
+          }
+        }
         // Rows come in whatever order the server finds them; each says where its rays go. The
         // table's keys and checks (one row per block, first_ray = kBlockSize × block, n ≤
         // kBlockSize) make the rows' ranges disjoint, so a count that adds up covers every ray
         // exactly once.
+        auto readTiles = [&](PGconn* c, const std::string& group) -> std::int64_t
+        {
+          // A parallel plan would only copy the rows once more, between processes.
+          exec(c, "SELECT set_config('max_parallel_workers_per_gather', '0', true)",
+               "reading the rays failed");
+          std::int64_t got = 0;
+          Params()
+            .i64(id)
+            .text("{" + group + "}")
+            .stream(
+              c,
+              "SELECT tile, first_ray, n, data FROM ray_blocks WHERE frame_id = $1 AND tile = "
+              "ANY($2::integer[])",
+              "reading the rays failed",
+              [&](const PGresult* row)
+              {
+                const std::int32_t tile = getI32(row, 0, 0);
+                const std::int64_t first = getI64(row, 0, 1);
+                const std::int32_t n = getI32(row, 0, 2);
+                const auto t = std::find_if(tiles.begin(), tiles.end(),
+                                            [&](const auto& x) { return x.first == tile; });
+                if (t == tiles.end() || n < 1 || n > kBlockSize || first < 0 ||
+                    first + n > t->second.count ||
+                    PQgetlength(row, 0, 3) != std::int64_t(n) * kRecordBytes)
+                {
+                  throw StoreError("reading the rays of " + frame +
+                                   " failed: a stored block (tile " + std::to_string(tile) +
+                                   ", first ray " + std::to_string(first) +
+                                   ") does not fit the frame");
+                }
+                const char* p = PQgetvalue(row, 0, 3);
+                RayRecord* out = &records[std::size_t(t->second.base + first)];
+                for (int m = 0; m < n; ++m, p += kRecordBytes)
+                {
+                  decodeRecord(p, out[m]);
+                }
+                got += n;
+              });
+          return got;
+        };
+        std::vector<std::int64_t> gots(helpers.size(), 0);
+        std::vector<std::exception_ptr> errors(helpers.size());
+        std::vector<std::thread> threads;
+        for (std::size_t k = 0; k < helpers.size(); ++k)
+        {
+          threads.emplace_back(
+            [&, k]
+            {
+              PGconn* c = helpers[k];
+              try
+              {
+                exec(c, ReadBegin, "starting a transaction failed");
+                exec(c, "SET TRANSACTION SNAPSHOT '" + snapshot + "'", "reading the rays failed");
+                gots[k] = readTiles(c, groups[k + 1]);
+                exec(c, "ROLLBACK", "ending the read failed");
+              }
+              catch (...)
+              {
+                rollback(c);
+                errors[k] = std::current_exception();
+              }
+            });
+        }
         std::int64_t got = 0;
-        Params().i64(id).stream(
-          conn, "SELECT tile, first_ray, n, data FROM ray_blocks WHERE frame_id = $1",
-          "reading the rays failed",
-          [&](const PGresult* row)
+        std::exception_ptr mainError;
+        try
+        {
+          got = readTiles(conn, groups[0]);
+        }
+        catch (...)
+        {
+          mainError = std::current_exception();
+        }
+        for (std::thread& t : threads)
+        {
+          t.join();
+        }
+        if (mainError)
+        {
+          std::rethrow_exception(mainError);
+        }
+        for (std::size_t k = 0; k < helpers.size(); ++k)
+        {
+          if (errors[k])
           {
-            const std::int32_t tile = getI32(row, 0, 0);
-            const std::int64_t first = getI64(row, 0, 1);
-            const std::int32_t n = getI32(row, 0, 2);
-            const auto t = std::find_if(tiles.begin(), tiles.end(),
-                                        [&](const auto& x) { return x.first == tile; });
-            if (t == tiles.end() || n < 1 || n > kBlockSize || first < 0 ||
-                first + n > t->second.count ||
-                PQgetlength(row, 0, 3) != std::int64_t(n) * kRecordBytes)
-            {
-              throw StoreError("reading the rays of " + frame + " failed: a stored block (tile " +
-                               std::to_string(tile) + ", first ray " + std::to_string(first) +
-                               ") does not fit the frame");
-            }
-            const char* p = PQgetvalue(row, 0, 3);
-            RayRecord* out = &records[std::size_t(t->second.base + first)];
-            for (int m = 0; m < n; ++m, p += kRecordBytes)
-            {
-              decodeRecord(p, out[m]);
-            }
-            got += n;
-          });
+            std::rethrow_exception(errors[k]);
+          }
+          got += gots[k];
+        }
         if (got != rayCount)
         {
           throw StoreError(frame + " is inconsistent: it says " + std::to_string(rayCount) +
