@@ -822,7 +822,9 @@ int main(int argc, char* argv[])
     std::printf("<!-- store:begin -->\n## Accumulation in PostgreSQL\n\n");
     std::printf(
       "RayStore (schema version %d: each ray a packed %d-byte record, %d a row, inline; a table "
-      "per frame made and filled with COPY FREEZE in the frame's one transaction) against a "
+      "per tile made and filled with COPY FREEZE, a frame of at least 2 × %zu rays written as "
+      "one tile per connection over %d connections at once and made visible by one commit; "
+      "writes ask the kernel to write back every 2 MB, `backend_flush_after`) against a "
       "private PostgreSQL 15 server started for the run with `EmbeddedPostgres`, **durable "
       "(fsync on, synchronous_commit on, full_page_writes on: the defaults)**, wal_level = %s "
       "(the embedded server's: the table made in the writing transaction is fsynced at commit "
@@ -831,13 +833,16 @@ int main(int argc, char* argv[])
       "The records are synthetic — nothing is traced — but plausible: a shadow, a photon ring "
       "with image orders 1 and 2, three objects, escaped rays, NaN Jacobians along edges; "
       "deterministic pseudo-random values, %zu bytes of fields per ray. Times are wall-clock, "
-      "best of %d; a write is one `writeFrame` (commit included), a read one `readFrame` into "
+      "best of %d (the 1920×1080 runs of the file and of every store variant take turns in each "
+      "repetition, so that all see the same load); a write is one `writeFrame` (commit "
+      "included), a read one `readFrame` into "
       "`RayRecord`s (checked bit-exact once). The file is the same fields packed in native byte "
       "order, one `fwrite` per %zu records, then `fflush` + `fsync`; it is read back with "
       "`fread` and unpacked into `RayRecord`s. Reads of both come from the page cache (the store "
       "and the file were just written); the file read from the disk itself (its pages dropped "
       "with `posix_fadvise`) is shown too.\n\n",
-      RayStore::kSchemaVersion, RayStore::kRecordBytes, RayStore::kBlockSize, level.c_str(),
+      RayStore::kSchemaVersion, RayStore::kRecordBytes, RayStore::kBlockSize,
+      RayStore::kParallelMinRays, store.writeConnections(), level.c_str(),
       std::thread::hardware_concurrency(), diskOf(scratch).c_str(), RecordBytes, Repetitions,
       ChunkRecords);
     std::printf("| what | rays | write | write rays/s | read | read rays/s |\n"
@@ -873,8 +878,9 @@ int main(int argc, char* argv[])
     std::printf("- reading within 2× of the file (both from the page cache): %.2f×, %s.\n",
                 readRatio, met(nearRead));
     std::printf(
-      "\nCPU time of the fastest 1920×1080 write: %.2f s in the server's backend (receiving "
-      "%.0f MB, building %zu rows of 8 kB, copying them into pages, writing each new page to the "
+      "\nCPU time of the fastest 1920×1080 write: %.2f s in the server's processes (its backends "
+      "receiving %.0f MB, building %zu rows of 8 kB, copying them into pages, writing each new "
+      "page to the "
       "kernel twice: PostgreSQL 15 extends a table with a zeroed page and writes the filled page "
       "later), %.2f s in this process (making the records' bytes and sending them), while the "
       "file's write took %.2f s of CPU and waited for the disk the rest of its %.2f s. The load "
@@ -884,18 +890,20 @@ int main(int argc, char* argv[])
       loadBefore.c_str(), loadAfter.c_str(), std::thread::hardware_concurrency());
     if (!nearWrite)
       std::printf(
-        "\nWhy writing misses 2× here: the backend's CPU time alone is %.2f× the file's whole "
+        "\nWhy writing misses 2× here: the server's CPU time alone is %.2f× the file's whole "
         "write, and those copies are what PostgreSQL 15's COPY does with every byte (the "
-        "variants below show that this layout, a table per frame and no WAL for the rays, is the "
+        "variants below show that this layout, a table per tile and no WAL for the rays, is the "
         "cheapest of those measured: the others add the WAL's copy of every byte, or TOAST's "
-        "chunks, or a foreign-key check per row). Client and server could overlap on two idle "
-        "cores; on two cores shared with other builds they mostly take turns.\n",
+        "chunks, or a foreign-key check per row). Two backends share that work between the two "
+        "cores, but only when the cores are otherwise idle: with other jobs running, they and "
+        "this process take turns.\n",
         h.serverCpu / f.write);
 
     std::printf(
       "\n### Store layouts and settings, in the same run\n\n"
-      "The 1920×1080 records again, best of %d each, as ratios to the file above. The first two "
-      "rows are RayStore itself; the others the same records through plain libpq (binary COPY "
+      "The 1920×1080 records again, best of %d each, as ratios to the file above. The first five "
+      "rows are RayStore itself (the connections of a write are also those of a read of its "
+      "tiles); the next two the same records through plain libpq (binary COPY "
       "into a table shared by all frames, in one transaction with a frames row their foreign key "
       "refers to; binary COPY out, decoded into `RayRecord`s and checked bit-exact once).\n\n",
       Repetitions);
