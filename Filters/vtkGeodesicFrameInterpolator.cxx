@@ -409,28 +409,24 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
 
     const int W = f.width, H = f.height;
     const vtkIdType n = static_cast<vtkIdType>(W) * H;
+    int ext[6] = { 0, W - 1, 0, H - 1, 0, 0 };
+    image->Initialize();
+    image->SetExtent(ext);
+    image->SetSpacing(1, 1, 1);
+    image->SetOrigin(0, 0, 0);
     auto colors = asrt::makeArray<vtkUnsignedCharArray>("Colors", 3, n);
     auto cls = asrt::makeArray<vtkUnsignedCharArray>("InterpolationClass", 1, n);
     auto objectId = asrt::makeArray<vtkIntArray>("ObjectId", 1, n);
     auto order = asrt::makeArray<vtkIntArray>("ImageOrder", 1, n);
     auto pathLength = asrt::makeArray<vtkDoubleArray>("PathLength", 1, n);
     auto termination = asrt::makeArray<vtkIntArray>("Termination", 1, n);
-    int ext[6] = { 0, W - 1, 0, H - 1, 0, 0 };
-    image->Initialize();
-    image->SetExtent(ext);
-    image->SetSpacing(1, 1, 1);
-    image->SetOrigin(0, 0, 0);
     std::copy(f.rgb.begin(), f.rgb.end(), colors->GetPointer(0));
-    for (vtkIdType p = 0; p < n; ++p)
-    {
-      cls->SetValue(p, static_cast<unsigned char>(f.pixelClass[static_cast<std::size_t>(p)]));
-      const asrt::SourceFields s =
-        asrt::sourceFields(this->Impl->Splats, f.source[static_cast<std::size_t>(p)], t);
-      objectId->SetValue(p, s.objectId);
-      order->SetValue(p, s.imageOrder);
-      pathLength->SetValue(p, s.pathLength);
-      termination->SetValue(p, s.termination);
-    }
+    static_assert(sizeof(asrt::PixelClass) == sizeof(unsigned char), "classes are bytes");
+    std::copy(f.pixelClass.begin(), f.pixelClass.end(),
+              reinterpret_cast<asrt::PixelClass*>(cls->GetPointer(0)));
+    static_assert(sizeof(int) == sizeof(std::int32_t), "vtkIntArray holds 32-bit values");
+    asrt::sourceFieldsOf(this->Impl->Splats, f, objectId->GetPointer(0), order->GetPointer(0),
+                         termination->GetPointer(0), pathLength->GetPointer(0));
 
     if (this->ExactMode && t > 0.0 && t < 1.0)
     {
@@ -461,9 +457,16 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
          std::initializer_list<vtkDataArray*>{ cls, objectId, order, pathLength, termination })
       pd->AddArray(a);
 
-    double fractions[asrt::kPixelClassCount] = { 0, 0, 0, 0, 0 };
+    // Counted on all threads: one counter bumped per pixel is a chain of dependent increments.
+    vtkIdType counts[asrt::kPixelClassCount] = { 0, 0, 0, 0, 0 };
+    const unsigned char* classes = cls->GetPointer(0);
+    constexpr int classCount = asrt::kPixelClassCount;
+#pragma omp parallel for schedule(static) reduction(+ : counts[:classCount]) if (n > 65536)
     for (vtkIdType p = 0; p < n; ++p)
-      fractions[cls->GetValue(p)] += 1.0 / static_cast<double>(n);
+      ++counts[classes[p]];
+    double fractions[asrt::kPixelClassCount];
+    for (int c = 0; c < asrt::kPixelClassCount; ++c)
+      fractions[c] = static_cast<double>(counts[c]) / static_cast<double>(n);
     vtkFieldData* fd = image->GetFieldData();
     addField(fd, "InterpolationTime", { t });
     addField(fd, "InterpolationFractions",

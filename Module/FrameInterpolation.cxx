@@ -1,9 +1,16 @@
 #include "FrameInterpolation.h"
 
 #include <omp.h>
+#ifdef __SSE4_1__
+#include <smmintrin.h>
+#else
+#include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace asrt
@@ -38,6 +45,8 @@ constexpr float kVisibleWeight = 0.2f;
 /// Frames smaller than this are rendered on one thread: a parallel region costs more than it
 /// saves there (a time slice, on a busy machine).
 constexpr std::size_t kParallelPixels = 16384;
+/// How many list entries ahead of the one being drawn its splat is prefetched.
+constexpr std::int64_t kPrefetchAhead = 16;
 
 bool sameImage(SampleKind ka, const PixelSample& a, SampleKind kb, const PixelSample& b)
 {
@@ -155,6 +164,7 @@ void buildSide(const FrameSamples& self, const FrameSamples& other,
     out.imageOrder[offset + p] = s.imageOrder;
     out.termination[offset + p] = static_cast<std::uint8_t>(s.termination);
     out.pathLength[offset + p] = s.pathLength;
+    out.lengthChange[offset + p] = sp.dLength;
   }
 }
 
@@ -180,6 +190,7 @@ SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Corresp
   set.imageOrder.resize(2 * n);
   set.termination.resize(2 * n);
   set.pathLength.resize(2 * n);
+  set.lengthChange.resize(2 * n);
   buildSide(a, b, c.aToB, 0, options, set);
   buildSide(b, a, c.bToA, n, options, set);
   // Pairs that match each other.
@@ -250,7 +261,7 @@ SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Corresp
     if (b1 - b0 <= 1)
     {
       for (int b = b0; b <= b1; ++b)
-        visit(set.listIndex(b, 0, g));
+        visit(set.listIndex(b, 0, g), b);
       return;
     }
     // A splat of side B moves with s = 1 − t: slice k of t is slice K − 1 − k of its path.
@@ -261,21 +272,46 @@ SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Corresp
       const float s1 = s0 + 1.0f / K;
       if (bandsOf(y + s0 * s.dy, y + s1 * s.dy, b0, b1))
         for (int b = b0; b <= b1; ++b)
-          visit(set.listIndex(b, 1 + slice, g));
+          visit(set.listIndex(b, 1 + slice, g), b);
     }
   };
   std::vector<std::int64_t> count(lists + 1, 0);
   for (std::size_t k = 0; k < 2 * n; ++k)
-    place(k, [&](std::size_t list) { ++count[list + 1]; });
+    place(k, [&](std::size_t list, int) { ++count[list + 1]; });
   for (std::size_t l = 0; l < lists; ++l)
     count[l + 1] += count[l];
   set.bandStart = count;
   set.bandSplats.resize(static_cast<std::size_t>(count.back()));
+  set.bandReach.resize(set.bandSplats.size());
   std::vector<std::int64_t> fill(count.begin(), count.end() - 1);
+  // When (in its own s) a splat may touch band b: y(s) = y + s·dy within the band's rows widened
+  // by its largest reach and a pixel to spare, in 255ths of s rounded outwards, and a 255th more.
+  auto reach = [&](std::size_t k, int b)
+  {
+    const SplatSet::Splat& sp = set.splats[k];
+    const float y = static_cast<float>((k % n) / W);
+    const float spare = (sp.footprint >= 0 ? std::max(1.0f, maxExtent) : 1.0f) + 1.0f;
+    const float lo = static_cast<float>(b * rows) - spare,
+                hi = static_cast<float>(std::min(H, (b + 1) * rows)) + spare;
+    float sLo = 0, sHi = 1;
+    if (std::abs(sp.dy) > 1e-6f)
+    {
+      const float a0 = (lo - y) / sp.dy, a1 = (hi - y) / sp.dy;
+      sLo = std::max(0.0f, std::min(a0, a1));
+      sHi = std::min(1.0f, std::max(a0, a1));
+    }
+    const int qLo = std::clamp(static_cast<int>(std::floor(sLo * 255.0f)) - 1, 0, 255);
+    const int qHi = std::clamp(static_cast<int>(std::ceil(sHi * 255.0f)) + 1, 0, 255);
+    return std::array<std::uint8_t, 2>{ { static_cast<std::uint8_t>(qLo),
+                                          static_cast<std::uint8_t>(qHi) } };
+  };
   for (std::size_t k = 0; k < 2 * n; ++k)
     place(k,
-          [&](std::size_t list) {
-            set.bandSplats[static_cast<std::size_t>(fill[list]++)] = static_cast<std::int32_t>(k);
+          [&](std::size_t list, int b)
+          {
+            const std::size_t e = static_cast<std::size_t>(fill[list]++);
+            set.bandSplats[e] = static_cast<std::int32_t>(k);
+            set.bandReach[e] = reach(k, b);
           });
   return set;
 }
@@ -295,35 +331,52 @@ namespace
 {
 using Accumulator = InterpolationWorkspace::Accumulator;
 
+/// A splat's colour at t as drawn: (r, g, b, 1), so that one multiply-add per touch updates the
+/// colour sums and the weight together.
+using Color4 = __m128;
+
+/// (c[0], c[1], c[2], 1) as floats. With SSE4.1 (the x86-64-v2 baseline) from the bytes at once:
+/// four are read, the fourth dropped for the 1 (it is the next field of the splat).
+inline Color4 colorOf(const std::uint8_t* c)
+{
+#ifdef __SSE4_1__
+  static_assert(offsetof(SplatSet::Splat, other) + 4 <= sizeof(SplatSet::Splat),
+                "the colour bytes are read four at a time");
+  std::uint32_t bytes;
+  std::memcpy(&bytes, c, 4);
+  return _mm_blend_ps(
+    _mm_cvtepi32_ps(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(static_cast<int>(bytes)))),
+    _mm_set1_ps(1.0f), 8);
+#else
+  return _mm_setr_ps(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]),
+                     1.0f);
+#endif
+}
+
 /// Adds one splat's touch of weight w (> 0) to a pixel. Visibility without a second pass: a
 /// touch that counts and lies in front of everything gathered by more than its margin discards
-/// it; one behind the front's limit is dropped; the rest blend.
-inline void deposit(Accumulator& a, float w, float key, float margin, const float color[3],
+/// it; one behind the front's limit is dropped; the rest blend. The limit never lies in front of
+/// the nearest key (it is the front of a touch no nearer than that key), so a discarding touch
+/// lowers the limit to its own front just as a blending one does: min(limit, key + margin) either
+/// way, and only the sums depend on the comparison (branch-free but for the drop, which is rare
+/// and well predicted).
+inline void deposit(Accumulator& a, float w, float key, float margin, Color4 color,
                     float sideWeight, std::int32_t index, std::uint8_t cls)
 {
   if (key > a.limit)
     return; // behind the front surface here
-  if (w >= kVisibleWeight)
-  {
-    if (key + margin < a.nearest)
-    {
-      a.r = a.g = a.b = a.weight = 0;
-      a.limit = key + margin;
-    }
-    else
-      a.limit = std::min(a.limit, key + margin);
-  }
-  if (key < a.nearest)
-  {
-    a.nearest = key;
-    a.best = index;
-    a.cls = cls;
-  }
+  const bool visible = w >= kVisibleWeight;
+  const float front = key + margin;
+  __m128 sum = _mm_load_ps(&a.r);
+  if (visible && front < a.nearest)
+    sum = _mm_setzero_ps();
+  a.limit = visible ? std::min(a.limit, front) : a.limit;
+  const bool nearer = key < a.nearest;
+  a.nearest = nearer ? key : a.nearest;
+  a.best = nearer ? index : a.best;
+  a.cls = nearer ? cls : a.cls;
   const float ws = w * sideWeight;
-  a.r += ws * color[0];
-  a.g += ws * color[1];
-  a.b += ws * color[2];
-  a.weight += ws;
+  _mm_store_ps(&a.r, _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(ws), color)));
 }
 
 /// The footprint map M with its singular values clamped to [1, maxMag] (a splat covers at least
@@ -394,6 +447,7 @@ namespace
 /// Fills the pixels no splat reached (class HoleFilled, source −1). Few small holes grow inwards
 /// from their rims, each pass giving a hole pixel the mean of its 8-neighbours known before the
 /// pass (deterministic, O(holes)); large ones, or what remains after 64 passes, by push-pull.
+/// ws.allHoles lists the holes in pixel order (renderFrame collects them while resolving).
 void fillHoles(InterpolatedFrame& out, InterpolationWorkspace& ws)
 {
   const int W = out.width, H = out.height;
@@ -401,9 +455,7 @@ void fillHoles(InterpolatedFrame& out, InterpolationWorkspace& ws)
   ws.holes.clear();
   if (static_cast<std::size_t>(out.holes) * 50 <= n)
   {
-    for (std::size_t p = 0; p < n; ++p)
-      if (out.source[p] == -1)
-        ws.holes.push_back(static_cast<std::int32_t>(p));
+    ws.holes = ws.allHoles;
     // A pixel filled in pass k is marked −2 − k in `source` until the end.
     for (int pass = 0; pass < 64 && !ws.holes.empty(); ++pass)
     {
@@ -439,9 +491,9 @@ void fillHoles(InterpolatedFrame& out, InterpolationWorkspace& ws)
       }
       ws.holes.swap(ws.stillHoles);
     }
-    for (std::size_t p = 0; p < n; ++p)
-      if (out.source[p] <= -2)
-        out.source[p] = -1;
+    for (const std::int32_t p : ws.allHoles)
+      if (out.source[static_cast<std::size_t>(p)] <= -2)
+        out.source[static_cast<std::size_t>(p)] = -1;
     if (ws.holes.empty())
       return;
   }
@@ -528,22 +580,56 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
   if (static_cast<int>(ws.bands.size()) < threads)
     ws.bands.resize(static_cast<std::size_t>(threads));
   const float maxMag = set.options.maxMagnification;
+  // No footprint reaches further from its centre than this (its singular values are clamped;
+  // with a hair to spare for the rounding of the clamped map).
+  const float maxExtent = 1.0001f * std::sqrt(2.0f) * maxMag;
   // Accumulators of a band: its rows plus a guard row above and below and a guard column on
   // each side, so that the four taps of a bilinear splat need no bounds checks.
   const int stride = W + 2;
   std::int64_t holes = 0;
 
+  // The bands with the most splats to draw first, so that the threads finish together (each
+  // band's pixels are what they are whichever thread draws it, and whenever).
+  std::vector<int>& order = ws.bandOrder;
+  std::vector<std::int64_t>& work = ws.bandWork;
+  order.resize(static_cast<std::size_t>(bands));
+  if (ws.bandHoles.size() < static_cast<std::size_t>(bands))
+    ws.bandHoles.resize(static_cast<std::size_t>(bands));
+  work.assign(static_cast<std::size_t>(bands), 0);
+  for (int b = 0; b < bands; ++b)
+  {
+    order[static_cast<std::size_t>(b)] = b;
+    for (int gs = 0; gs < 8; ++gs)
+      if (drawGroup[gs % 4])
+      {
+        const std::size_t list = set.listIndex(b, gs < 4 ? 0 : slice, gs % 4);
+        work[static_cast<std::size_t>(b)] += set.bandStart[list + 1] - set.bandStart[list];
+      }
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int x, int y) {
+                     return work[static_cast<std::size_t>(x)] > work[static_cast<std::size_t>(y)];
+                   });
+
+  const bool emptied = ws.bandsEmpty;
+  ws.bandsEmpty = false; // until this render has emptied them again
 #pragma omp parallel reduction(+ : holes) if (n > kParallelPixels)
   {
-    // A thread's accumulators are emptied once per frame; after that, resolving a band empties
-    // what it read (while it is in cache) and its guard cells, ready for the thread's next band.
+    // Resolving a band empties what it read (while it is in cache) and its guard cells, ready
+    // for the thread's next band, and so for the next frame: accumulators are only filled anew
+    // when they grow, or when a render did not finish.
     auto& acc = ws.bands[static_cast<std::size_t>(omp_get_thread_num())];
     const float inf = std::numeric_limits<float>::infinity();
     const Accumulator empty{ 0, 0, 0, 0, inf, inf, -1, 0, { 0, 0, 0 } };
-    acc.assign(static_cast<std::size_t>(rows + 2) * stride, empty);
+    const std::size_t cells = static_cast<std::size_t>(rows + 2) * stride;
+    if (!emptied || acc.size() < cells)
+      acc.assign(std::max(cells, acc.size()), empty);
 #pragma omp for schedule(dynamic, 1)
-    for (int b = 0; b < bands; ++b)
+    for (int k = 0; k < bands; ++k)
     {
+      const int b = order[static_cast<std::size_t>(k)];
+      std::vector<std::int32_t>& bandHoles = ws.bandHoles[static_cast<std::size_t>(b)];
+      bandHoles.clear();
       const int r0 = b * rows, r1 = std::min(H, r0 + rows);
       // Pixel (px, py) of the band is origin[py · stride + px].
       Accumulator* origin = acc.data() + stride + 1 - static_cast<std::ptrdiff_t>(r0) * stride;
@@ -554,14 +640,30 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
           continue;
         const bool sideB = g >= 2;
         const float sideWeight = groupWeight[g];
+        const float s = sideB ? 1.0f - tf : tf;
+        // One side alone shows its own frame's colours: what each frame says is there.
+        const __m128 blend = _mm_set1_ps(sides == SplatSides::Both ? s : 0.0f);
         const std::size_t list = set.listIndex(b, gs < 4 ? 0 : slice, g);
         std::size_t rowStart = std::numeric_limits<std::size_t>::max() / 2;
         int row = 0;
-        for (std::int64_t e = set.bandStart[list]; e < set.bandStart[list + 1]; ++e)
+        const std::int64_t end = set.bandStart[list + 1];
+        // s in 255ths, rounded down and up: s · 255 < lo ⇔ below < lo, s · 255 > hi ⇔ above > hi.
+        const int below = static_cast<int>(std::floor(s * 255.0f)),
+                  above = static_cast<int>(std::ceil(s * 255.0f));
+        for (std::int64_t e = set.bandStart[list]; e < end; ++e)
         {
+          // Turned away unread when it cannot reach this band at this t.
+          const auto& r = set.bandReach[static_cast<std::size_t>(e)];
+          if (below < r[0] || above > r[1])
+            continue;
           const std::int32_t index = set.bandSplats[static_cast<std::size_t>(e)];
           const SplatSet::Splat& sp = set.splats[static_cast<std::size_t>(index)];
-          const float s = sideB ? 1.0f - tf : tf;
+          // The lists skip through the splats (other groups, other bands): too irregular for the
+          // hardware prefetcher, so the splats some way ahead are asked for explicitly.
+          if (e + kPrefetchAhead < end)
+            _mm_prefetch(reinterpret_cast<const char*>(&set.splats[static_cast<std::size_t>(
+                           set.bandSplats[static_cast<std::size_t>(e + kPrefetchAhead)])]),
+                         _MM_HINT_T0);
           const std::size_t pix = static_cast<std::size_t>(index) - (sideB ? n : 0);
           if (pix < rowStart || pix >= rowStart + static_cast<std::size_t>(W))
           {
@@ -570,23 +672,25 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
           }
           const float x = static_cast<float>(pix - rowStart) + s * sp.dx;
           const float y = static_cast<float>(row) + s * sp.dy;
+          // Many listed splats lie outside this band at this t (those listed in two bands, or
+          // for a whole slice of t): they are turned away before their key and colour are made.
+          const bool bilinear =
+            sp.footprint < 0 ||
+            s * set.jacobianDeviation[static_cast<std::size_t>(sp.footprint)] <= kBilinearDeviation;
+          const float fx = std::floor(x), fy = std::floor(y);
+          if (bilinear ? !(fx >= -1.0f && fx < static_cast<float>(W) &&
+                           fy >= static_cast<float>(r0 - 1) && fy < static_cast<float>(r1))
+                       : !(y + maxExtent >= static_cast<float>(r0) &&
+                           y - maxExtent < static_cast<float>(r1)))
+            continue; // no tap inside the band (NaN positions end here too)
           const float key =
             static_cast<float>(sp.layer) * set.layerStride + sp.length + s * sp.dLength;
-          // One side alone shows its own frame's colours: what each frame says is there.
-          const float blend = sides == SplatSides::Both ? s : 0.0f;
-          float color[3];
-          for (int c = 0; c < 3; ++c)
-            color[c] = static_cast<float>(sp.color[c]) +
-                       blend * (static_cast<float>(sp.other[c]) - static_cast<float>(sp.color[c]));
+          // Colour (r, g, b, 1) at t: own + blend · (other − own).
+          const __m128 own = colorOf(sp.color), other = colorOf(sp.other);
+          const Color4 color = _mm_add_ps(own, _mm_mul_ps(blend, _mm_sub_ps(other, own)));
 
-          if (sp.footprint < 0 ||
-              s * set.jacobianDeviation[static_cast<std::size_t>(sp.footprint)] <=
-                kBilinearDeviation)
+          if (bilinear)
           {
-            const float fx = std::floor(x), fy = std::floor(y);
-            if (!(fx >= -1.0f && fx < static_cast<float>(W) && fy >= static_cast<float>(r0 - 1) &&
-                  fy < static_cast<float>(r1)))
-              continue; // no tap inside the band (NaN positions end here too)
             const float ax = x - fx, ay = y - fy;
             Accumulator* a =
               origin + static_cast<std::ptrdiff_t>(fy) * stride + static_cast<std::ptrdiff_t>(fx);
@@ -644,27 +748,38 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
           if (!(a.weight > 0.0f))
           {
             ++holes;
+            bandHoles.push_back(static_cast<std::int32_t>(p));
             out.pixelClass[p] = PixelClass::HoleFilled;
             out.source[p] = -1;
             out.rgb[3 * p] = out.rgb[3 * p + 1] = out.rgb[3 * p + 2] = 0;
             continue;
           }
-          const float inverse = 1.0f / a.weight;
-          out.rgb[3 * p] =
-            static_cast<std::uint8_t>(std::clamp(a.r * inverse, 0.0f, 255.0f) + 0.5f);
-          out.rgb[3 * p + 1] =
-            static_cast<std::uint8_t>(std::clamp(a.g * inverse, 0.0f, 255.0f) + 0.5f);
-          out.rgb[3 * p + 2] =
-            static_cast<std::uint8_t>(std::clamp(a.b * inverse, 0.0f, 255.0f) + 0.5f);
+          // round(clamp(sum / weight, 0, 255)) per channel, four lanes at once.
+          const __m128 mean = _mm_mul_ps(_mm_load_ps(&a.r), _mm_set1_ps(1.0f / a.weight));
+          const __m128i rounded = _mm_cvttps_epi32(
+            _mm_add_ps(_mm_min_ps(_mm_max_ps(mean, _mm_setzero_ps()), _mm_set1_ps(255.0f)),
+                       _mm_set1_ps(0.5f)));
+          alignas(16) std::int32_t channels[4];
+          _mm_store_si128(reinterpret_cast<__m128i*>(channels), rounded);
+          out.rgb[3 * p] = static_cast<std::uint8_t>(channels[0]);
+          out.rgb[3 * p + 1] = static_cast<std::uint8_t>(channels[1]);
+          out.rgb[3 * p + 2] = static_cast<std::uint8_t>(channels[2]);
           out.source[p] = a.best;
           out.pixelClass[p] = static_cast<PixelClass>(a.cls & ~SplatSet::kMutual);
         }
       }
     }
   }
+  ws.bandsEmpty = true;
   out.holes = holes;
   if (holes > 0)
+  {
+    ws.allHoles.clear();
+    for (int b = 0; b < bands; ++b)
+      ws.allHoles.insert(ws.allHoles.end(), ws.bandHoles[static_cast<std::size_t>(b)].begin(),
+                         ws.bandHoles[static_cast<std::size_t>(b)].end());
     fillHoles(out, ws);
+  }
 }
 
 void renderDisagreement(const SplatSet& set, double t, std::vector<std::uint8_t>& out,
@@ -701,8 +816,36 @@ SourceFields sourceFields(const SplatSet& set, std::int32_t splat, double t)
   f.objectId = set.objectId[k];
   f.imageOrder = set.imageOrder[k];
   f.termination = set.termination[k];
-  f.pathLength = set.pathLength[k] + s * static_cast<double>(set.splats[k].dLength);
+  f.pathLength = set.pathLength[k] + s * static_cast<double>(set.lengthChange[k]);
   return f;
+}
+
+void sourceFieldsOf(const SplatSet& set, const InterpolatedFrame& frame, std::int32_t* objectId,
+                    std::int32_t* imageOrder, std::int32_t* termination, double* pathLength)
+{
+  const std::int64_t n = static_cast<std::int64_t>(frame.width) * frame.height;
+  const double t = frame.t;
+#pragma omp parallel for schedule(static) if (static_cast <std::size_t>(n) > kParallelPixels)
+  for (std::int64_t p = 0; p < n; ++p)
+  {
+    // sourceFields, inline.
+    const std::int32_t splat = frame.source[static_cast<std::size_t>(p)];
+    if (splat < 0 || static_cast<std::size_t>(splat) >= set.splats.size())
+    {
+      const SourceFields none;
+      objectId[p] = none.objectId;
+      imageOrder[p] = none.imageOrder;
+      termination[p] = none.termination;
+      pathLength[p] = none.pathLength;
+      continue;
+    }
+    const std::size_t k = static_cast<std::size_t>(splat);
+    const double s = k >= set.pixelCount() ? 1.0 - t : t;
+    objectId[p] = set.objectId[k];
+    imageOrder[p] = set.imageOrder[k];
+    termination[p] = set.termination[k];
+    pathLength[p] = set.pathLength[k] + s * static_cast<double>(set.lengthChange[k]);
+  }
 }
 
 bool pushPullFill(int width, int height, int channels, float* values, const float* weights,

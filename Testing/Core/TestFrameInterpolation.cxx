@@ -241,6 +241,63 @@ TEST(FrameInterpolation, DisagreementFlagsInconsistentFrames)
     EXPECT_GE(d[static_cast<std::size_t>(8) * w + i], 100) << i;
 }
 
+TEST(FrameInterpolation, BandsDoNotChangeTheFrame)
+{
+  // The renderer cuts the frame into bands of rows, lists each splat in the bands it can reach
+  // (per slice of t when it travels far) and skips those that cannot reach a band at t. None of
+  // that may change a pixel: splats travelling across many narrow bands, bilinear and with
+  // footprints, against the same frame drawn as one band.
+  const int w = 40, h = 160;
+  const double dx = 0.3, dy = 70.6;
+  // High-contrast noise, so that a touch left out shows (a smooth ramp would hide it in the
+  // neighbours' mean).
+  auto noise = [](int i, int j, int salt)
+  {
+    const unsigned x = static_cast<unsigned>(i) * 73856093u ^ static_cast<unsigned>(j) * 19349663u ^
+                       static_cast<unsigned>(salt) * 83492791u;
+    return static_cast<double>((x * 2654435761u) >> 24) / 255.0;
+  };
+  const FrameSamples a = flatFrame(
+    w, h, [&](int i, int j) { return Color(noise(i, j, 1), noise(i, j, 2), noise(i, j, 3)); });
+  const FrameSamples b = flatFrame(
+    w, h, [&](int i, int j) { return Color(noise(i, j, 4), noise(i, j, 5), noise(i, j, 6)); });
+  const Correspondence moved =
+    correspondence(w, h, uniformMatch(w, h, [&](int i, int j) { return Vec3(i + dx, j + dy, 0); }),
+                   uniformMatch(w, h, [&](int i, int j) { return Vec3(i - dx, j - dy, 0); }));
+  // A magnified 3× about a point low in the frame: A's splats spread over several rows and
+  // travel up to ~190 rows; B's never reach the frame.
+  std::vector<PixelMatch> ab = uniformMatch(
+    w, h, [&](int i, int j) { return Vec3(20 + 3.0 * (i - 20), 30 + 3.0 * (j - 30), 0); }, 3.0);
+  std::vector<PixelMatch> away(static_cast<std::size_t>(w) * h);
+  for (PixelMatch& m : away)
+    m.x = m.y = -1000;
+  const Correspondence magnified = correspondence(w, h, ab, away);
+  InterpolationOptions narrow, whole;
+  narrow.bandRows = 8;
+  whole.bandRows = h;
+  InterpolationWorkspace ws;
+  InterpolatedFrame banded, single;
+  for (const Correspondence* c : { &moved, &magnified })
+  {
+    const SplatSet setNarrow = buildSplats(a, b, *c, narrow),
+                   setWhole = buildSplats(a, b, *c, whole);
+    for (const SplatSides sides : { SplatSides::Both, SplatSides::AOnly, SplatSides::BOnly })
+      for (const double t : { 0.13, 0.5, 0.77 })
+      {
+        renderFrame(setNarrow, t, banded, ws, sides);
+        renderFrame(setWhole, t, single, ws, sides);
+        ASSERT_EQ(banded.holes, single.holes) << "t " << t;
+        for (std::size_t p = 0; p < banded.pixelClass.size(); ++p)
+        {
+          ASSERT_EQ(banded.pixelClass[p], single.pixelClass[p]) << "t " << t << " pixel " << p;
+          for (int k = 0; k < 3; ++k)
+            ASSERT_NEAR(banded.rgb[3 * p + k], single.rgb[3 * p + k], 1)
+              << "t " << t << " pixel " << p;
+        }
+      }
+  }
+}
+
 TEST(FrameInterpolation, PushPullKeepsKnownPixelsAndFillsFromThem)
 {
   const int w = 37, h = 23;
