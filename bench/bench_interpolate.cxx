@@ -382,6 +382,16 @@ Movie movie(int frames, int keys, RayStore& store, const std::string& label)
       samplesFromRecords(store.readFrame(ids[q]), n, n, 30, "key frame " + std::to_string(q)));
   mv.readEnds = now() - t0;
   const int inBetween = frames - keys;
+  // Frame k against the traced one, into the mean PSNR, the worst PSNR and the mean SSIM.
+  auto scoreFrame = [&](int k, const std::vector<std::uint8_t>& rgb, double& meanPsnr,
+                        double& minPsnr, double& meanSsim)
+  {
+    const RgbView truth{ n, n, direct[static_cast<std::size_t>(k)].data() };
+    const double p = psnr(truth, { n, n, rgb.data() });
+    meanPsnr += p / inBetween;
+    minPsnr = std::min(minPsnr, p);
+    meanSsim += ssim(truth, { n, n, rgb.data() }) / inBetween;
+  };
   for (int q = 0; q + 1 < keys; ++q)
   {
     const int ka = keyFrames[static_cast<std::size_t>(q)],
@@ -400,13 +410,7 @@ Movie movie(int frames, int keys, RayStore& store, const std::string& label)
       t0 = now();
       renderFrame(set, static_cast<double>(k - ka) / (kb - ka), f, ws);
       mv.interpolate += now() - t0;
-      const double p =
-        psnr({ n, n, direct[static_cast<std::size_t>(k)].data() }, { n, n, f.rgb.data() });
-      mv.meanPsnr += p / inBetween;
-      mv.minPsnr = std::min(mv.minPsnr, p);
-      mv.meanSsim +=
-        ssim({ n, n, direct[static_cast<std::size_t>(k)].data() }, { n, n, f.rgb.data() }) /
-        inBetween;
+      scoreFrame(k, f.rgb, mv.meanPsnr, mv.minPsnr, mv.meanSsim);
     }
     // Exact mode through the filter (it re-traces with vtkGeodesicSource).
     Interpolator in(hitsOf(kScene, n, n, massOf(ka)), hitsOf(kScene, n, n, massOf(kb)));
@@ -419,13 +423,7 @@ Movie movie(int frames, int keys, RayStore& store, const std::string& label)
       const FilterRun r = filterFrame(interp, static_cast<double>(k - ka) / (kb - ka));
       mv.exactInterpolate += r.seconds;
       mv.exactRetraced += r.retraced / inBetween;
-      const double p =
-        psnr({ n, n, direct[static_cast<std::size_t>(k)].data() }, { n, n, r.rgb.data() });
-      mv.exactMeanPsnr += p / inBetween;
-      mv.exactMinPsnr = std::min(mv.exactMinPsnr, p);
-      mv.exactMeanSsim +=
-        ssim({ n, n, direct[static_cast<std::size_t>(k)].data() }, { n, n, r.rgb.data() }) /
-        inBetween;
+      scoreFrame(k, r.rgb, mv.exactMeanPsnr, mv.exactMinPsnr, mv.exactMeanSsim);
     }
   }
   return mv;
