@@ -613,6 +613,18 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
 
   const bool emptied = ws.bandsEmpty;
   ws.bandsEmpty = false; // until this render has emptied them again
+  // The arrays as plain pointers and the splat's fields as locals: the deposits store bytes,
+  // which may alias anything, and would otherwise have every one of them loaded again after
+  // each touch.
+  const SplatSet::Splat* const splats = set.splats.data();
+  const std::int32_t* const bandSplats = set.bandSplats.data();
+  const std::array<std::uint8_t, 2>* const bandReach = set.bandReach.data();
+  const std::int64_t* const bandStart = set.bandStart.data();
+  const float* const jacobianDeviation = set.jacobianDeviation.data();
+  const float layerStride = set.layerStride;
+  std::uint8_t* const rgbOut = out.rgb.data();
+  PixelClass* const classOut = out.pixelClass.data();
+  std::int32_t* const sourceOut = out.source.data();
 #pragma omp parallel reduction(+ : holes) if (n > kParallelPixels)
   {
     // Resolving a band empties what it read (while it is in cache) and its guard cells, ready
@@ -646,23 +658,22 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
         const std::size_t list = set.listIndex(b, gs < 4 ? 0 : slice, g);
         std::size_t rowStart = std::numeric_limits<std::size_t>::max() / 2;
         int row = 0;
-        const std::int64_t end = set.bandStart[list + 1];
+        const std::int64_t end = bandStart[list + 1];
         // s in 255ths, rounded down and up: s · 255 < lo ⇔ below < lo, s · 255 > hi ⇔ above > hi.
         const int below = static_cast<int>(std::floor(s * 255.0f)),
                   above = static_cast<int>(std::ceil(s * 255.0f));
-        for (std::int64_t e = set.bandStart[list]; e < end; ++e)
+        for (std::int64_t e = bandStart[list]; e < end; ++e)
         {
           // Turned away unread when it cannot reach this band at this t.
-          const auto& r = set.bandReach[static_cast<std::size_t>(e)];
+          const auto& r = bandReach[e];
           if (below < r[0] || above > r[1])
             continue;
-          const std::int32_t index = set.bandSplats[static_cast<std::size_t>(e)];
-          const SplatSet::Splat& sp = set.splats[static_cast<std::size_t>(index)];
+          const std::int32_t index = bandSplats[e];
+          const SplatSet::Splat& sp = splats[index];
           // The lists skip through the splats (other groups, other bands): too irregular for the
           // hardware prefetcher, so the splats some way ahead are asked for explicitly.
           if (e + kPrefetchAhead < end)
-            _mm_prefetch(reinterpret_cast<const char*>(&set.splats[static_cast<std::size_t>(
-                           set.bandSplats[static_cast<std::size_t>(e + kPrefetchAhead)])]),
+            _mm_prefetch(reinterpret_cast<const char*>(&splats[bandSplats[e + kPrefetchAhead]]),
                          _MM_HINT_T0);
           const std::size_t pix = static_cast<std::size_t>(index) - (sideB ? n : 0);
           if (pix < rowStart || pix >= rowStart + static_cast<std::size_t>(W))
@@ -675,16 +686,16 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
           // Many listed splats lie outside this band at this t (those listed in two bands, or
           // for a whole slice of t): they are turned away before their key and colour are made.
           const bool bilinear =
-            sp.footprint < 0 ||
-            s * set.jacobianDeviation[static_cast<std::size_t>(sp.footprint)] <= kBilinearDeviation;
+            sp.footprint < 0 || s * jacobianDeviation[sp.footprint] <= kBilinearDeviation;
           const float fx = std::floor(x), fy = std::floor(y);
           if (bilinear ? !(fx >= -1.0f && fx < static_cast<float>(W) &&
                            fy >= static_cast<float>(r0 - 1) && fy < static_cast<float>(r1))
                        : !(y + maxExtent >= static_cast<float>(r0) &&
                            y - maxExtent < static_cast<float>(r1)))
             continue; // no tap inside the band (NaN positions end here too)
-          const float key =
-            static_cast<float>(sp.layer) * set.layerStride + sp.length + s * sp.dLength;
+          const float key = static_cast<float>(sp.layer) * layerStride + sp.length + s * sp.dLength;
+          const float margin = sp.margin;
+          const std::uint8_t cls = sp.cls;
           // Colour (r, g, b, 1) at t: own + blend · (other − own).
           const __m128 own = colorOf(sp.color), other = colorOf(sp.other);
           const Color4 color = _mm_add_ps(own, _mm_mul_ps(blend, _mm_sub_ps(other, own)));
@@ -696,14 +707,23 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
               origin + static_cast<std::ptrdiff_t>(fy) * stride + static_cast<std::ptrdiff_t>(fx);
             const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay,
                         w11 = ax * ay;
+            // Usually all four taps touch: one test for them (the same deposits, in order).
+            if ((w00 > 0) & (w10 > 0) & (w01 > 0) & (w11 > 0))
+            {
+              deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
+              deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
+              deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
+              deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
+              continue;
+            }
             if (w00 > 0)
-              deposit(a[0], w00, key, sp.margin, color, sideWeight, index, sp.cls);
+              deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
             if (w10 > 0)
-              deposit(a[1], w10, key, sp.margin, color, sideWeight, index, sp.cls);
+              deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
             if (w01 > 0)
-              deposit(a[stride], w01, key, sp.margin, color, sideWeight, index, sp.cls);
+              deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
             if (w11 > 0)
-              deposit(a[stride + 1], w11, key, sp.margin, color, sideWeight, index, sp.cls);
+              deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
             continue;
           }
           const auto& d = set.jacobians[static_cast<std::size_t>(sp.footprint)];
@@ -726,7 +746,7 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
               const float w =
                 std::max(0.0f, 1.0f - std::abs(u)) * std::max(0.0f, 1.0f - std::abs(v));
               if (w > 0.0f)
-                deposit(line[px], w, key, sp.margin, color, sideWeight, index, sp.cls);
+                deposit(line[px], w, key, margin, color, sideWeight, index, cls);
             }
           }
         }
@@ -749,9 +769,9 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
           {
             ++holes;
             bandHoles.push_back(static_cast<std::int32_t>(p));
-            out.pixelClass[p] = PixelClass::HoleFilled;
-            out.source[p] = -1;
-            out.rgb[3 * p] = out.rgb[3 * p + 1] = out.rgb[3 * p + 2] = 0;
+            classOut[p] = PixelClass::HoleFilled;
+            sourceOut[p] = -1;
+            rgbOut[3 * p] = rgbOut[3 * p + 1] = rgbOut[3 * p + 2] = 0;
             continue;
           }
           // round(clamp(sum / weight, 0, 255)) per channel, four lanes at once.
@@ -761,11 +781,11 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
                        _mm_set1_ps(0.5f)));
           alignas(16) std::int32_t channels[4];
           _mm_store_si128(reinterpret_cast<__m128i*>(channels), rounded);
-          out.rgb[3 * p] = static_cast<std::uint8_t>(channels[0]);
-          out.rgb[3 * p + 1] = static_cast<std::uint8_t>(channels[1]);
-          out.rgb[3 * p + 2] = static_cast<std::uint8_t>(channels[2]);
-          out.source[p] = a.best;
-          out.pixelClass[p] = static_cast<PixelClass>(a.cls & ~SplatSet::kMutual);
+          rgbOut[3 * p] = static_cast<std::uint8_t>(channels[0]);
+          rgbOut[3 * p + 1] = static_cast<std::uint8_t>(channels[1]);
+          rgbOut[3 * p + 2] = static_cast<std::uint8_t>(channels[2]);
+          sourceOut[p] = a.best;
+          classOut[p] = static_cast<PixelClass>(a.cls & ~SplatSet::kMutual);
         }
       }
     }

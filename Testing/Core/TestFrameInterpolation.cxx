@@ -7,6 +7,7 @@
 #include "SceneFile.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <limits>
@@ -296,6 +297,75 @@ TEST(FrameInterpolation, BandsDoNotChangeTheFrame)
         }
       }
   }
+}
+
+TEST(FrameInterpolation, ThreadCountDoesNotChangeTheFrame)
+{
+  // Bands are handed to threads dynamically and each thread keeps its own accumulators between
+  // bands and frames: none of that may show in a pixel. Large enough to be drawn in parallel,
+  // with depths that blend and hide, footprints, holes, and frames drawn one after another (so
+  // that accumulators left over from one render meet the next).
+  const int w = 200, h = 120;
+  auto noise = [](int i, int j, int salt)
+  {
+    const unsigned x = static_cast<unsigned>(i) * 73856093u ^ static_cast<unsigned>(j) * 19349663u ^
+                       static_cast<unsigned>(salt) * 83492791u;
+    return static_cast<double>((x * 2654435761u) >> 24) / 255.0;
+  };
+  auto color = [&](int salt)
+  {
+    return [&, salt](int i, int j)
+    { return Color(noise(i, j, salt), noise(i, j, salt + 1), noise(i, j, salt + 2)); };
+  };
+  auto length = [&](int salt)
+  { return [&, salt](int i, int j) { return 10.0 + noise(i, j, salt); }; };
+  const FrameSamples a = flatFrame(w, h, color(1), nullptr, length(7));
+  const FrameSamples b = flatFrame(w, h, color(4), nullptr, length(8));
+  // Rows that travel 1.5 px per row towards the bottom, and a 5× magnification (beyond
+  // maxMagnification: holes) of the top.
+  const Correspondence sheared = correspondence(
+    w, h, uniformMatch(w, h, [&](int i, int j) { return Vec3(i + 0.37, j + 1.5 * j - 40.2, 0); }),
+    uniformMatch(w, h, [&](int i, int j) { return Vec3(i - 0.37, (j + 40.2) / 2.5, 0); }));
+  const Correspondence magnified = correspondence(
+    w, h,
+    uniformMatch(
+      w, h, [&](int i, int j) { return Vec3(100 + 5.0 * (i - 100), 90 + 5.0 * (j - 90), 0); }, 5.0),
+    uniformMatch(
+      w, h, [&](int i, int j) { return Vec3(100 + 0.2 * (i - 100), 90 + 0.2 * (j - 90), 0); },
+      0.2));
+  const int saved = omp_get_max_threads();
+  std::int64_t holes = 0;
+  for (const Correspondence* c : { &sheared, &magnified })
+  {
+    const SplatSet set = buildSplats(a, b, *c);
+    for (const SplatSides sides : { SplatSides::Both, SplatSides::AOnly })
+    {
+      InterpolationWorkspace ws;
+      std::vector<InterpolatedFrame> one;
+      omp_set_num_threads(1);
+      for (const double t : { 0.13, 0.5, 0.77 })
+      {
+        one.emplace_back();
+        renderFrame(set, t, one.back(), ws, sides);
+        holes += one.back().holes;
+      }
+      for (const int threads : { 2, 3 })
+      {
+        omp_set_num_threads(threads);
+        InterpolatedFrame f;
+        for (std::size_t k = 0; k < one.size(); ++k)
+        {
+          renderFrame(set, one[k].t, f, ws, sides);
+          EXPECT_EQ(f.holes, one[k].holes) << threads << " threads, t " << one[k].t;
+          EXPECT_TRUE(f.rgb == one[k].rgb) << threads << " threads, t " << one[k].t;
+          EXPECT_TRUE(f.pixelClass == one[k].pixelClass) << threads << " threads, t " << one[k].t;
+          EXPECT_TRUE(f.source == one[k].source) << threads << " threads, t " << one[k].t;
+        }
+      }
+    }
+  }
+  omp_set_num_threads(saved);
+  EXPECT_GT(holes, 0); // the hole filling was exercised too
 }
 
 TEST(FrameInterpolation, PushPullKeepsKnownPixelsAndFillsFromThem)
