@@ -42,6 +42,7 @@ namespace
 {
 const std::string kScene = "Data/scenes/fig4-mass-start.json"; // the paper's Figs. 4–5
 const std::string kOrbitScene = "Data/scenes/fig1-cylinders.json";
+constexpr int kSpeedRepetitions = 3; ///< the speed figures are the fastest of this many runs
 
 double now()
 {
@@ -235,27 +236,39 @@ Speed speed(int w, int h, double massA, double massB, int frames, bool throughFi
   InterpolatedFrame f;
   renderFrame(set, 0.5, f, ws); // warm the workspace
   s.matchedFraction = f.fractions()[0];
-  t0 = now();
-  for (int k = 1; k <= frames; ++k)
-    renderFrame(set, static_cast<double>(k) / (frames + 1), f, ws);
-  s.renderWall = (now() - t0) / frames;
+  // Each sequence of frames is rendered kSpeedRepetitions times; the fastest counts (the
+  // machine is shared).
+  auto sequence = [&]
+  {
+    double best = 1e300;
+    for (int rep = 0; rep < kSpeedRepetitions; ++rep)
+    {
+      const double start = now();
+      for (int k = 1; k <= frames; ++k)
+        renderFrame(set, static_cast<double>(k) / (frames + 1), f, ws);
+      best = std::min(best, (now() - start) / frames);
+    }
+    return best;
+  };
+  s.renderWall = sequence();
   // The same on one thread: the work itself, free of waiting at barriers.
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
-  t0 = now();
-  for (int k = 1; k <= frames; ++k)
-    renderFrame(set, static_cast<double>(k) / (frames + 1), f, ws);
-  s.renderOneThread = (now() - t0) / frames;
+  s.renderOneThread = sequence();
   omp_set_num_threads(threads);
   if (throughFilter)
   {
     Interpolator in(hitsOf(kScene, w, h, massA), hitsOf(kScene, w, h, massB));
     vtkGeodesicFrameInterpolator* interp = in.filter;
     interp->UpdateTimeStep(0.5); // builds the correspondence
-    double total = 0;
-    for (int k = 1; k <= frames; ++k)
-      total += filterFrame(interp, static_cast<double>(k) / (frames + 1)).seconds;
-    s.filterWall = total / frames;
+    s.filterWall = 1e300;
+    for (int rep = 0; rep < kSpeedRepetitions; ++rep)
+    {
+      double total = 0;
+      for (int k = 1; k <= frames; ++k)
+        total += filterFrame(interp, static_cast<double>(k) / (frames + 1)).seconds;
+      s.filterWall = std::min(s.filterWall, total / frames);
+    }
   }
   return s;
 }
@@ -508,10 +521,11 @@ int main(int argc, char* argv[])
       "b_c = 3√3 M: the shadow's edge and the rings of higher image orders.\n\n",
       omp_get_max_threads(), load[0]);
 
-    std::printf("### Speed\n\nKey frames M = 0.1 and 0.3 of `%s`; frames at t = k/(N+1). *Core* "
-                "is `renderFrame` alone, on %d threads and on one; *filter* is `UpdateTimeStep` "
-                "through the VTK filter, output arrays included.\n\n",
-                kScene.c_str(), omp_get_max_threads());
+    std::printf("### Speed\n\nKey frames M = 0.1 and 0.3 of `%s`; frames at t = k/(N+1) (N = "
+                "120 at 200×200, 30 at 1920×1080), each sequence rendered %d times, the fastest "
+                "counting. *Core* is `renderFrame` alone, on %d threads and on one; *filter* is "
+                "`UpdateTimeStep` through the VTK filter, output arrays included.\n\n",
+                kScene.c_str(), kSpeedRepetitions, omp_get_max_threads());
     std::printf("| resolution | trace A, B | correspondence | splats (list entries) | core "
                 "frame | core frames/s | one thread: frame, frames/s | filter frames/s |\n"
                 "|---|---|---|---|---|---|---|---|\n");
@@ -526,11 +540,14 @@ int main(int argc, char* argv[])
     {
       const Speed& s = speeds.back();
       std::printf("\nTarget: ≥ 30 frames/s at 1920×1080 on 2 cores. Measured %.1f frames/s "
-                  "(%.1f on one thread, so %.1f× from the second). **Not met**: a frame draws "
-                  "%.2f M splats (a mutual pair once, every other pixel from both frames) at "
-                  "≈ %.0f ns each on one thread, clearing and resolving 2 M pixels included.\n",
+                  "(%.1f on one thread, so %.1f× from the second): **%s**. A frame draws %.2f M "
+                  "splats (a mutual pair once, every other pixel from both frames) at ≈ %.0f ns "
+                  "each on one thread, clearing and resolving 2 M pixels included; through the "
+                  "filter, which also fills the per-pixel arrays of the ray in front, %.1f "
+                  "frames/s.\n",
                   1.0 / s.renderWall, 1.0 / s.renderOneThread, s.renderOneThread / s.renderWall,
-                  s.drawn / 1e6, 1e9 * s.renderOneThread / static_cast<double>(s.drawn));
+                  1.0 / s.renderWall >= 30 ? "met" : "not met", s.drawn / 1e6,
+                  1e9 * s.renderOneThread / static_cast<double>(s.drawn), 1.0 / s.filterWall);
     }
 
     std::printf("\n### Quality against cost (200×200, the middle frame t = ½)\n\n");
