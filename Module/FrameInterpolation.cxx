@@ -164,7 +164,6 @@ void buildSide(const FrameSamples& self, const FrameSamples& other,
     out.imageOrder[offset + p] = s.imageOrder;
     out.termination[offset + p] = static_cast<std::uint8_t>(s.termination);
     out.pathLength[offset + p] = s.pathLength;
-    out.lengthChange[offset + p] = sp.dLength;
   }
 }
 
@@ -190,7 +189,6 @@ SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Corresp
   set.imageOrder.resize(2 * n);
   set.termination.resize(2 * n);
   set.pathLength.resize(2 * n);
-  set.lengthChange.resize(2 * n);
   buildSide(a, b, c.aToB, 0, options, set);
   buildSide(b, a, c.bToA, n, options, set);
   // Pairs that match each other.
@@ -836,7 +834,7 @@ SourceFields sourceFields(const SplatSet& set, std::int32_t splat, double t)
   f.objectId = set.objectId[k];
   f.imageOrder = set.imageOrder[k];
   f.termination = set.termination[k];
-  f.pathLength = set.pathLength[k] + s * static_cast<double>(set.lengthChange[k]);
+  f.pathLength = set.pathLength[k] + s * static_cast<double>(set.splats[k].dLength);
   return f;
 }
 
@@ -848,23 +846,11 @@ void sourceFieldsOf(const SplatSet& set, const InterpolatedFrame& frame, std::in
 #pragma omp parallel for schedule(static) if (static_cast <std::size_t>(n) > kParallelPixels)
   for (std::int64_t p = 0; p < n; ++p)
   {
-    // sourceFields, inline.
-    const std::int32_t splat = frame.source[static_cast<std::size_t>(p)];
-    if (splat < 0 || static_cast<std::size_t>(splat) >= set.splats.size())
-    {
-      const SourceFields none;
-      objectId[p] = none.objectId;
-      imageOrder[p] = none.imageOrder;
-      termination[p] = none.termination;
-      pathLength[p] = none.pathLength;
-      continue;
-    }
-    const std::size_t k = static_cast<std::size_t>(splat);
-    const double s = k >= set.pixelCount() ? 1.0 - t : t;
-    objectId[p] = set.objectId[k];
-    imageOrder[p] = set.imageOrder[k];
-    termination[p] = set.termination[k];
-    pathLength[p] = set.pathLength[k] + s * static_cast<double>(set.lengthChange[k]);
+    const SourceFields f = sourceFields(set, frame.source[static_cast<std::size_t>(p)], t);
+    objectId[p] = f.objectId;
+    imageOrder[p] = f.imageOrder;
+    termination[p] = f.termination;
+    pathLength[p] = f.pathLength;
   }
 }
 

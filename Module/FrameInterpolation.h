@@ -108,9 +108,6 @@ struct SplatSet
   std::vector<std::int32_t> objectId, imageOrder;
   std::vector<std::uint8_t> termination;
   std::vector<double> pathLength; ///< in this frame, exactly
-  /// Splat::dLength again, so that the per-pixel fields of a frame are read from compact arrays
-  /// only (not from the 32-byte splats).
-  std::vector<float> lengthChange;
   std::size_t pixelCount() const { return static_cast<std::size_t>(width) * height; }
 };
 

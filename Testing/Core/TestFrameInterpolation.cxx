@@ -242,6 +242,18 @@ TEST(FrameInterpolation, DisagreementFlagsInconsistentFrames)
     EXPECT_GE(d[static_cast<std::size_t>(8) * w + i], 100) << i;
 }
 
+namespace
+{
+/// High-contrast noise in [0, 1] per pixel and salt (a touch left out or added then shows; a
+/// smooth ramp would hide it in the neighbours' mean).
+double noise(int i, int j, int salt)
+{
+  const unsigned x = static_cast<unsigned>(i) * 73856093u ^ static_cast<unsigned>(j) * 19349663u ^
+                     static_cast<unsigned>(salt) * 83492791u;
+  return static_cast<double>((x * 2654435761u) >> 24) / 255.0;
+}
+}
+
 TEST(FrameInterpolation, BandsDoNotChangeTheFrame)
 {
   // The renderer cuts the frame into bands of rows, lists each splat in the bands it can reach
@@ -250,14 +262,6 @@ TEST(FrameInterpolation, BandsDoNotChangeTheFrame)
   // footprints, against the same frame drawn as one band.
   const int w = 40, h = 160;
   const double dx = 0.3, dy = 70.6;
-  // High-contrast noise, so that a touch left out shows (a smooth ramp would hide it in the
-  // neighbours' mean).
-  auto noise = [](int i, int j, int salt)
-  {
-    const unsigned x = static_cast<unsigned>(i) * 73856093u ^ static_cast<unsigned>(j) * 19349663u ^
-                       static_cast<unsigned>(salt) * 83492791u;
-    return static_cast<double>((x * 2654435761u) >> 24) / 255.0;
-  };
   const FrameSamples a = flatFrame(
     w, h, [&](int i, int j) { return Color(noise(i, j, 1), noise(i, j, 2), noise(i, j, 3)); });
   const FrameSamples b = flatFrame(
@@ -306,12 +310,6 @@ TEST(FrameInterpolation, ThreadCountDoesNotChangeTheFrame)
   // with depths that blend and hide, footprints, holes, and frames drawn one after another (so
   // that accumulators left over from one render meet the next).
   const int w = 200, h = 120;
-  auto noise = [](int i, int j, int salt)
-  {
-    const unsigned x = static_cast<unsigned>(i) * 73856093u ^ static_cast<unsigned>(j) * 19349663u ^
-                       static_cast<unsigned>(salt) * 83492791u;
-    return static_cast<double>((x * 2654435761u) >> 24) / 255.0;
-  };
   auto color = [&](int salt)
   {
     return [&, salt](int i, int j)
