@@ -2,6 +2,8 @@
 
 #include <libpq-fe.h>
 #include <nlohmann/json.hpp>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -1093,6 +1095,46 @@ void decodePoints(const char* p, std::size_t count, std::vector<PathPoint>& poin
 }
 }
 
+std::vector<RayRecord> allocateRecords(std::size_t count, int threads)
+{
+  std::vector<RayRecord> records;
+  records.reserve(count);
+#ifdef MADV_POPULATE_WRITE
+  // Only whole pages inside the reserved block; the kernel may refuse (older kernels: EINVAL),
+  // and then construction faults the pages in as usual.
+  const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
+  const std::uintptr_t begin = (std::uintptr_t(records.data()) + page - 1) / page * page;
+  const std::uintptr_t end = (std::uintptr_t(records.data() + count)) / page * page;
+  constexpr std::uintptr_t minSlice = std::uintptr_t(16) << 20;
+  if (end > begin)
+  {
+    const std::uintptr_t pages = (end - begin) / page;
+    const std::uintptr_t slices = std::max<std::uintptr_t>(
+      1, std::min<std::uintptr_t>(std::uintptr_t(std::max(threads, 1)), (end - begin) / minSlice));
+    auto populate = [&](std::uintptr_t k)
+    {
+      const std::uintptr_t a = begin + pages * k / slices * page;
+      const std::uintptr_t b = begin + pages * (k + 1) / slices * page;
+      madvise(reinterpret_cast<void*>(a), b - a, MADV_POPULATE_WRITE);
+    };
+    std::vector<std::thread> others;
+    for (std::uintptr_t k = 1; k < slices; ++k)
+    {
+      others.emplace_back(populate, k);
+    }
+    populate(0);
+    for (std::thread& t : others)
+    {
+      t.join();
+    }
+  }
+#else
+  (void)threads;
+#endif
+  records.resize(count);
+  return records;
+}
+
 namespace
 {
 /// A connection set up as every connection of the store is (UTF8, notices silenced), or null
@@ -2179,7 +2221,6 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
           throw StoreError(frame + " is inconsistent: it says " + std::to_string(rayCount) +
                            " rays, its tiles " + std::to_string(base));
         }
-        records.resize(std::size_t(rayCount));
         // Tiles of a large frame are read over several connections at once, from one snapshot
         // (exported by this transaction), each decoded on a thread of its own; the tiles are
         // shared out by their rays.
@@ -2189,6 +2230,8 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
           helpers = this->P->helpers(
             int(std::min<std::size_t>(std::size_t(this->P->WriteConnections), tiles.size())) - 1);
         }
+        records = allocateRecords(std::size_t(rayCount),
+                                  int(std::max(1u, std::thread::hardware_concurrency())));
         std::vector<std::string> groups(helpers.size() + 1);
         {
           std::vector<std::int64_t> load(groups.size(), 0);

@@ -155,6 +155,27 @@ void expectSame(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b
 
 }
 
+// readFrame's result comes from allocateRecords: its pages are faulted in by several threads
+// (in slices of at least 16 MB) before the records are constructed; whatever the slicing, every
+// record must be a default one and the vector exactly as long as asked.
+TEST(RayStoreMemory, AllocatedRecordsAreDefaultRecords)
+{
+  const RayRecord fresh;
+  // 0 and 1 records; one slice; several slices with a remainder (about 74 MB of records).
+  for (const std::size_t count :
+       { std::size_t(0), std::size_t(1), std::size_t(4099), std::size_t(271829) })
+  {
+    for (const int threads : { 0, 1, 3 })
+    {
+      const std::vector<RayRecord> records = asrt::allocateRecords(count, threads);
+      ASSERT_EQ(records.size(), count) << threads << " threads";
+      for (std::size_t k = 0; k < count; k += (k < 1000 || k + 1000 > count) ? 1 : 97)
+        ASSERT_TRUE(sameBits(records[k], fresh))
+          << "record " << k << " of " << count << ", " << threads << " threads";
+    }
+  }
+}
+
 TEST(RayStoreSchema, MigrateCreatesTheSchemaAndIsIdempotent)
 {
   const std::string ci = freshDatabase();
