@@ -14,9 +14,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -724,4 +728,171 @@ TEST(RayStoreFrames, ReplacedAndDeletedFramesLeaveNothingBehind)
   // The scene comes back with the next frame.
   const std::int64_t again = store.writeFrame(scene(), "again", synthetic(10, 64));
   EXPECT_EQ(store.frameInfo(again).rayCount, 10);
+}
+
+namespace
+{
+/// The statements of the README's block of example queries (after "Researchers ask in SQL"),
+/// comments dropped, one string each.
+std::vector<std::string> readmeQueries()
+{
+  std::ifstream in(std::string(ASRT_SOURCE_DIR) + "/README.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t intro = text.find("Researchers ask in SQL");
+  const std::size_t begin = text.find("```sql\n", intro);
+  const std::size_t end = text.find("```", begin + 7);
+  if (intro == std::string::npos || begin == std::string::npos || end == std::string::npos)
+    return {};
+  std::istringstream block(text.substr(begin + 7, end - begin - 7));
+  std::vector<std::string> queries;
+  std::string line, query;
+  while (std::getline(block, line))
+  {
+    if (line.rfind("--", 0) == 0)
+      continue;
+    query += line + "\n";
+    if (!line.empty() && line.back() == ';')
+    {
+      queries.push_back(query);
+      query.clear();
+    }
+  }
+  return queries;
+}
+
+/// Rows of a query as text (doubles in the server's shortest exact form), or the server's error.
+std::vector<std::vector<std::string>> textRows(Db& db, const std::string& sql)
+{
+  std::unique_ptr<PGresult, void (*)(PGresult*)> r(PQexec(db.Conn, sql.c_str()), PQclear);
+  if (PQresultStatus(r.get()) != PGRES_TUPLES_OK)
+    throw std::runtime_error(sql + ": " + PQresultErrorMessage(r.get()));
+  std::vector<std::vector<std::string>> rows(std::size_t(PQntuples(r.get())));
+  for (int row = 0; row < PQntuples(r.get()); ++row)
+    for (int col = 0; col < PQnfields(r.get()); ++col)
+      rows[std::size_t(row)].push_back(PQgetvalue(r.get(), row, col));
+  return rows;
+}
+}
+
+// The README's example queries run as printed, and each answers what its comment says, checked
+// against the records and paths as written (counted here, not by the server).
+TEST(RayStoreSql, ReadmeQueriesAnswerWhatTheySay)
+{
+  const std::vector<std::string> queries = readmeQueries();
+  ASSERT_EQ(queries.size(), 5u) << "the README's block of example queries changed";
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  std::vector<RayRecord> a = synthetic(1500, 64, 7), b = synthetic(2100, 64, 8);
+  // Real windings are finite (SQL orders NaN above every number, so it would count as large).
+  for (auto* records : { &a, &b })
+    for (RayRecord& r : *records)
+      if (std::isnan(r.winding))
+        r.winding = 7.0;
+  std::vector<asrt::RayPath> paths(3);
+  for (std::size_t k = 0; k < paths.size(); ++k)
+  {
+    paths[k].i = int(3 * k + 1);
+    paths[k].j = int(2 * k + 5);
+    for (int m = 0; m < 40 + int(k); ++m)
+    {
+      const double r = 30.0 - 0.7 * m + 0.02 * m * m + double(k);
+      paths[k].points.push_back({ asrt::Vec3(r, 0, 0), 0.5 * m, r, 1e-13 });
+    }
+  }
+  const std::int64_t first = store.writeFrame(scene(1.0), "first", a);
+  const std::int64_t second = store.writeFrame(scene(2.0), "second", b, paths);
+  // The README asks about frame 2; here that is whatever id the second frame got.
+  auto forSecond = [&](std::string q)
+  {
+    const std::string id = "frame_id = " + std::to_string(second);
+    for (std::size_t at = 0; (at = q.find("frame_id = 2", at)) != std::string::npos;
+         at += id.size())
+      q.replace(at, 12, id);
+    return q;
+  };
+  Db db(ci);
+  // std::stod refuses the denormals that the records hold (ERANGE); strtod reads them exactly.
+  auto number = [](const std::string& text) { return std::strtod(text.c_str(), nullptr); };
+
+  // The frames, with what varies between them.
+  const auto frames = textRows(db, queries[0]);
+  ASSERT_EQ(frames.size(), 2u);
+  for (const auto& row : frames)
+  {
+    const bool isFirst = row[0] == std::to_string(first);
+    EXPECT_TRUE(isFirst || row[0] == std::to_string(second)) << row[0];
+    EXPECT_EQ(row[2], isFirst ? "first" : "second");
+    EXPECT_EQ(number(row[3]), isFirst ? 1.0 : 2.0);
+    EXPECT_EQ(row[8], std::to_string(isFirst ? a.size() : b.size()));
+  }
+
+  // The rays of frame 2 that hit object 2 in image order 1, with their hit points and lengths.
+  std::map<std::pair<int, int>, const RayRecord*> hits;
+  for (const RayRecord& r : b)
+    if (r.objectId == 2 && r.imageOrder == 1)
+      hits[{ r.i, r.j }] = &r;
+  ASSERT_GT(hits.size(), 20u);
+  const auto selected = textRows(db, forSecond(queries[1]));
+  ASSERT_EQ(selected.size(), hits.size());
+  for (const auto& row : selected)
+  {
+    const auto it = hits.find({ std::stoi(row[0]), std::stoi(row[1]) });
+    ASSERT_NE(it, hits.end()) << "pixel " << row[0] << ", " << row[1] << " was not selected";
+    const RayRecord& r = *it->second;
+    const double expected[] = { r.hitPoint.x(), r.hitPoint.y(), r.hitPoint.z(), r.affineLength };
+    for (int c = 0; c < 4; ++c)
+    {
+      const double got = number(row[std::size_t(2 + c)]);
+      EXPECT_TRUE(got == expected[c] || (std::isnan(got) && std::isnan(expected[c])))
+        << "column " << 2 + c << " of pixel " << row[0] << ", " << row[1];
+    }
+  }
+
+  // How much of each frame the hole swallows: the fraction of captured rays.
+  auto captured = [](const std::vector<RayRecord>& records)
+  {
+    std::size_t n = 0;
+    for (const RayRecord& r : records)
+      n += r.termination == asrt::Termination::Captured;
+    return double(n) / double(records.size());
+  };
+  const auto fractions = textRows(db, queries[2]);
+  ASSERT_EQ(fractions.size(), 2u);
+  for (const auto& row : fractions)
+    EXPECT_NEAR(number(row[1]), captured(row[0] == std::to_string(first) ? a : b), 1e-12)
+      << "frame " << row[0];
+
+  // Rays that wound round the hole more than once, by frame.
+  auto wound = [](const std::vector<RayRecord>& records)
+  {
+    std::size_t n = 0;
+    for (const RayRecord& r : records)
+      n += r.winding > 2 * M_PI;
+    return n;
+  };
+  const auto windings = textRows(db, queries[3]);
+  ASSERT_EQ(windings.size(), 2u);
+  for (const auto& row : windings)
+    EXPECT_EQ(std::stoul(row[1]), wound(row[0] == std::to_string(first) ? a : b))
+      << "frame " << row[0];
+
+  // The closest approach to the hole along each stored path of frame 2, closest first.
+  const auto approaches = textRows(db, forSecond(queries[4]));
+  ASSERT_EQ(approaches.size(), paths.size());
+  double previous = -1;
+  for (const auto& row : approaches)
+  {
+    const asrt::RayPath* p = nullptr;
+    for (const asrt::RayPath& q : paths)
+      if (std::to_string(q.i) == row[0] && std::to_string(q.j) == row[1])
+        p = &q;
+    ASSERT_NE(p, nullptr) << "pixel " << row[0] << ", " << row[1];
+    double rMin = p->points.front().r;
+    for (const asrt::PathPoint& q : p->points)
+      rMin = std::min(rMin, q.r);
+    EXPECT_EQ(number(row[2]), rMin);
+    EXPECT_GE(rMin, previous);
+    previous = rMin;
+  }
 }
