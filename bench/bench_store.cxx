@@ -315,7 +315,24 @@ struct Timing
   std::size_t selected = 0;
   /// CPU seconds of the fastest write: the server's backend, and this process.
   double serverCpu = 0, clientCpu = 0;
+  /// Every repetition's write and read, in order (for ratios between variants measured side by
+  /// side).
+  std::vector<double> writes, reads;
 };
+
+/// The median over repetitions of a[k] / b[k]: the two variants of each ratio ran one after the
+/// other, so a slow spell of this shared machine weighs on both (the fastest of each, compared,
+/// may come from different spells).
+double pairedRatio(const std::vector<double>& a, const std::vector<double>& b)
+{
+  std::vector<double> r;
+  for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
+    r.push_back(a[k] / b[k]);
+  if (r.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  std::sort(r.begin(), r.end());
+  return r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
+}
 
 /// CPU seconds (user + system) a process has used so far, from /proc/<pid>/stat.
 double cpuSeconds(int pid)
@@ -617,6 +634,7 @@ void measureStoreOnce(RayStore& store, const std::vector<RayRecord>& records, in
   const double server0 = serverCpuSeconds(store.backendPid()), client0 = cpuSeconds(getpid());
   double t0 = now();
   const std::int64_t id = store.writeFrame(frameScene(width, height, mass += 1), "bench", records);
+  t.writes.push_back(now() - t0);
   if (now() - t0 < t.write)
   {
     t.write = now() - t0;
@@ -626,6 +644,7 @@ void measureStoreOnce(RayStore& store, const std::vector<RayRecord>& records, in
   {
     t0 = now();
     const std::vector<RayRecord> back = store.readFrame(id);
+    t.reads.push_back(now() - t0);
     t.read = std::min(t.read, now() - t0);
     if (check && !sameBits(back, records))
       throw std::runtime_error("the store did not give the records back bit-exact");
@@ -788,6 +807,7 @@ int main(int argc, char* argv[])
       const double cpu0 = cpuSeconds(getpid());
       double t0 = now();
       writeFile(file, hd);
+      f.writes.push_back(now() - t0);
       if (now() - t0 < f.write)
       {
         f.write = now() - t0;
@@ -796,6 +816,7 @@ int main(int argc, char* argv[])
       t0 = now();
       {
         const std::vector<RayRecord> back = readFile(file);
+        f.reads.push_back(now() - t0);
         f.read = std::min(f.read, now() - t0);
         if (rep == 0 && !sameBits(back, hd))
           throw std::runtime_error("the file did not give the records back bit-exact");
@@ -847,6 +868,20 @@ int main(int argc, char* argv[])
 
     const std::size_t nS = small.size(), nH = hd.size();
     const double writeRatio = h.write / f.write, readRatio = h.read / f.read;
+    const double pairedWrite = pairedRatio(h.writes, f.writes),
+                 pairedRead = pairedRatio(h.reads, f.reads);
+    auto spread = [](const std::vector<double>& a, const std::vector<double>& b)
+    {
+      double lo = 1e300, hi = 0;
+      for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
+      {
+        lo = std::min(lo, a[k] / b[k]);
+        hi = std::max(hi, a[k] / b[k]);
+      }
+      char text[64];
+      std::snprintf(text, sizeof text, "%.2f–%.2f×", lo, hi);
+      return std::string(text);
+    };
     std::printf("<!-- store:begin -->\n## Accumulation in PostgreSQL\n\n");
     std::printf(
       "RayStore (schema version %d: each ray a packed %d-byte record, %d a row, inline; a table "
@@ -862,7 +897,9 @@ int main(int argc, char* argv[])
       "with image orders 1 and 2, three objects, escaped rays, NaN Jacobians along edges; "
       "deterministic pseudo-random values, %zu bytes of fields per ray. Times are wall-clock, "
       "best of %d (the 1920×1080 runs of the file and of every store variant take turns in each "
-      "repetition, so that all see the same load, after one untimed round of each); a write is one "
+      "repetition, so that all see the same load, after one untimed round of each; the store's "
+      "ratios to the file are given both as fastest against fastest and per repetition, the "
+      "store's write or read over the file's just before it); a write is one "
       "`writeFrame` (commit "
       "included), a read one `readFrame` into "
       "`RayRecord`s (checked bit-exact once). The file is the same fields packed in native byte "
@@ -890,7 +927,12 @@ int main(int argc, char* argv[])
     std::printf("| raw file, read into a vector made as the store makes its own | %zu | | | "
                 "%.2f s | %s |\n",
                 nH, likeStoreRead, rate(nH, likeStoreRead).c_str());
-    std::printf("| store / file | | %.2f× | | %.2f× | |\n", writeRatio, readRatio);
+    std::printf("| store / file (fastest against fastest) | | %.2f× | | %.2f× | |\n", writeRatio,
+                readRatio);
+    std::printf("| store / file, each repetition's pair: median (range) | | %.2f× (%s) | | "
+                "%.2f× (%s) | |\n",
+                pairedWrite, spread(h.writes, f.writes).c_str(), pairedRead,
+                spread(h.reads, f.reads).c_str());
     std::printf("| store / file read into the same kind of vector | | | | %.2f× | |\n",
                 h.read / likeStoreRead);
     std::printf("| predicate `%s`, 1920×1080, evaluated by the server, only the selected rays "
@@ -898,7 +940,9 @@ int main(int argc, char* argv[])
                 Predicate, h.selected, nH, h.predicate, rate(nH, h.predicate).c_str());
 
     const bool fastWrite = nH / h.write >= 1e6, fastRead = nH / h.read >= 1e6;
-    const bool nearWrite = writeRatio <= 2, nearRead = readRatio <= 2;
+    // Met only if both ways of comparing say so.
+    const bool nearWrite = writeRatio <= 2 && pairedWrite <= 2,
+               nearRead = readRatio <= 2 && pairedRead <= 2;
     auto met = [](bool b) { return b ? "**met**" : "**not met**"; };
     std::printf(
       "\nThe paper (SGI Onyx2, 200×200): about 44 min to write a frame to PostgreSQL and 4 min to "
@@ -910,10 +954,13 @@ int main(int argc, char* argv[])
                 met(fastWrite));
     std::printf("- reading at ≥ 1 M rays/s: %s rays/s, %s;\n", rate(nH, h.read).c_str(),
                 met(fastRead));
-    std::printf("- writing within 2× of the fsync'd file: %.2f×, %s;\n", writeRatio,
-                met(nearWrite));
-    std::printf("- reading within 2× of the file (both from the page cache): %.2f×, %s.\n",
-                readRatio, met(nearRead));
+    std::printf("- writing within 2× of the fsync'd file: %.2f× fastest against fastest, %.2f× "
+                "the median pair, %s;\n",
+                writeRatio, pairedWrite, met(nearWrite));
+    std::printf("- reading within 2× of the file (both from the page cache): %.2f× fastest "
+                "against fastest, %.2f× the median pair, %s (against the file read into the "
+                "same kind of vector: %.2f×).\n",
+                readRatio, pairedRead, met(nearRead), h.read / likeStoreRead);
     std::printf(
       "\nCPU time of the fastest 1920×1080 write: %.2f s in the server's processes (its backends "
       "receiving %.0f MB, building %zu rows of 8 kB, copying them into pages, writing each new "
@@ -925,6 +972,19 @@ int main(int argc, char* argv[])
       h.serverCpu, double(nH) * RayStore::kRecordBytes / 1e6,
       (nH + RayStore::kBlockSize - 1) / RayStore::kBlockSize, h.clientCpu, f.clientCpu, f.write,
       loadBefore.c_str(), loadAfter.c_str(), std::thread::hardware_concurrency());
+    {
+      // What the write ratio rests on: the store's write is CPU-bound, the file's mostly waits.
+      const double cores = double(std::max(1u, std::thread::hardware_concurrency()));
+      const double floor = (h.serverCpu + h.clientCpu) / cores;
+      std::printf(
+        "\nSo the write ratio depends on this disk as much as on the store. The store's write "
+        "is bound by CPU: with every core busy it cannot take less than (%.2f + %.2f) s / %.0f "
+        "= %.2f s. The file's write spends %.2f of its %.2f s waiting for the disk to take "
+        "the fsync. The 2× target holds only while the fsync'd file takes at least %.2f s: "
+        "on a faster disk the ratio gets worse, on a slower one better.\n",
+        h.serverCpu, h.clientCpu, cores, floor, std::max(0.0, f.write - f.clientCpu), f.write,
+        floor / 2);
+    }
     if (!nearWrite)
       std::printf(
         "\nWhy writing misses 2× here: the server's CPU time alone is %.2f× the file's whole "
