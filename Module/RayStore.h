@@ -96,8 +96,8 @@ struct FrameInfo
 
 /// `count` default records in a new vector whose memory `threads` threads fault in at once
 /// before the records are constructed. Faulting in fresh pages (the kernel clears each one) is
-/// most of what filling a large result costs: about 0.3 s of one core for a 1920×1080 frame's
-/// 560 MB here, a quarter of it with two threads and the kernel's batched population
+/// most of what filling a large result costs: 0.25-0.65 s of one core for a 1920×1080 frame's
+/// 560 MB here, 0.11-0.16 s with two threads and the kernel's batched population
 /// (MADV_POPULATE_WRITE, Linux 5.14; on other kernels the records are simply constructed).
 /// readFrame() returns its records in such a vector.
 ASRTCORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads);
