@@ -1100,6 +1100,10 @@ std::vector<RayRecord> allocateRecords(std::size_t count, int threads)
   std::vector<RayRecord> records;
   records.reserve(count);
 #ifdef MADV_POPULATE_WRITE
+  if (threads <= 0)
+  {
+    threads = int(std::max(1u, std::thread::hardware_concurrency()));
+  }
   // Only whole pages inside the reserved block; the kernel may refuse (older kernels: EINVAL),
   // and then construction faults the pages in as usual.
   const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
@@ -1110,7 +1114,7 @@ std::vector<RayRecord> allocateRecords(std::size_t count, int threads)
   {
     const std::uintptr_t pages = (end - begin) / page;
     const std::uintptr_t slices = std::max<std::uintptr_t>(
-      1, std::min<std::uintptr_t>(std::uintptr_t(std::max(threads, 1)), (end - begin) / minSlice));
+      1, std::min<std::uintptr_t>(std::uintptr_t(threads), (end - begin) / minSlice));
     auto populate = [&](std::uintptr_t k)
     {
       const std::uintptr_t a = begin + pages * k / slices * page;
@@ -2230,8 +2234,7 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
           helpers = this->P->helpers(
             int(std::min<std::size_t>(std::size_t(this->P->WriteConnections), tiles.size())) - 1);
         }
-        records = allocateRecords(std::size_t(rayCount),
-                                  int(std::max(1u, std::thread::hardware_concurrency())));
+        records = allocateRecords(std::size_t(rayCount));
         std::vector<std::string> groups(helpers.size() + 1);
         {
           std::vector<std::int64_t> load(groups.size(), 0);

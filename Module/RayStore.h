@@ -94,13 +94,13 @@ struct FrameInfo
   std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
 
-/// `count` default records in a new vector whose memory `threads` threads fault in at once
-/// before the records are constructed. Faulting in fresh pages (the kernel clears each one) is
-/// most of what filling a large result costs: 0.25-0.65 s of one core for a 1920×1080 frame's
-/// 560 MB here, 0.11-0.16 s with two threads and the kernel's batched population
+/// `count` default records in a new vector whose memory `threads` threads (0: one per core) fault
+/// in at once before the records are constructed. Faulting in fresh pages (the kernel clears each
+/// one) is most of what filling a large result costs: 0.25-0.65 s of one core for a 1920×1080
+/// frame's 560 MB here, 0.11-0.16 s with two threads and the kernel's batched population
 /// (MADV_POPULATE_WRITE, Linux 5.14; on other kernels the records are simply constructed).
 /// readFrame() returns its records in such a vector.
-ASRTCORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads);
+ASRTCORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads = 0);
 
 class ASRTCORE_EXPORT RayStore
 {

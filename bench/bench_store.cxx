@@ -266,9 +266,7 @@ std::vector<RayRecord> readFile(const std::string& path, bool likeTheStore = fal
   const std::size_t count = std::size_t(std::ftell(f)) / RecordBytes;
   std::fseek(f, 0, SEEK_SET);
   std::vector<RayRecord> out =
-    likeTheStore
-      ? asrt::allocateRecords(count, int(std::max(1u, std::thread::hardware_concurrency())))
-      : std::vector<RayRecord>(count);
+    likeTheStore ? asrt::allocateRecords(count) : std::vector<RayRecord>(count);
   std::vector<char> buf(ChunkRecords * RecordBytes);
   for (std::size_t first = 0; first < count; first += ChunkRecords)
   {
@@ -320,18 +318,24 @@ struct Timing
   std::vector<double> writes, reads;
 };
 
-/// The median over repetitions of a[k] / b[k]: the two variants of each ratio ran one after the
-/// other, so a slow spell of this shared machine weighs on both (the fastest of each, compared,
-/// may come from different spells).
-double pairedRatio(const std::vector<double>& a, const std::vector<double>& b)
+/// a[k] / b[k] over the repetitions, in increasing order. The two variants of each ratio ran one
+/// after the other, so a slow spell of this shared machine weighs on both (the fastest of each,
+/// compared, may come from different spells).
+std::vector<double> pairedRatios(const std::vector<double>& a, const std::vector<double>& b)
 {
   std::vector<double> r;
   for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
     r.push_back(a[k] / b[k]);
-  if (r.empty())
-    return std::numeric_limits<double>::quiet_NaN();
   std::sort(r.begin(), r.end());
-  return r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
+  return r;
+}
+
+double median(const std::vector<double>& sorted)
+{
+  if (sorted.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t m = sorted.size() / 2;
+  return sorted.size() % 2 ? sorted[m] : 0.5 * (sorted[m - 1] + sorted[m]);
 }
 
 /// CPU seconds (user + system) a process has used so far, from /proc/<pid>/stat.
@@ -634,10 +638,11 @@ void measureStoreOnce(RayStore& store, const std::vector<RayRecord>& records, in
   const double server0 = serverCpuSeconds(store.backendPid()), client0 = cpuSeconds(getpid());
   double t0 = now();
   const std::int64_t id = store.writeFrame(frameScene(width, height, mass += 1), "bench", records);
-  t.writes.push_back(now() - t0);
-  if (now() - t0 < t.write)
+  const double write = now() - t0;
+  t.writes.push_back(write);
+  if (write < t.write)
   {
-    t.write = now() - t0;
+    t.write = write;
     t.serverCpu = serverCpuSeconds(store.backendPid()) - server0;
     t.clientCpu = cpuSeconds(getpid()) - client0;
   }
@@ -645,7 +650,7 @@ void measureStoreOnce(RayStore& store, const std::vector<RayRecord>& records, in
     t0 = now();
     const std::vector<RayRecord> back = store.readFrame(id);
     t.reads.push_back(now() - t0);
-    t.read = std::min(t.read, now() - t0);
+    t.read = std::min(t.read, t.reads.back());
     if (check && !sameBits(back, records))
       throw std::runtime_error("the store did not give the records back bit-exact");
   }
@@ -808,16 +813,16 @@ int main(int argc, char* argv[])
       double t0 = now();
       writeFile(file, hd);
       f.writes.push_back(now() - t0);
-      if (now() - t0 < f.write)
+      if (f.writes.back() < f.write)
       {
-        f.write = now() - t0;
+        f.write = f.writes.back();
         f.clientCpu = cpuSeconds(getpid()) - cpu0;
       }
       t0 = now();
       {
         const std::vector<RayRecord> back = readFile(file);
         f.reads.push_back(now() - t0);
-        f.read = std::min(f.read, now() - t0);
+        f.read = std::min(f.read, f.reads.back());
         if (rep == 0 && !sameBits(back, hd))
           throw std::runtime_error("the file did not give the records back bit-exact");
       }
@@ -868,18 +873,13 @@ int main(int argc, char* argv[])
 
     const std::size_t nS = small.size(), nH = hd.size();
     const double writeRatio = h.write / f.write, readRatio = h.read / f.read;
-    const double pairedWrite = pairedRatio(h.writes, f.writes),
-                 pairedRead = pairedRatio(h.reads, f.reads);
-    auto spread = [](const std::vector<double>& a, const std::vector<double>& b)
+    const std::vector<double> writePairs = pairedRatios(h.writes, f.writes),
+                              readPairs = pairedRatios(h.reads, f.reads);
+    const double pairedWrite = median(writePairs), pairedRead = median(readPairs);
+    auto spread = [](const std::vector<double>& sorted)
     {
-      double lo = 1e300, hi = 0;
-      for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
-      {
-        lo = std::min(lo, a[k] / b[k]);
-        hi = std::max(hi, a[k] / b[k]);
-      }
       char text[64];
-      std::snprintf(text, sizeof text, "%.2f–%.2f×", lo, hi);
+      std::snprintf(text, sizeof text, "%.2f–%.2f×", sorted.front(), sorted.back());
       return std::string(text);
     };
     std::printf("<!-- store:begin -->\n## Accumulation in PostgreSQL\n\n");
@@ -931,8 +931,7 @@ int main(int argc, char* argv[])
                 readRatio);
     std::printf("| store / file, each repetition's pair: median (range) | | %.2f× (%s) | | "
                 "%.2f× (%s) | |\n",
-                pairedWrite, spread(h.writes, f.writes).c_str(), pairedRead,
-                spread(h.reads, f.reads).c_str());
+                pairedWrite, spread(writePairs).c_str(), pairedRead, spread(readPairs).c_str());
     std::printf("| store / file read into the same kind of vector | | | | %.2f× | |\n",
                 h.read / likeStoreRead);
     std::printf("| predicate `%s`, 1920×1080, evaluated by the server, only the selected rays "
