@@ -1,0 +1,237 @@
+// Accumulation of traced frames in PostgreSQL: scenes, frames and their rays, written in one
+// transaction each with binary COPY and read back bit-exact.
+//
+// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"). A ray is a
+// packed record of kRecordBytes bytes, its fields as big-endian 32/64-bit words in the column
+// order of the view rays_v (big-endian so that SQL can decode them with bit(n) casts). Rows of
+// ray_blocks hold kBlockSize consecutive records in one bytea kept inline (STORAGE PLAIN: one row
+// fills one 8 kB page, so nothing goes through TOAST). ray_blocks is partitioned by (frame, tile):
+// each tile's rows go into a table of their own, created in the transaction that writes them,
+// loaded with COPY FREEZE and attached to ray_blocks before the commit. A table created in the
+// writing transaction is what lets PostgreSQL skip the WAL under wal_level = minimal (the
+// embedded server's setting) and fsync the table at commit instead, writing the rays once rather
+// than twice; with wal_level replica or logical (a server with replication) the same statements
+// are WAL-logged as usual. Either way the commit is durable. SQL sees one row per ray through the
+// view rays_v, which decodes the words; a predicate given to readFrame is evaluated there, on the
+// server, and only the selected rays travel.
+//
+// Tiled frames (issue 7): several processes (ranks) write the tiles of one frame concurrently,
+// each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
+// on, with status 'writing'; the transaction of the tile that brings the count of written tiles
+// to the frame's tile count also makes it 'complete'. Everything that reads frames (listFrames,
+// findFrame, readFrame, rays_v, path_points_v) shows complete frames only, so a frame whose
+// writer died is never seen half-written; abandonedFrames() finds such frames for deleteFrame().
+//
+// Paths: a frame may also keep the polylines of some of its rays (RayPath, one per pixel), in
+// ray_paths, written in the frame's transaction; the view path_points_v shows one row per point.
+//
+// Plain C++: no VTK types, no libpq types in this header.
+#ifndef asrt_RayStore_h
+#define asrt_RayStore_h
+
+#include "FrameTracer.h"
+#include "SceneFile.h"
+#include "asrtStoreModule.h"
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace asrt
+{
+/// Every failure of the store: the message says what failed (connecting, schema version, a
+/// duplicate frame, the server's error with its SQLSTATE, ...).
+class ASRTSTORE_EXPORT StoreError : public std::runtime_error
+{
+public:
+  explicit StoreError(const std::string& what, std::string sqlState = std::string())
+    : std::runtime_error(what)
+    , State(std::move(sqlState))
+  {
+  }
+  /// The server's SQLSTATE when the server reported the error ("23505", ...), else empty.
+  const std::string& sqlState() const { return this->State; }
+
+private:
+  std::string State;
+};
+
+/// The parameters that vary between the frames of one scene (e.g. along a movie). Together with
+/// the rest of the scene they identify a frame.
+struct FrameKey
+{
+  double mass = 0, spin = 0, charge = 0;
+  Vec3 cameraPosition = Vec3::Zero();
+  Vec3 focalPoint = Vec3::Zero();
+  Vec3 viewUp = Vec3::Zero();
+  double viewAngle = 0;
+  int width = 0, height = 0;
+  std::string method;
+  double step = 0;
+  double relativeTolerance = 0, absoluteTolerance = 0;
+};
+
+struct FrameInfo
+{
+  std::int64_t id = 0;
+  std::int64_t sceneId = 0;
+  std::string sceneHash; ///< SHA-256 (hex) of the scene without its varying parameters
+  std::string frameHash; ///< SHA-256 (hex) of effectiveSceneText(): the frame's identity
+  std::string name;      ///< the scene's name
+  std::string label;
+  FrameKey key;
+  std::string status; ///< "complete" (a frame being written is visible to nobody else)
+  double writeSeconds = 0;
+  double traceSeconds = 0; ///< NaN when the writer did not say
+  std::string createdAt;   ///< ISO 8601, UTC
+  std::int64_t rayCount = 0;
+  int tileCount = 1;          ///< tiles it was written in (writeFrame: one per connection)
+  std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
+};
+
+/// `count` default records in a new vector whose memory `threads` threads (0: one per core) fault
+/// in at once before the records are constructed. Faulting in fresh pages (the kernel clears each
+/// one) is most of what filling a large result costs: 0.25-0.65 s of one core for a 1920×1080
+/// frame's 560 MB here, 0.11-0.16 s with two threads and the kernel's batched population
+/// (MADV_POPULATE_WRITE, Linux 5.14; on other kernels the records are simply constructed).
+/// readFrame() returns its records in such a vector.
+ASRTSTORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads = 0);
+
+class ASRTSTORE_EXPORT RayStore
+{
+public:
+  /// The schema version this build creates and understands.
+  static constexpr int kSchemaVersion = 3;
+  /// Bytes of one packed ray record (the fields of rays_v, big-endian).
+  static constexpr int kRecordBytes = 260;
+  /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page.
+  static constexpr int kBlockSize = 31;
+  /// A parallel write gives each connection at least this many rays (smaller frames are written
+  /// over one: another connection's table and commit would cost more than they save).
+  static constexpr std::size_t kParallelMinRays = 65536;
+  /// Two: on two cores, the server's two backends take the write's CPU time in parallel (one
+  /// backend alone takes twice the time of the fsync'd file; bench/REPORT.md, "store").
+  static constexpr int kDefaultWriteConnections = 2;
+
+  /// Connects. `conninfo` is a libpq connection string or URI; empty means libpq's defaults and
+  /// the PG* environment variables. A connect_timeout of 10 s applies unless the conninfo or
+  /// PGCONNECT_TIMEOUT sets one. Throws StoreError with libpq's reason (no server, wrong
+  /// credentials, ...).
+  explicit RayStore(const std::string& conninfo);
+  ~RayStore();
+  RayStore(const RayStore&) = delete;
+  RayStore& operator=(const RayStore&) = delete;
+
+  /// Creates or upgrades the schema in one transaction (serialised against concurrent migrators).
+  /// Refuses a database whose schema is newer than this build's. Idempotent. Also drops the
+  /// tables of rays left behind by frames deleted with plain SQL. `targetVersion` below
+  /// kSchemaVersion stops at that version (to test migrations); it never downgrades.
+  void migrate(int targetVersion = kSchemaVersion);
+  /// The database's schema version; 0 if it has none yet.
+  int schemaVersion();
+
+  /// Stores a frame in one transaction. Its identity is effectiveSceneText(scene): storing the
+  /// same scene with the same parameters again throws a StoreError ("duplicate frame") unless
+  /// `replace`, which replaces the old frame in the same transaction. Labels and names must be
+  /// valid UTF-8 without NUL bytes (anything else is refused before touching the database); they
+  /// are bound as parameters, never spliced into SQL. Returns the frame's id.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          const std::vector<RayRecord>& records, bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+  /// As above, with the paths of some of its rays stored in the same transaction (bit-exact, in
+  /// the given order). At most one path per pixel, each pixel inside the frame's resolution:
+  /// anything else is refused (StoreError) before touching the database.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          const std::vector<RayRecord>& records, const std::vector<RayPath>& paths,
+                          bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+  /// As above, with the records produced one at a time by `next(index, record)` for index in
+  /// [0, count), e.g. straight from a tracer. If it throws, the transaction is rolled back (no
+  /// trace of the frame remains) and the exception propagates.
+  ///
+  /// With `concurrentProducer` (the overloads above pass it: their records are in memory), `next`
+  /// may be called from several threads at once, for different indices (each thread in
+  /// increasing order), and a frame of at least 2 × kParallelMinRays rays is written over up to
+  /// writeConnections() connections at once, as that many tiles of consecutive rays (FrameInfo's
+  /// tileCount). It is still one frame, made visible by one commit: the other connections load
+  /// their tiles into tables that nothing shows until the main transaction attaches them just
+  /// before it commits; if anything fails, those tables are dropped (by this call, or by the next
+  /// migrate() if this process dies). Without it, `next` is called in index order from the
+  /// calling thread, and the frame is one tile.
+  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
+                          std::size_t count,
+                          const std::function<void(std::size_t, RayRecord&)>& next,
+                          bool replace = false,
+                          double traceSeconds = std::numeric_limits<double>::quiet_NaN(),
+                          const std::vector<RayPath>& paths = {}, bool concurrentProducer = false);
+
+  /// Connections a parallel write uses at most (see writeFrame); default kDefaultWriteConnections.
+  /// 1 writes every frame over this store's own connection. The others are opened when first
+  /// needed and kept; if the server refuses some (max_connections), a write uses those it got.
+  void setWriteConnections(int n);
+  int writeConnections() const;
+
+  /// Starts (or joins) a frame written as `tileCount` tiles by writeTile(), possibly from several
+  /// processes at once: the frame row is created and committed with status 'writing'. Every rank
+  /// may call this with the same arguments; concurrent and later calls return the id of the same
+  /// 'writing' frame as long as it is not complete (a different tile count is an error). A
+  /// complete frame of the same identity is a duplicate (StoreError "duplicate frame") unless
+  /// `replace`, which deletes it and starts a new one; `replace` never touches a 'writing' frame,
+  /// since that is how the ranks of one write find each other (delete an abandoned one first).
+  std::int64_t beginTiledFrame(const SceneDescription& scene, const std::string& label,
+                               int tileCount, bool replace = false);
+  /// Writes tile `tile` (0 <= tile < tileCount) of a frame begun by beginTiledFrame(), in one
+  /// transaction; the transaction that writes the last missing tile also completes the frame.
+  /// readFrame() returns the tiles in tile order, each in the order written. Writing a tile that
+  /// is already written (or being written) throws a StoreError ("already written"). Tiles may be
+  /// empty.
+  void writeTile(std::int64_t frameId, int tile, const std::vector<RayRecord>& records);
+  /// As above, with the records produced one at a time (see the streaming writeFrame()).
+  void writeTile(std::int64_t frameId, int tile, std::size_t count,
+                 const std::function<void(std::size_t, RayRecord&)>& next);
+  /// Frames still 'writing' whose last tile (or, with none, whose start) is older than
+  /// `olderThan`: most likely their writers died. Choose `olderThan` longer than the longest tile
+  /// write, since a tile only counts once committed. deleteFrame() removes them.
+  std::vector<std::int64_t> abandonedFrames(std::chrono::seconds olderThan);
+
+  /// Complete frames, by id.
+  std::vector<FrameInfo> listFrames();
+  /// Throws StoreError if there is no complete frame `id`.
+  FrameInfo frameInfo(std::int64_t id);
+  /// The records of frame `id` in the order written (a tiled frame's tiles in tile order),
+  /// bit-exact. `predicate`, if not empty, is an
+  /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
+  /// image_order = 1"). It is the one piece of caller text spliced into SQL, deliberately: it is
+  /// evaluated on the server in a READ ONLY transaction that is rolled back, with
+  /// predicateTimeout as statement_timeout, restricted to the frame's rays, so it can select but
+  /// not write; only the selected records are sent back.
+  std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
+  /// The paths stored with frame `id`, in the order written, bit-exact (empty if none).
+  std::vector<RayPath> readPaths(std::int64_t id);
+  /// Deletes a frame with its rays and paths, complete or not (e.g. abandoned), and its scene row
+  /// if no other frame uses it; throws StoreError if there is none. It waits for reads of other
+  /// frames that are under way (dropping a frame's tables locks ray_blocks briefly).
+  void deleteFrame(std::int64_t id);
+  /// The effective scene text of frame `id` (what effectiveSceneText() gave when it was written):
+  /// enough to describe, re-trace or interpolate the frame. Throws StoreError if there is none.
+  std::string frameSceneText(std::int64_t id);
+  /// The complete frame stored for this scene with these parameters, if any.
+  std::optional<std::int64_t> findFrame(const SceneDescription& scene);
+
+  void setPredicateTimeout(std::chrono::milliseconds t) { this->PredicateTimeout = t; }
+  /// The server process of this connection (for tests that break it).
+  int backendPid() const;
+
+private:
+  struct Impl;
+  Impl* P;
+  std::chrono::milliseconds PredicateTimeout{ 60000 };
+};
+}
+
+#endif

@@ -1,0 +1,119 @@
+// Tracing a frame: one ray per pixel through the scene, in parallel, each ending in a RayRecord.
+#ifndef asrt_FrameTracer_h
+#define asrt_FrameTracer_h
+
+#include "SceneFile.h"
+#include "asrtTracingModule.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace asrt
+{
+/// Everything the accumulation stores about one pixel's ray.
+struct RayRecord
+{
+  std::int32_t i = 0, j = 0;     ///< pixel (column from the left, row from the bottom)
+  Vec3 origin = Vec3::Zero();    ///< the eye
+  Vec3 direction = Vec3::Zero(); ///< unit direction in the observer's frame (right, up, forward)
+  Vec4 momentum = Vec4::Zero();  ///< initial covariant momentum p_μ
+  Termination termination = Termination::Running;
+  std::int32_t objectId = -1;   ///< hit object, −1 if none
+  Vec3 hitPoint = Vec3::Zero(); ///< refined hit, or where the ray ended
+  Vec3 hitNormal = Vec3::Zero();
+  double u = 0, v = 0;         ///< surface coordinates of the hit
+  double chordError = 0;       ///< |chord hit − refined hit|: what refinement corrected
+  double affineLength = 0;     ///< λ from the eye to the hit (or the end)
+  double winding = 0;          ///< angle swept around the hole (radians)
+  std::int32_t imageOrder = 0; ///< half-turns: floor(winding / π)
+  std::int64_t steps = 0;
+  double maxAbsH = 0;
+  Color color = Color::Zero();
+  /// Screen-space Jacobian ∂(u, v)/∂(i, j) of the hit from neighbouring pixels that hit the same
+  /// object in the same image order (u differences taken modulo 1); NaN where no neighbour does.
+  double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;
+};
+
+/// What the Jacobians of a pixel's neighbours read of its record.
+struct JacobianSample
+{
+  std::int32_t i = 0, j = 0;
+  double u = 0, v = 0;
+  std::int32_t objectId = -1;
+  std::int32_t imageOrder = 0;
+  Termination termination = Termination::Running;
+};
+
+/// One point of a traced ray's polyline.
+struct PathPoint
+{
+  Vec3 x;
+  double lambda;
+  double r;
+  double absH;
+};
+
+/// The traced path of one pixel's ray: the points from the eye on (vtkGeodesicSource's
+/// polylines, stored with a frame by RayStore).
+struct RayPath
+{
+  std::int32_t i = 0, j = 0; ///< the pixel
+  Termination termination = Termination::Running;
+  std::vector<PathPoint> points;
+};
+
+/// Traces pixels of one scene. Thread-safe: every traced pixel uses its own propagator.
+class ASRTTRACING_EXPORT FrameTracer
+{
+public:
+  /// Builds the spacetime and camera of the description; throws InvalidParameter if they are
+  /// invalid (camera inside the horizon, static observer in an ergosphere, bad method, ...).
+  explicit FrameTracer(const SceneDescription& scene);
+  ~FrameTracer();
+
+  const Spacetime& spacetime() const { return *this->St; }
+  const Camera& camera() const { return *this->Cam; }
+  const SceneDescription& description() const { return this->Desc; }
+  /// The escape radius actually used: at least the scene's, the celestial sphere's and the eye's.
+  double escapeRadius() const { return this->Tracing.escapeRadius; }
+
+  /// Traces one pixel; appends its polyline to `path` if given.
+  RayRecord tracePixel(int i, int j, std::vector<PathPoint>* path = nullptr) const;
+
+  /// Traces the ray through the continuous screen position (x, y), where pixel (i, j) is the
+  /// position (i, j) (Camera::localDirection's convention): sub-pixel rays, e.g. to check where
+  /// an interpolated point should be. The record's pixel is (x, y) rounded; no Jacobian (NaN).
+  RayRecord traceAt(double x, double y) const;
+
+  /// Traces the given pixels (i, j) with OpenMP, dynamically scheduled (rays near the photon
+  /// sphere cost far more than the rest). The result is in the order given and identical for any
+  /// number of threads. `progress` is called now and then with the fraction done; if it returns
+  /// false the work stops early and the returned records of untraced pixels keep termination
+  /// Running. Jacobians come from the neighbours among these pixels (NaN without any).
+  std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
+                                     const std::function<bool(double)>& progress = nullptr) const;
+
+  /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left. The rows just outside
+  /// the band are traced too (and dropped) so that the Jacobians of a band are those of the whole
+  /// frame: pieces assemble into exactly the single-piece frame.
+  std::vector<RayRecord> traceRows(int rowBegin, int rowEnd,
+                                   const std::function<bool(double)>& progress = nullptr) const;
+
+  /// Fills the screen-space Jacobians of the records from their neighbours among them and among
+  /// `neighbours` (pixels traced elsewhere, e.g. by another process). Where a pixel appears
+  /// twice, its first appearance counts, records before neighbours.
+  static void computeJacobians(std::vector<RayRecord>& records,
+                               const std::vector<JacobianSample>& neighbours = {});
+
+private:
+  SceneDescription Desc;
+  std::unique_ptr<Spacetime> St;
+  std::unique_ptr<Camera> Cam;
+  TraceOptions Tracing;
+};
+}
+
+#endif
