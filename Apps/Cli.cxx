@@ -1,5 +1,6 @@
 #include "Cli.h"
 
+#include "DataFiles.h"
 #include "Progress.h"
 #include "Propagator.h"
 #include "StoreConnection.h"
@@ -375,7 +376,7 @@ std::string scenesDirectory()
   if (const char* dir = std::getenv("ASRT_DATA_DIR"))
     if (*dir)
       return std::string(dir) + "/scenes";
-  return std::string(ASRT_SOURCE_DATA_DIR) + "/scenes";
+  return tools::dataDirectory() + "/scenes";
 }
 }
 }

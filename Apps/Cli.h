@@ -136,8 +136,8 @@ void traceFrame(vtkGeodesicSource* source, const std::string& label, bool quiet)
 /// hostile frame name cannot move the cursor or hide itself.
 std::string printable(const std::string& text);
 
-/// The directory of the scene presets (Data/scenes): $ASRT_DATA_DIR/scenes, else the source
-/// tree this program was built from.
+/// The directory of the scene presets (Data/scenes): $ASRT_DATA_DIR/scenes, else those installed
+/// with this program, else those of the source tree it was built from.
 std::string scenesDirectory();
 
 /// MPI runs (asrt trace --mpi under mpirun): every process runs the same command; process 0

@@ -11,6 +11,7 @@
 #include "vtkXMLImageDataWriter.h"
 #include "vtkXMLPolyDataWriter.h"
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace asrt
@@ -70,6 +71,23 @@ void writeVtp(vtkPolyData* data, const std::string& path)
   vtkNew<vtkXMLPolyDataWriter> writer;
   writer->SetCompressorTypeToZLib();
   writeWith(writer.Get(), data, path);
+}
+
+std::string dataDirectory()
+{
+  // The install puts the data at a fixed path relative to the program (bin/../share/asrt), so an
+  // installed tree can be moved (cmake --install --prefix, a package's /usr). /proc/self/exe is
+  // the running program with symbolic links resolved.
+  std::error_code error;
+  const std::filesystem::path program = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error)
+  {
+    const std::filesystem::path installed =
+      (program.parent_path() / ASRT_INSTALLED_DATA_DIR_FROM_PROGRAM).lexically_normal();
+    if (std::filesystem::is_directory(installed / "scenes", error))
+      return installed.string();
+  }
+  return ASRT_SOURCE_DATA_DIR;
 }
 }
 }

@@ -1,6 +1,6 @@
 // Writing frames and rays to files with VTK's writers: PNG for the picture, VTK XML (.vti, .vtp)
 // for ParaView. Every file appears whole or not at all; a failure throws std::runtime_error naming
-// the file and VTK's reason.
+// the file and VTK's reason. And where the program's own data (the scene presets) lies.
 #ifndef asrt_tools_DataFiles_h
 #define asrt_tools_DataFiles_h
 
@@ -20,6 +20,11 @@ void writePng(vtkImageData* image, const std::string& path);
 void writeVti(vtkImageData* image, const std::string& path);
 /// Polygonal data (hit points, ray polylines) as VTK XML poly data.
 void writeVtp(vtkPolyData* data, const std::string& path);
+
+/// The directory holding the example data (scenes/, textures/): <prefix>/share/asrt when the
+/// running program is an installed one (<prefix>/bin/asrt, in whatever prefix it was installed
+/// to), else the source tree's Data/ that the program was built from.
+std::string dataDirectory();
 }
 }
 
