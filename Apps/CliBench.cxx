@@ -133,8 +133,7 @@ int runBench(const std::vector<std::string>& args)
       deflectionError =
         std::max(deflectionError, tools::schwarzschildDeflection(cfg, b).relativeError());
     const std::string method =
-      cfg.method == "auto" ? defaultMethod(*makeSpacetime(scene.mass, scene.spin, scene.charge))
-                           : cfg.method;
+      cfg.method == "auto" ? defaultMethod(*makeSpacetime(scene.spacetime)) : cfg.method;
     std::printf("%-9s %-16s %7.0e %9.3f %9.0f %9.0f %12.1e %12.1e %8d %14.1e\n", preset,
                 method.c_str(), cfg.relativeTolerance, run.seconds,
                 run.records.size() / run.seconds, run.stepsPerRay,

@@ -117,7 +117,7 @@ int runList(const std::vector<std::string>& args)
     const std::string size = std::to_string(f.key.width) + "x" + std::to_string(f.key.height);
     std::printf("%5lld  %-20s %-16s %7g %6g  %-16s %9s  %-16s %8lld %7s %7s  %s\n",
                 static_cast<long long>(f.id), clipped(f.name, 20).c_str(),
-                clipped(f.label, 16).c_str(), f.key.mass, f.key.spin,
+                clipped(f.label, 16).c_str(), f.key.spacetime.mass, f.key.spacetime.spin,
                 clipped(vec(f.key.cameraPosition), 16).c_str(), size.c_str(),
                 clipped(f.key.method, 16).c_str(), static_cast<long long>(f.rayCount),
                 seconds(f.traceSeconds).c_str(), seconds(f.writeSeconds).c_str(),
@@ -150,9 +150,9 @@ int runShow(const std::vector<std::string>& args)
   std::printf("frame %lld\n", static_cast<long long>(info.id));
   std::printf("  name           %s\n", printable(info.name).c_str());
   std::printf("  label          %s\n", printable(info.label).c_str());
-  std::printf("  mass           %.17g\n", k.mass);
-  std::printf("  spin           %.17g\n", k.spin);
-  std::printf("  charge         %.17g\n", k.charge);
+  std::printf("  mass           %.17g\n", k.spacetime.mass);
+  std::printf("  spin           %.17g\n", k.spacetime.spin);
+  std::printf("  charge         %.17g\n", k.spacetime.charge);
   std::printf("  camera         %s\n", vec(k.cameraPosition).c_str());
   std::printf("  focal point    %s\n", vec(k.focalPoint).c_str());
   std::printf("  view up        %s\n", vec(k.viewUp).c_str());

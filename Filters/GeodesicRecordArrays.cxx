@@ -1,5 +1,7 @@
 #include "GeodesicRecordArrays.h"
 
+#include "SceneFile.h"
+
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkCellData.h"
@@ -296,6 +298,22 @@ std::vector<RayPath> polyDataToPaths(vtkPolyData* lines)
   return paths;
 }
 
+void addDoubleField(vtkFieldData* fd, const char* name, std::initializer_list<double> values)
+{
+  auto a = vtkSmartPointer<vtkDoubleArray>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(static_cast<int>(values.size()));
+  a->InsertNextTuple(values.begin());
+  fd->AddArray(a);
+}
+
+void setSpacetimeFieldData(const SpacetimeParameters& st, vtkFieldData* fd)
+{
+  addDoubleField(fd, "Mass", { st.mass });
+  addDoubleField(fd, "Spin", { st.spin });
+  addDoubleField(fd, "Charge", { st.charge });
+}
+
 void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd)
 {
   auto addString = [fd](const char* name, const std::string& value)
@@ -308,17 +326,9 @@ void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd)
   addString("SceneJSON", effectiveSceneText(d));
   addString("IntegrationMethod", d.integrator.method);
   auto addScalar = [fd](const char* name, std::initializer_list<double> values)
-  {
-    auto a = vtkSmartPointer<vtkDoubleArray>::New();
-    a->SetName(name);
-    a->SetNumberOfComponents(static_cast<int>(values.size()));
-    a->InsertNextTuple(values.begin());
-    fd->AddArray(a);
-  };
+  { addDoubleField(fd, name, values); };
   const CameraParameters& c = d.camera;
-  addScalar("Mass", { d.mass });
-  addScalar("Spin", { d.spin });
-  addScalar("Charge", { d.charge });
+  setSpacetimeFieldData(d.spacetime, fd);
   addScalar("CameraPosition", { c.position.x(), c.position.y(), c.position.z() });
   addScalar("FocalPoint", { c.focalPoint.x(), c.focalPoint.y(), c.focalPoint.z() });
   addScalar("ViewUp", { c.viewUp.x(), c.viewUp.y(), c.viewUp.z() });

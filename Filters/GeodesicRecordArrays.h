@@ -3,10 +3,12 @@
 #ifndef asrt_GeodesicRecordArrays_h
 #define asrt_GeodesicRecordArrays_h
 
-#include "FrameTracer.h"
+#include "RayRecord.h"
+#include "SceneDescription.h"
 
 #include "vtkSmartPointer.h"
 
+#include <initializer_list>
 #include <vector>
 
 class vtkDataArray;
@@ -43,6 +45,11 @@ void pathsToPolyData(const std::vector<RayPath>& paths, vtkPolyData* lines);
 /// The inverse of pathsToPolyData; throws InvalidParameter naming what is missing or malformed
 /// (an array, a cell that is no polyline, an unknown termination).
 std::vector<RayPath> polyDataToPaths(vtkPolyData* lines);
+/// Adds the field data array `name`: doubles, one tuple of the given values.
+void addDoubleField(vtkFieldData* fd, const char* name, std::initializer_list<double> values);
+/// The spacetime as field data "Mass", "Spin" and "Charge" (what frames and interpolated frames
+/// both report).
+void setSpacetimeFieldData(const SpacetimeParameters& st, vtkFieldData* fd);
 /// The frame's scene and parameters as field data ("SceneJSON", "Mass", ..., "Resolution").
 void setFrameFieldData(const SceneDescription& d, vtkFieldData* fd);
 /// The frame's description back from its "SceneJSON", without image textures (nothing the store

@@ -4,6 +4,7 @@
 #include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
 #include "RayStore.h"
+#include "SceneFile.h"
 #include "StoreConnection.h"
 #include "vtkGeodesicSource.h"
 
@@ -51,14 +52,6 @@ public:
   std::string Text;
 };
 
-void addField(vtkFieldData* fd, const char* name, std::initializer_list<double> values)
-{
-  auto a = vtkSmartPointer<vtkDoubleArray>::New();
-  a->SetName(name);
-  a->SetNumberOfComponents(static_cast<int>(values.size()));
-  a->InsertNextTuple(values.begin());
-  fd->AddArray(a);
-}
 }
 
 struct vtkGeodesicFrameInterpolator::Internals
@@ -144,7 +137,7 @@ struct vtkGeodesicFrameInterpolator::Internals
       try
       {
         const asrt::FrameParameters p = this->At(t, self->CameraPath);
-        const auto st = asrt::makeSpacetime(p.mass, p.spin, p.charge);
+        const auto st = asrt::makeSpacetime(p.spacetime);
         asrt::CameraParameters c = ca;
         c.position = p.position;
         c.focalPoint = p.focalPoint;
@@ -227,9 +220,9 @@ struct vtkGeodesicFrameInterpolator::Internals
     const std::string text = asrt::effectiveSceneText(this->Scene[0]);
     source->SetSceneText(text.c_str());
     source->SetTextureDirectory(self->TextureDirectory);
-    source->SetMass(p.mass);
-    source->SetSpin(p.spin);
-    source->SetCharge(p.charge);
+    source->SetMass(p.spacetime.mass);
+    source->SetSpin(p.spacetime.spin);
+    source->SetCharge(p.spacetime.charge);
     source->SetCameraPosition(p.position.data());
     source->SetFocalPoint(p.focalPoint.data());
     source->SetViewUp(p.viewUp.data());
@@ -468,9 +461,9 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     for (int c = 0; c < asrt::kPixelClassCount; ++c)
       fractions[c] = static_cast<double>(counts[c]) / static_cast<double>(n);
     vtkFieldData* fd = image->GetFieldData();
-    addField(fd, "InterpolationTime", { t });
-    addField(fd, "InterpolationFractions",
-             { fractions[0], fractions[1], fractions[2], fractions[3], fractions[4] });
+    asrt::addDoubleField(fd, "InterpolationTime", { t });
+    asrt::addDoubleField(fd, "InterpolationFractions",
+                         { fractions[0], fractions[1], fractions[2], fractions[3], fractions[4] });
     auto holes = vtkSmartPointer<vtkIdTypeArray>::New();
     holes->SetName("HolePixels");
     holes->InsertNextValue(static_cast<vtkIdType>(f.holes));
@@ -480,12 +473,11 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     retraced->InsertNextValue(this->LastRetracedCount);
     fd->AddArray(retraced);
     const asrt::FrameParameters p = this->Impl->At(t, this->CameraPath);
-    addField(fd, "Mass", { p.mass });
-    addField(fd, "Spin", { p.spin });
-    addField(fd, "Charge", { p.charge });
-    addField(fd, "CameraPosition", { p.position.x(), p.position.y(), p.position.z() });
-    addField(fd, "FocalPoint", { p.focalPoint.x(), p.focalPoint.y(), p.focalPoint.z() });
-    addField(fd, "ViewUp", { p.viewUp.x(), p.viewUp.y(), p.viewUp.z() });
+    asrt::setSpacetimeFieldData(p.spacetime, fd);
+    asrt::addDoubleField(fd, "CameraPosition", { p.position.x(), p.position.y(), p.position.z() });
+    asrt::addDoubleField(fd, "FocalPoint",
+                         { p.focalPoint.x(), p.focalPoint.y(), p.focalPoint.z() });
+    asrt::addDoubleField(fd, "ViewUp", { p.viewUp.x(), p.viewUp.y(), p.viewUp.z() });
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), t);
     this->UpdateProgress(1.0);
   }

@@ -2,6 +2,7 @@
 
 #include "GeodesicRecordArrays.h"
 #include "RayStore.h"
+#include "SceneFile.h"
 #include "StoreConnection.h"
 
 #include "vtkImageData.h"
@@ -66,9 +67,9 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
     {
       this->FrameIds.push_back(static_cast<vtkIdType>(f.id));
       std::ostringstream os;
-      os << "frame " << f.id << ": " << f.name << " [" << f.label << "] M=" << f.key.mass
-         << " a=" << f.key.spin << " " << f.key.width << "x" << f.key.height << " " << f.key.method
-         << ", " << f.rayCount << " rays, " << f.createdAt;
+      os << "frame " << f.id << ": " << f.name << " [" << f.label << "] M=" << f.key.spacetime.mass
+         << " a=" << f.key.spacetime.spin << " " << f.key.width << "x" << f.key.height << " "
+         << f.key.method << ", " << f.rayCount << " rays, " << f.createdAt;
       this->FrameDescriptions.push_back(os.str());
     }
     if (frames.empty())

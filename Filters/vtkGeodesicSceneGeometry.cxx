@@ -74,10 +74,10 @@ int vtkGeodesicSceneGeometry::RequestData(vtkInformation*, vtkInformationVector*
   {
     asrt::SceneDescription d = asrt::loadScene(this->SceneText, this->SceneFileName);
     if (!std::isnan(this->Mass))
-      d.mass = this->Mass;
+      d.spacetime.mass = this->Mass;
     if (!std::isnan(this->Spin))
-      d.spin = this->Spin;
-    const auto st = asrt::makeSpacetime(d.mass, d.spin, d.charge);
+      d.spacetime.spin = this->Spin;
+    const auto st = asrt::makeSpacetime(d.spacetime);
 
     vtkNew<vtkPoints> points;
     points->SetDataTypeToDouble();

@@ -166,11 +166,11 @@ struct vtkGeodesicSource::Internals
     asrt::SceneDescription d =
       asrt::loadScene(self->SceneText, self->SceneFileName, self->TextureDirectory);
     if (isSet(self->Mass))
-      d.mass = self->Mass;
+      d.spacetime.mass = self->Mass;
     if (isSet(self->Spin))
-      d.spin = self->Spin;
+      d.spacetime.spin = self->Spin;
     if (isSet(self->Charge))
-      d.charge = self->Charge;
+      d.spacetime.charge = self->Charge;
     auto override3 = [](const double* v, asrt::Vec3& target)
     {
       if (isSet(v[0]) || isSet(v[1]) || isSet(v[2]))
@@ -195,7 +195,7 @@ struct vtkGeodesicSource::Internals
     // The frame records the method actually used, so that stored frames stay identified by what
     // traced them even if the default changes.
     if (d.integrator.method == "auto")
-      d.integrator.method = asrt::defaultMethod(*asrt::makeSpacetime(d.mass, d.spin, d.charge));
+      d.integrator.method = asrt::defaultMethod(*asrt::makeSpacetime(d.spacetime));
     if (d.camera.width <= 0 || d.camera.height <= 0)
     {
       std::ostringstream os;

@@ -4,6 +4,7 @@
 // Markdown section for bench/REPORT.md.
 // Usage: asrt_bench_frame scene.json [--no-hd]
 #include "FrameTracer.h"
+#include "SceneFile.h"
 #include "vtkGeodesicSource.h"
 
 #include "vtkImageData.h"

@@ -54,7 +54,7 @@ SceneDescription scene(const std::string& file, int w, int h, double mass)
   SceneDescription d = loadSceneFile(file, vtkImageFileLoader());
   d.camera.width = w;
   d.camera.height = h;
-  d.mass = mass;
+  d.spacetime.mass = mass;
   return d;
 }
 
@@ -94,7 +94,7 @@ std::vector<std::uint8_t> rgbOf(const std::vector<RayRecord>& records, int w, in
 /// [0.9, 1.5] b_c, b_c = 3√3 M: the edge of the shadow and the rings of images of order ≥ 1.
 std::vector<std::uint8_t> ringBand(const Traced& f)
 {
-  const double bc = 3.0 * std::sqrt(3.0) * f.desc.mass;
+  const double bc = 3.0 * std::sqrt(3.0) * f.desc.spacetime.mass;
   std::vector<std::uint8_t> band(f.samples.pixels.size(), 0);
   for (const RayRecord& r : f.records)
   {

@@ -396,7 +396,7 @@ SceneDescription frameScene(int width, int height, double mass)
 {
   SceneDescription d;
   d.name = "storage benchmark (synthetic records)";
-  d.mass = mass;
+  d.spacetime.mass = mass;
   d.camera.width = width;
   d.camera.height = height;
   return d;

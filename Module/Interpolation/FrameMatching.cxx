@@ -1,6 +1,7 @@
 #include "FrameMatching.h"
 
 #include "FrameInterpolation.h"
+#include "SceneFile.h"
 
 #include <nlohmann/json.hpp>
 #include <omp.h>
@@ -714,9 +715,7 @@ const char* toString(CameraPath p)
 FrameParameters parametersOf(const SceneDescription& d)
 {
   FrameParameters p;
-  p.mass = d.mass;
-  p.spin = d.spin;
-  p.charge = d.charge;
+  p.spacetime = d.spacetime;
   p.position = d.camera.position;
   p.focalPoint = d.camera.focalPoint;
   p.viewUp = d.camera.viewUp;
@@ -725,9 +724,7 @@ FrameParameters parametersOf(const SceneDescription& d)
 
 void applyParameters(const FrameParameters& p, SceneDescription& d)
 {
-  d.mass = p.mass;
-  d.spin = p.spin;
-  d.charge = p.charge;
+  d.spacetime = p.spacetime;
   d.camera.position = p.position;
   d.camera.focalPoint = p.focalPoint;
   d.camera.viewUp = p.viewUp;
@@ -743,9 +740,9 @@ FrameParameters interpolateParameters(const FrameParameters& a, const FrameParam
     return b;
   auto lerp = [t](const auto& x, const auto& y) { return (1.0 - t) * x + t * y; };
   FrameParameters p;
-  p.mass = lerp(a.mass, b.mass);
-  p.spin = lerp(a.spin, b.spin);
-  p.charge = lerp(a.charge, b.charge);
+  p.spacetime.mass = lerp(a.spacetime.mass, b.spacetime.mass);
+  p.spacetime.spin = lerp(a.spacetime.spin, b.spacetime.spin);
+  p.spacetime.charge = lerp(a.spacetime.charge, b.spacetime.charge);
   p.focalPoint = lerp(a.focalPoint, b.focalPoint);
   const Vec3 up = lerp(a.viewUp.normalized(), b.viewUp.normalized());
   if (!(up.norm() > 1e-9))
@@ -753,7 +750,7 @@ FrameParameters interpolateParameters(const FrameParameters& a, const FrameParam
                            "between is undefined");
   p.viewUp = up.normalized();
   if (path == CameraPath::Automatic)
-    path = a.mass > 0 || b.mass > 0 ? CameraPath::Orbit : CameraPath::Linear;
+    path = a.spacetime.mass > 0 || b.spacetime.mass > 0 ? CameraPath::Orbit : CameraPath::Linear;
   const double ra = a.position.norm(), rb = b.position.norm();
   if (path == CameraPath::Linear || ra == 0 || rb == 0)
   {

@@ -8,7 +8,8 @@
 #ifndef asrt_FrameMatching_h
 #define asrt_FrameMatching_h
 
-#include "FrameTracer.h"
+#include "RayRecord.h"
+#include "SceneDescription.h"
 #include "asrtInterpolationModule.h"
 
 #include <array>
@@ -141,7 +142,7 @@ ASRTINTERPOLATION_EXPORT Correspondence matchFrames(
 /// The parameters that may change between the two frames of a movie.
 struct FrameParameters
 {
-  double mass = 0, spin = 0, charge = 0;
+  SpacetimeParameters spacetime;
   Vec3 position = Vec3::Zero();
   Vec3 focalPoint = Vec3::Zero();
   Vec3 viewUp = Vec3::UnitZ();

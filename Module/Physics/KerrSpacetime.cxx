@@ -176,40 +176,6 @@ double KerrSpacetime::ergosphereRadius(double cosTheta) const
   return M + std::sqrt(std::max(0.0, M * M - a * a * cosTheta * cosTheta));
 }
 
-std::unique_ptr<Spacetime> makeSpacetime(double mass, double spin, double charge)
-{
-  requireFinite(mass, "mass");
-  requireFinite(spin, "spin");
-  requireFinite(charge, "charge");
-  if (mass < 0.0)
-  {
-    std::ostringstream os;
-    os << "mass must be non-negative, got " << mass;
-    throw InvalidParameter(os.str());
-  }
-  if (mass == 0.0)
-  {
-    if (spin != 0.0 || charge != 0.0)
-    {
-      throw InvalidParameter("spin and charge must be 0 when the mass is 0");
-    }
-    return std::make_unique<MinkowskiSpacetime>();
-  }
-  if (spin != 0.0 && charge != 0.0)
-  {
-    throw InvalidParameter("spin and charge together (Kerr-Newman) are not supported");
-  }
-  if (spin != 0.0)
-  {
-    return std::make_unique<KerrSpacetime>(mass, spin);
-  }
-  if (charge != 0.0)
-  {
-    return std::make_unique<ReissnerNordstromSpacetime>(mass, charge);
-  }
-  return std::make_unique<SchwarzschildSpacetime>(mass);
-}
-
 Vec4 completeNullMomentum(const Spacetime& st, const Vec4& x, const Vec4& p, const Vec4& d,
                           bool largerRoot)
 {

@@ -7,6 +7,7 @@
 #define asrt_Spacetime_h
 
 #include "AsrtTypes.h"
+#include "SpacetimeParameters.h"
 #include "asrtPhysicsModule.h"
 
 #include <memory>
@@ -226,8 +227,7 @@ private:
 /// The cheapest spacetime that models (M, a, Q): Minkowski for M = 0, Schwarzschild for a = Q = 0,
 /// Reissner–Nordström for a = 0, Kerr for Q = 0. Throws InvalidParameter otherwise (negative mass,
 /// |a| > M, |Q| > M, NaN, or both a and Q nonzero).
-ASRTPHYSICS_EXPORT std::unique_ptr<Spacetime> makeSpacetime(double mass, double spin,
-                                                            double charge);
+ASRTPHYSICS_EXPORT std::unique_ptr<Spacetime> makeSpacetime(const SpacetimeParameters& p);
 
 /// Solves H(p + μ d) = 0 for μ and returns p + μ d: completes a partly given covariant momentum to
 /// a null one. Picks the root with the larger μ if `largerRoot`, the smaller otherwise. Throws

@@ -1,5 +1,7 @@
 #include "RayStore.h"
 
+#include "SceneFile.h"
+
 #include <libpq-fe.h>
 #include <nlohmann/json.hpp>
 #include <sys/mman.h>
@@ -714,9 +716,9 @@ FrameInfo frameFromRow(const PGresult* r, int row)
   f.name = getText(r, row, c++);
   f.label = getText(r, row, c++);
   FrameKey& k = f.key;
-  k.mass = getF64(r, row, c++);
-  k.spin = getF64(r, row, c++);
-  k.charge = getF64(r, row, c++);
+  k.spacetime.mass = getF64(r, row, c++);
+  k.spacetime.spin = getF64(r, row, c++);
+  k.spacetime.charge = getF64(r, row, c++);
   for (Vec3* v : { &k.cameraPosition, &k.focalPoint, &k.viewUp })
   {
     for (int m = 0; m < 3; ++m)
@@ -1051,7 +1053,7 @@ Result insertFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
   const IntegratorConfig& ic = scene.integrator;
   Params ins;
   ins.i64(sceneId).bytes(texts.frame).text(texts.frame).text(scene.name).text(label);
-  ins.f64(scene.mass).f64(scene.spin).f64(scene.charge);
+  ins.f64(scene.spacetime.mass).f64(scene.spacetime.spin).f64(scene.spacetime.charge);
   for (const Vec3* v : { &cam.position, &cam.focalPoint, &cam.viewUp })
   {
     ins.f64(v->x()).f64(v->y()).f64(v->z());

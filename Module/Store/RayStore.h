@@ -29,8 +29,8 @@
 #ifndef asrt_RayStore_h
 #define asrt_RayStore_h
 
-#include "FrameTracer.h"
-#include "SceneFile.h"
+#include "RayRecord.h"
+#include "SceneDescription.h"
 #include "asrtStoreModule.h"
 
 #include <chrono>
@@ -65,7 +65,7 @@ private:
 /// the rest of the scene they identify a frame.
 struct FrameKey
 {
-  double mass = 0, spin = 0, charge = 0;
+  SpacetimeParameters spacetime;
   Vec3 cameraPosition = Vec3::Zero();
   Vec3 focalPoint = Vec3::Zero();
   Vec3 viewUp = Vec3::Zero();

@@ -9,7 +9,7 @@
 #ifndef asrt_DistributedFrame_h
 #define asrt_DistributedFrame_h
 
-#include "FrameTracer.h"
+#include "RayRecord.h"
 #include "asrtTracingModule.h"
 
 #include <cstdint>

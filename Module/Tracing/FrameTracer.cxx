@@ -22,7 +22,7 @@ const Color failureColor(1.0, 0.0, 1.0);
 
 FrameTracer::FrameTracer(const SceneDescription& scene)
   : Desc(scene)
-  , St(makeSpacetime(scene.mass, scene.spin, scene.charge))
+  , St(makeSpacetime(scene.spacetime))
   , Tracing(scene.tracing)
 {
   this->Cam = std::make_unique<Camera>(*this->St, scene.camera);

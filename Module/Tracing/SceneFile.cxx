@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -384,7 +383,7 @@ public:
       str(*v, "description");
 
     this->spacetime(root.require("spacetime"), d);
-    const auto st = makeSpacetime(d.mass, d.spin, d.charge);
+    const auto st = makeSpacetime(d.spacetime);
     this->camera(root.require("camera"), d, *st);
     if (const json* v = root.get("integrator"))
       this->integrator(*v, d, *st);
@@ -420,14 +419,14 @@ private:
   void spacetime(const json& j, SceneDescription& d)
   {
     Fields f(j, "spacetime", { "mass", "spin", "charge" });
-    d.mass = nonNegative(f.require("mass"), f.sub("mass"));
+    d.spacetime.mass = nonNegative(f.require("mass"), f.sub("mass"));
     if (const json* v = f.get("spin"))
-      d.spin = number(*v, f.sub("spin"));
+      d.spacetime.spin = number(*v, f.sub("spin"));
     if (const json* v = f.get("charge"))
-      d.charge = number(*v, f.sub("charge"));
+      d.spacetime.charge = number(*v, f.sub("charge"));
     try
     {
-      makeSpacetime(d.mass, d.spin, d.charge);
+      makeSpacetime(d.spacetime);
     }
     catch (const InvalidParameter& e)
     {
@@ -792,7 +791,8 @@ std::string effectiveSceneText(const SceneDescription& d)
 {
   json j = d.sourceText.empty() ? json::object() : json::parse(d.sourceText);
   auto vec = [](const Vec3& v) { return json::array({ v.x(), v.y(), v.z() }); };
-  j["spacetime"] = { { "mass", d.mass }, { "spin", d.spin }, { "charge", d.charge } };
+  const SpacetimeParameters& st = d.spacetime;
+  j["spacetime"] = { { "mass", st.mass }, { "spin", st.spin }, { "charge", st.charge } };
   json& cam = j["camera"];
   cam["position"] = vec(d.camera.position);
   cam["focalPoint"] = vec(d.camera.focalPoint);
@@ -819,36 +819,6 @@ std::string effectiveSceneText(const SceneDescription& d)
     j.erase("subset");
   return j.dump();
 }
-PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels)
-{
-  std::sort(pixels.begin(), pixels.end());
-  pixels.erase(std::unique(pixels.begin(), pixels.end()), pixels.end());
-  PixelSubsetId id;
-  id.count = static_cast<std::int64_t>(pixels.size());
-  if (pixels.empty())
-    return id;
-  // FNV-1a, 64 bits, over the little-endian bytes of each (i, j) as two int32.
-  std::uint64_t h = 14695981039346656037ULL;
-  auto feed = [&h](std::int32_t v)
-  {
-    const auto u = static_cast<std::uint32_t>(v);
-    for (int b = 0; b < 4; ++b)
-    {
-      h ^= (u >> (8 * b)) & 0xffu;
-      h *= 1099511628211ULL;
-    }
-  };
-  for (const auto& [i, j] : pixels)
-  {
-    feed(i);
-    feed(j);
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  id.digest = hex;
-  return id;
-}
-
 SceneDescription parseSceneWithoutImages(const std::string& jsonText)
 {
   const ImageLoader neutral = [](const std::string&)

@@ -11,16 +11,12 @@
 #ifndef asrt_SceneFile_h
 #define asrt_SceneFile_h
 
-#include "Camera.h"
-#include "RayTracer.h"
-#include "Scene.h"
+#include "SceneDescription.h"
 #include "asrtTracingModule.h"
 
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace asrt
@@ -36,42 +32,6 @@ struct ImagePixels
 /// Reads an image file. The numeric core reads none itself: the VTK layer passes one built on
 /// VTK's image readers. It throws InvalidParameter if the file is missing or unreadable.
 using ImageLoader = std::function<ImagePixels(const std::string& path)>;
-
-/// Identifies a frame that holds only some of its pixels, traced on their own (e.g. the rays an
-/// interpolator re-traces): how many and a digest of which. It is part of the frame's identity, so
-/// that such a frame never collides with the whole frame at the same parameters. Whole frames have
-/// count 0 and their scene text carries no "subset" field (their identity is unchanged).
-struct PixelSubsetId
-{
-  std::int64_t count = 0;
-  std::string digest; ///< 16 hex digits: FNV-1a 64 of the sorted, distinct (i, j) as int32 pairs
-  bool operator==(const PixelSubsetId& o) const
-  {
-    return this->count == o.count && this->digest == o.digest;
-  }
-};
-
-/// The identity of a set of pixels: sorted and deduplicated first, so the order and repetitions
-/// of the list do not matter. An empty list gives count 0 (a whole frame).
-ASRTTRACING_EXPORT PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels);
-
-struct SceneDescription
-{
-  std::string name;
-  double mass = 1.0;
-  double spin = 0.0;
-  double charge = 0.0;
-  CameraParameters camera;
-  IntegratorConfig integrator;
-  TraceOptions tracing;
-  std::shared_ptr<Scene> scene = std::make_shared<Scene>();
-  /// Non-empty for a frame of only some pixels (the optional root field "subset": {"pixels": n,
-  /// "digest": "..."}, written by the tools, not by hand).
-  PixelSubsetId subset;
-  /// The JSON it was parsed from, normalised: nlohmann's dump() of the parsed document (keys
-  /// sorted, no whitespace), so equal documents give equal text (for storage and hashing).
-  std::string sourceText;
-};
 
 /// Parses a scene from JSON text. Relative texture paths are resolved against `baseDir`; each
 /// distinct image is read once through `loader` (which may be empty if no object uses an image).

@@ -3,6 +3,7 @@
 // (coverage from the Jacobian), objects passing in front of each other (visibility), and the
 // parameters between two frames (linear, orbit). Also the image-quality measures and push-pull.
 #include "FrameInterpolation.h"
+#include "FrameTracer.h"
 #include "ImageQuality.h"
 #include "SceneFile.h"
 
@@ -400,15 +401,15 @@ TEST(FrameInterpolation, PushPullKeepsKnownPixelsAndFillsFromThem)
 TEST(FrameParameters, MassSpinAndCameraBetweenTwoFrames)
 {
   FrameParameters a, b;
-  a.mass = 0.1;
-  b.mass = 1.2;
-  a.spin = 0.0;
-  b.spin = 0.6;
+  a.spacetime.mass = 0.1;
+  b.spacetime.mass = 1.2;
+  a.spacetime.spin = 0.0;
+  b.spacetime.spin = 0.6;
   a.position = Vec3(30, 0, 0);
   b.position = Vec3(0, 40, 0);
   const FrameParameters m = interpolateParameters(a, b, 0.5, CameraPath::Orbit);
-  EXPECT_DOUBLE_EQ(m.mass, 0.65);
-  EXPECT_DOUBLE_EQ(m.spin, 0.3);
+  EXPECT_DOUBLE_EQ(m.spacetime.mass, 0.65);
+  EXPECT_DOUBLE_EQ(m.spacetime.spin, 0.3);
   // Radius 35 on the bisector of the quarter turn.
   EXPECT_NEAR(m.position.norm(), 35.0, 1e-12);
   EXPECT_NEAR(m.position.x(), 35.0 / std::sqrt(2.0), 1e-12);
@@ -424,7 +425,7 @@ TEST(FrameParameters, MassSpinAndCameraBetweenTwoFrames)
     (interpolateParameters(a, b, 0.5, CameraPath::Automatic).position - m.position).norm(), 0,
     1e-12);
   FrameParameters fa = a, fb = b;
-  fa.mass = fb.mass = 0;
+  fa.spacetime.mass = fb.spacetime.mass = 0;
   EXPECT_NEAR(
     (interpolateParameters(fa, fb, 0.5, CameraPath::Automatic).position - line.position).norm(), 0,
     1e-12);

@@ -6,7 +6,9 @@
 #include "InterpolationTestSupport.h"
 
 #include "FrameInterpolation.h"
+#include "FrameTracer.h"
 #include "GeodesicFrameMatching.h"
+#include "SceneFile.h"
 
 #include "vtkCommand.h"
 #include "vtkDoubleArray.h"

@@ -75,7 +75,7 @@ TEST(InterpolationStore, ExactModeAccumulatesItsRays)
   EXPECT_EQ(frames[0].id, first.frameId);
   EXPECT_EQ(frames[0].rayCount, first.retraced);
   EXPECT_EQ(frames[0].label, "interpolation re-trace");
-  EXPECT_DOUBLE_EQ(frames[0].key.mass, 0.2);
+  EXPECT_DOUBLE_EQ(frames[0].key.spacetime.mass, 0.2);
   EXPECT_NE(store.frameSceneText(first.frameId).find("\"subset\""), std::string::npos);
 
   // The stored rays are the re-traced pixels, with the colours the frame shows there.

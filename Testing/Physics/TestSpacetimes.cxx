@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <random>
+#include <string>
+#include <utility>
 
 using namespace asrt;
 
@@ -163,9 +165,9 @@ TEST(Spacetime, RejectsUnphysicalParameters)
   EXPECT_THROW((SchwarzschildSpacetime(0.0)), InvalidParameter);
   EXPECT_THROW((SchwarzschildSpacetime(INFINITY)), InvalidParameter);
   EXPECT_THROW((ReissnerNordstromSpacetime(1.0, 1.01)), InvalidParameter);
-  EXPECT_THROW(makeSpacetime(-0.5, 0, 0), InvalidParameter);
-  EXPECT_THROW(makeSpacetime(1.0, 0.5, 0.5), InvalidParameter);
-  EXPECT_THROW(makeSpacetime(0.0, 0.5, 0.0), InvalidParameter);
+  EXPECT_THROW(makeSpacetime({ -0.5, 0, 0 }), InvalidParameter);
+  EXPECT_THROW(makeSpacetime({ 1.0, 0.5, 0.5 }), InvalidParameter);
+  EXPECT_THROW(makeSpacetime({ 0.0, 0.5, 0.0 }), InvalidParameter);
   try
   {
     KerrSpacetime tooFast(1.0, 2.0);
@@ -179,10 +181,50 @@ TEST(Spacetime, RejectsUnphysicalParameters)
 
 TEST(Spacetime, FactoryPicksTheCheapestModel)
 {
-  EXPECT_EQ(makeSpacetime(0, 0, 0)->kind(), SpacetimeKind::Minkowski);
-  EXPECT_EQ(makeSpacetime(1, 0, 0)->kind(), SpacetimeKind::Schwarzschild);
-  EXPECT_EQ(makeSpacetime(1, 0.5, 0)->kind(), SpacetimeKind::Kerr);
-  EXPECT_EQ(makeSpacetime(1, 0, 0.5)->kind(), SpacetimeKind::ReissnerNordstrom);
+  EXPECT_EQ(makeSpacetime({ 0, 0, 0 })->kind(), SpacetimeKind::Minkowski);
+  EXPECT_EQ(makeSpacetime({ 1, 0, 0 })->kind(), SpacetimeKind::Schwarzschild);
+  EXPECT_EQ(makeSpacetime({ 1, 0.5, 0 })->kind(), SpacetimeKind::Kerr);
+  EXPECT_EQ(makeSpacetime({ 1, 0, 0.5 })->kind(), SpacetimeKind::ReissnerNordstrom);
+}
+
+TEST(Spacetime, FactoryBuildsTheGivenParameters)
+{
+  const SpacetimeParameters kerr{ 1.5, -0.75, 0.0 };
+  const auto k = makeSpacetime(kerr);
+  EXPECT_EQ(k->mass(), 1.5);
+  EXPECT_EQ(k->spin(), -0.75);
+  EXPECT_EQ(k->charge(), 0.0);
+  const auto rn = makeSpacetime({ 2.0, 0.0, 0.5 });
+  EXPECT_EQ(rn->mass(), 2.0);
+  EXPECT_EQ(rn->spin(), 0.0);
+  EXPECT_EQ(rn->charge(), 0.5);
+  // The default is flat space.
+  EXPECT_EQ(makeSpacetime(SpacetimeParameters())->kind(), SpacetimeKind::Minkowski);
+  // A non-finite parameter is refused by name.
+  for (const auto& [bad, name] : { std::pair{ SpacetimeParameters{ NAN, 0, 0 }, "mass" },
+                                   std::pair{ SpacetimeParameters{ 1, INFINITY, 0 }, "spin" },
+                                   std::pair{ SpacetimeParameters{ 1, 0, NAN }, "charge" } })
+  {
+    try
+    {
+      makeSpacetime(bad);
+      ADD_FAILURE() << name;
+    }
+    catch (const InvalidParameter& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(SpacetimeParameters, EqualWhenEveryParameterIs)
+{
+  const SpacetimeParameters p{ 1.0, 0.5, 0.0 };
+  EXPECT_EQ(p, (SpacetimeParameters{ 1.0, 0.5, 0.0 }));
+  EXPECT_NE(p, (SpacetimeParameters{ 1.5, 0.5, 0.0 }));
+  EXPECT_NE(p, (SpacetimeParameters{ 1.0, 0.25, 0.0 }));
+  EXPECT_NE(p, (SpacetimeParameters{ 1.0, 0.5, 0.25 }));
+  EXPECT_EQ(SpacetimeParameters(), (SpacetimeParameters{ 0.0, 0.0, 0.0 }));
 }
 
 TEST(Spacetime, CompleteNullMomentumGivesHZero)

@@ -72,8 +72,8 @@ asrt::SceneDescription scene(double mass = 1.0)
 {
   asrt::SceneDescription d;
   d.name = "three cylinders";
-  d.mass = mass;
-  d.spin = 0.25;
+  d.spacetime.mass = mass;
+  d.spacetime.spin = 0.25;
   d.camera.width = 64;
   d.camera.height = 48;
   return d;
@@ -240,8 +240,8 @@ TEST(RayStoreFrames, RoundTripIsBitExact)
   EXPECT_EQ(f.rayCount, std::int64_t(records.size()));
   EXPECT_EQ(f.label, "round trip");
   EXPECT_EQ(f.name, "three cylinders");
-  EXPECT_EQ(bitsOf(f.key.mass), bitsOf(1.0));
-  EXPECT_EQ(bitsOf(f.key.spin), bitsOf(0.25));
+  EXPECT_EQ(bitsOf(f.key.spacetime.mass), bitsOf(1.0));
+  EXPECT_EQ(bitsOf(f.key.spacetime.spin), bitsOf(0.25));
   EXPECT_EQ(bitsOf(f.key.cameraPosition.y()), bitsOf(-30.000000000000004));
   EXPECT_EQ(bitsOf(f.key.cameraPosition.z()), bitsOf(1e-300));
   EXPECT_EQ(bitsOf(f.key.relativeTolerance), bitsOf(1.2345678901234567e-9));
@@ -327,10 +327,10 @@ TEST(RayStoreFrames, SameSceneAndParametersIsTheSameFrame)
   EXPECT_EQ(frames[0].id, replaced);
   EXPECT_EQ(frames[0].label, "replaced");
   EXPECT_EQ(frames[0].rayCount, 3000);
-  EXPECT_EQ(frames[0].key.mass, 1.0);
+  EXPECT_EQ(frames[0].key.spacetime.mass, 1.0);
   EXPECT_EQ(frames[1].id, heavier);
   EXPECT_EQ(frames[1].rayCount, 5000);
-  EXPECT_EQ(frames[1].key.mass, 1.5);
+  EXPECT_EQ(frames[1].key.spacetime.mass, 1.5);
   for (const auto& f : frames)
   {
     EXPECT_EQ(f.status, "complete");

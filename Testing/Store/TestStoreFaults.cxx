@@ -72,7 +72,7 @@ asrt::SceneDescription scene(double mass)
 {
   asrt::SceneDescription d;
   d.name = "fault scene";
-  d.mass = mass;
+  d.spacetime.mass = mass;
   d.camera.width = 97;
   d.camera.height = 64;
   return d;
@@ -455,13 +455,13 @@ TEST(StoreFaultsConcurrent, ManyWritersAndOneDuplicatePairAllEndIntact)
     {
       const int t = f.label == "twin0" ? 0 : 1;
       EXPECT_EQ(twinCodes[std::size_t(t)], int(Ok)) << "the stored twin is the one that failed";
-      EXPECT_EQ(f.key.mass, 99.0);
+      EXPECT_EQ(f.key.spacetime.mass, 99.0);
       seed = 1000 + std::uint64_t(t);
     }
     else
     {
       const int w = f.label[1] - '0', k = f.label[3] - '0';
-      EXPECT_EQ(bitsOf(f.key.mass), bitsOf(2.0 + w + 0.125 * k)) << f.label;
+      EXPECT_EQ(bitsOf(f.key.spacetime.mass), bitsOf(2.0 + w + 0.125 * k)) << f.label;
       seed = std::uint64_t(100 * w + k);
     }
     EXPECT_EQ(f.rayCount, std::int64_t(count)) << f.label;

@@ -77,7 +77,7 @@ asrt::SceneDescription scene(double mass)
 {
   asrt::SceneDescription d;
   d.name = "tiled scene";
-  d.mass = mass;
+  d.spacetime.mass = mass;
   d.camera.width = Width;
   d.camera.height = 64;
   return d;
@@ -469,11 +469,11 @@ std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneDescript
     cols += ", tile_count";
     vals += ", " + std::to_string(tiles.size());
   }
-  const std::int64_t id =
-    std::stoll(legacyExec(c, "INSERT INTO frames (" + cols + ") VALUES (" + vals + ") RETURNING id",
-                          { sceneId, effective, scene.name, num(scene.mass), num(scene.spin),
-                            std::to_string(scene.camera.width), std::to_string(scene.camera.height),
-                            status, std::to_string(status == "complete" ? rays : 0) }));
+  const std::int64_t id = std::stoll(legacyExec(
+    c, "INSERT INTO frames (" + cols + ") VALUES (" + vals + ") RETURNING id",
+    { sceneId, effective, scene.name, num(scene.spacetime.mass), num(scene.spacetime.spin),
+      std::to_string(scene.camera.width), std::to_string(scene.camera.height), status,
+      std::to_string(status == "complete" ? rays : 0) }));
   std::string blockCols = "frame_id, block, first_ray, n", blockVals = "$1, $2, $3, $4";
   int next = 5;
   if (version >= 2)

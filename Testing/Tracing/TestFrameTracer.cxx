@@ -31,7 +31,7 @@ std::shared_ptr<const Texture> solid(double r = 0.5, double g = 0.5, double b = 
 SceneDescription describe(double mass, const CameraParameters& cam)
 {
   SceneDescription d;
-  d.mass = mass;
+  d.spacetime.mass = mass;
   d.camera = cam;
   d.scene = std::make_shared<Scene>();
   return d;

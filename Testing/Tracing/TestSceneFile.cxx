@@ -143,7 +143,7 @@ TEST(SceneFile, ReadsEveryField)
   FakeLoader fake;
   const SceneDescription d = parse(validDoc(), &fake);
   EXPECT_EQ(d.name, "test scene");
-  EXPECT_EQ(d.mass, 1.0);
+  EXPECT_EQ(d.spacetime.mass, 1.0);
   EXPECT_EQ(d.camera.position, Vec3(0, -30, 8));
   EXPECT_EQ(d.camera.width, 320);
   EXPECT_EQ(d.camera.height, 200);
@@ -204,8 +204,8 @@ TEST(SceneFile, DefaultsAndNormalisedSource)
   const IntegratorConfig integ;
   const TraceOptions tr;
   EXPECT_EQ(d.name, "");
-  EXPECT_EQ(d.mass, 0.0);
-  EXPECT_EQ(d.spin, 0.0);
+  EXPECT_EQ(d.spacetime.mass, 0.0);
+  EXPECT_EQ(d.spacetime.spin, 0.0);
   EXPECT_EQ(d.camera.width, cam.width);
   EXPECT_EQ(d.camera.viewAngle, cam.viewAngle);
   EXPECT_EQ(d.camera.viewUp, cam.viewUp);
@@ -503,7 +503,7 @@ TEST(SceneFilePresets, EveryPresetParses)
     EXPECT_FALSE(d.name.empty());
     EXPECT_FALSE(d.scene->objects().empty());
     // Each builds its spacetime and propagator (the parser checked the method against it).
-    EXPECT_NO_THROW(makePropagator(*makeSpacetime(d.mass, d.spin, d.charge), d.integrator));
+    EXPECT_NO_THROW(makePropagator(*makeSpacetime(d.spacetime), d.integrator));
   }
   EXPECT_GE(n, 6);
 }
@@ -511,7 +511,7 @@ TEST(SceneFilePresets, EveryPresetParses)
 TEST(SceneFilePresets, PaperFiguresAreOneSceneAtDifferentMasses)
 {
   const SceneDescription fig1 = preset("fig1-cylinders.json");
-  EXPECT_EQ(fig1.mass, 1.0);
+  EXPECT_EQ(fig1.spacetime.mass, 1.0);
   EXPECT_EQ(fig1.camera.width, 200);
   EXPECT_EQ(fig1.camera.height, 200);
   int cylinders = 0, skies = 0, planes = 0;
@@ -561,7 +561,7 @@ TEST(SceneFilePresets, PaperFiguresAreOneSceneAtDifferentMasses)
   for (const auto& o : others)
   {
     const SceneDescription d = preset(o.file);
-    EXPECT_EQ(d.mass, o.mass) << o.file;
+    EXPECT_EQ(d.spacetime.mass, o.mass) << o.file;
     EXPECT_EQ(withoutMass(d), withoutMass(fig1)) << o.file;
   }
 }
@@ -569,7 +569,7 @@ TEST(SceneFilePresets, PaperFiguresAreOneSceneAtDifferentMasses)
 TEST(SceneFilePresets, DiskScenesMatchTheirSpecification)
 {
   const SceneDescription kerr = preset("kerr-disk.json");
-  EXPECT_EQ(kerr.spin, 0.9);
+  EXPECT_EQ(kerr.spacetime.spin, 0.9);
   // Prograde ISCO (Bardeen, Press & Teukolsky 1972) for a = 0.9: r = 2.32 M in Boyer–Lindquist r;
   // the disk is given in Cartesian (Kerr–Schild) radius ρ = √(r² + a²) on the equator.
   const double a = 0.9;
@@ -591,8 +591,8 @@ TEST(SceneFilePresets, DiskScenesMatchTheirSpecification)
   EXPECT_NEAR(std::acos(kerr.camera.position.z() / r) * 180 / M_PI, 75.0, 1e-9);
 
   const SceneDescription gyoto = preset("gyoto-disk.json");
-  EXPECT_EQ(gyoto.mass, 1.0);
-  EXPECT_EQ(gyoto.spin, 0.0);
+  EXPECT_EQ(gyoto.spacetime.mass, 1.0);
+  EXPECT_EQ(gyoto.spacetime.spin, 0.0);
   const double th = 80 * M_PI / 180;
   EXPECT_LT((gyoto.camera.position - Vec3(0, -50 * std::sin(th), 50 * std::cos(th))).norm(), 1e-13);
   EXPECT_NEAR(gyoto.camera.viewAngle * M_PI / 180, 0.9, 1e-15);
@@ -660,13 +660,13 @@ TEST(SceneFile, EffectiveSceneTextCarriesOverridesAndParsesBack)
       "objects": [{"type": "sphere", "id": 3, "center": [0, 20, 0], "radius": 2,
                    "texture": {"color": [1, 0, 0]}}]})",
                                   ".", none);
-  d.mass = 0.5;
+  d.spacetime.mass = 0.5;
   d.camera.position = Vec3(1, -25, 2);
   d.camera.width = 16;
   d.integrator.method = "RK4";
   d.integrator.step = 0.02;
   const SceneDescription back = parseScene(effectiveSceneText(d), ".", none);
-  EXPECT_EQ(back.mass, 0.5);
+  EXPECT_EQ(back.spacetime.mass, 0.5);
   EXPECT_EQ(back.camera.position, Vec3(1, -25, 2));
   EXPECT_EQ(back.camera.width, 16);
   EXPECT_EQ(back.integrator.method, "RK4");
