@@ -263,10 +263,262 @@ int vtkGeodesicDistributedSource::RequestInformation(vtkInformation* request,
   return 0;
 }
 
+/// One RequestData: its state, and its phases in the order it runs them. A phase returning a
+/// bool is collective: false when any process failed, every process then holding the same
+/// failure (Run::agree).
+struct vtkGeodesicDistributedSource::DataRequest
+{
+  vtkGeodesicDistributedSource* source;
+  vtkImageData* image;
+  vtkPolyData* hits;
+  const Run run;
+  Failure failure;
+  std::optional<asrt::SceneDescription> scene;
+  std::unique_ptr<asrt::FrameTracer> tracer;
+  std::optional<asrt::RowPartition> partition;
+  std::unique_ptr<asrt::RayStore> store;
+  std::int64_t frameId = -1;
+  std::vector<asrt::RayRecord> records;
+  double traceSeconds = 0, storeSeconds = 0;
+
+  DataRequest(vtkGeodesicDistributedSource* self, vtkImageData* imageOutput,
+              vtkPolyData* hitsOutput)
+    : source(self)
+    , image(imageOutput)
+    , hits(hitsOutput)
+    , run(this->source->Controller)
+  {
+  }
+
+  /// Reports the agreed failure and leaves the outputs empty.
+  int fail(const std::string& message)
+  {
+    vtkErrorWithObjectMacro(this->source, << message);
+    this->source->StoreFailed = this->failure.store;
+    this->source->Interrupted = this->failure.interrupted;
+    this->image->Initialize();
+    this->hits->Initialize();
+    return 0;
+  }
+
+  /// fail, once a frame may have been begun: a begun frame must not stay behind half-written.
+  /// Except when the frame we joined already had tiles: another run is writing it (or was, and
+  /// died), and only its owner, or whoever cleans up abandoned frames, may delete it.
+  int failAndForget(const std::string& message)
+  {
+    const bool othersFrame = message.find("already written") != std::string::npos;
+    if (this->store && this->run.Rank == 0 && !othersFrame)
+    {
+      try
+      {
+        this->store->deleteFrame(this->frameId);
+      }
+      catch (const std::exception&)
+      {
+        // The frame stays 'writing', invisible; abandonedFrames() finds it.
+      }
+    }
+    if (othersFrame)
+      return this->fail(message + " (frame " + std::to_string(this->frameId) +
+                        " was begun by another run: if that run died, RayStore::abandonedFrames "
+                        "finds it and deleteFrame removes it)");
+    return this->fail(message);
+  }
+
+  /// The scene exactly as RequestInformation loaded it on every process, its tracer and the
+  /// rows each process traces; refused when this process's share would not fit in memory.
+  bool prepare()
+  {
+    if (!this->source->Cache)
+      this->failure.message = "the scene was not loaded";
+    else if (this->source->GetPixelSubset())
+      this->failure.message =
+        "PixelSubset is not supported in distributed tracing: it traces whole frames";
+    else if (this->source->GeneratePolylines)
+      this->failure.message = "GeneratePolylines is not supported in distributed tracing";
+    if (!this->failure.happened())
+    {
+      try
+      {
+        this->scene = *this->source->Cache;
+        this->tracer = std::make_unique<asrt::FrameTracer>(*this->scene);
+        this->partition.emplace(this->scene->camera.height, this->run.Size,
+                                this->source->RowLayout == CONTIGUOUS
+                                  ? asrt::RowLayout::Contiguous
+                                  : asrt::RowLayout::Interleaved,
+                                this->source->RowsPerBlock);
+        this->checkMemory();
+      }
+      catch (const std::exception& e)
+      {
+        this->failure.message = e.what();
+      }
+    }
+    return this->run.agree(this->failure);
+  }
+
+  /// Each process holds its rays' records and hit points; process 0 also the samples of the
+  /// whole image while it assembles it.
+  void checkMemory()
+  {
+    const asrt::CameraParameters& camera = this->scene->camera;
+    const double own = static_cast<double>(camera.width) *
+                       this->partition->rowsOf(this->run.Rank).size(),
+                 all = static_cast<double>(camera.width) * camera.height;
+    const double bytes = own * (sizeof(asrt::RayRecord) + 352.0) +
+                         (this->run.Rank == 0 ? all * (sizeof(asrt::RayRecord) + 104.0) : 0.0);
+    const double limit =
+      this->source->MemoryLimit > 0.0 ? this->source->MemoryLimit : 0.8 * physicalMemory();
+    if (bytes > limit)
+    {
+      std::ostringstream os;
+      os << "process " << this->run.Rank << " needs about " << bytes / 1e9
+         << " GB for its share of the frame, more than the " << limit / 1e9 << " GB allowed";
+      this->failure.message = os.str();
+    }
+  }
+
+  /// The store first: an unreachable database should not cost a trace. Process 0 resolves the
+  /// connection (it may start the private server) and every process joins the same frame.
+  bool beginStoredFrame()
+  {
+    std::string conninfo;
+    if (this->run.Rank == 0)
+    {
+      try
+      {
+        conninfo = asrt::storeConnection(this->source->ConnectionString);
+      }
+      catch (const std::exception& e)
+      {
+        this->failure = { std::string("cannot start the private PostgreSQL server: ") + e.what(),
+                          true };
+      }
+    }
+    if (!this->run.agree(this->failure))
+      return false;
+    conninfo = this->run.broadcast(conninfo);
+    try
+    {
+      this->store = std::make_unique<asrt::RayStore>(conninfo);
+      this->store->migrate();
+      this->frameId =
+        this->store->beginTiledFrame(*this->scene, this->source->Label ? this->source->Label : "",
+                                     this->partition->blockCount(), this->source->ReplaceExisting);
+    }
+    catch (const std::exception& e)
+    {
+      this->failure = { e.what(), true };
+    }
+    if (!this->run.agree(this->failure))
+      return false;
+    const std::vector<double> ids = this->run.allGather({ static_cast<double>(this->frameId) });
+    for (double id : ids)
+      if (id != static_cast<double>(this->frameId))
+        this->failure = { "the processes began different frames (" +
+                            std::to_string(static_cast<long long>(id)) + " and " +
+                            std::to_string(this->frameId) + ")",
+                          true };
+    return this->run.agree(this->failure);
+  }
+
+  /// Traces this process's rows.
+  bool traceOwnRows()
+  {
+    const int W = this->scene->camera.width;
+    const std::vector<int> rows = this->partition->rowsOf(this->run.Rank);
+    std::vector<std::pair<int, int>> pixels;
+    pixels.reserve(rows.size() * static_cast<std::size_t>(W));
+    for (int j : rows)
+      for (int i = 0; i < W; ++i)
+        pixels.emplace_back(i, j);
+    const auto traceStart = std::chrono::steady_clock::now();
+    try
+    {
+      this->records = this->tracer->tracePixels(pixels,
+                                                [this](double f)
+                                                {
+                                                  this->source->UpdateProgress(0.8 * f);
+                                                  return !this->source->GetAbortExecute();
+                                                });
+      if (this->source->GetAbortExecute())
+        this->failure = { "interrupted", false, true };
+    }
+    catch (const std::exception& e)
+    {
+      this->failure.message = e.what();
+    }
+    this->traceSeconds = secondsSince(traceStart);
+    return this->run.agree(this->failure);
+  }
+
+  /// This process's tiles, one per block of rows, each in its own transaction. Not collective:
+  /// a failure is agreed on after the image and the work are shared.
+  void storeTiles()
+  {
+    const int W = this->scene->camera.width;
+    const auto storeStart = std::chrono::steady_clock::now();
+    if (!this->store)
+      return;
+    try
+    {
+      const std::vector<int> blocks = this->partition->blocksOf(this->run.Rank);
+      std::size_t first = 0;
+      for (std::size_t k = 0; k < blocks.size(); ++k)
+      {
+        int tile = blocks[k];
+        const std::size_t count = static_cast<std::size_t>(this->partition->blockEnd(tile) -
+                                                           this->partition->blockBegin(tile)) *
+                                  W;
+        this->store->writeTile(this->frameId, tile, count,
+                               [&](std::size_t n, asrt::RayRecord& r)
+                               { r = this->records[first + n]; });
+        first += count;
+        this->source->InvokeEvent(TileStoredEvent, &tile);
+        this->source->UpdateProgress(0.82 + 0.13 * static_cast<double>(k + 1) / blocks.size());
+      }
+    }
+    catch (const std::exception& e)
+    {
+      this->failure = { e.what(), true };
+    }
+    this->storeSeconds = secondsSince(storeStart);
+  }
+
+  /// Collective: process 0 assembles the image from everyone's samples.
+  void assembleImage()
+  {
+    std::vector<double> samples;
+    asrt::packImageSamples(this->records, samples);
+    samples = this->run.gatherAtZero(samples);
+    if (this->run.Rank == 0)
+    {
+      const std::vector<asrt::RayRecord> frame = asrt::unpackImageSamples(samples);
+      samples = std::vector<double>();
+      asrt::recordsToImage(frame, this->scene->camera.width, 0, this->scene->camera.height,
+                           this->image);
+    }
+  }
+
+  /// Collective: every process's work into RankWork, on every process.
+  void shareRankWork()
+  {
+    std::int64_t steps = 0;
+    for (const asrt::RayRecord& r : this->records)
+      steps += r.steps;
+    const std::vector<double> work =
+      this->run.allGather({ static_cast<double>(steps), static_cast<double>(this->records.size()),
+                            this->traceSeconds, this->storeSeconds });
+    vtkDoubleArray* rankWork = this->source->RankWork;
+    rankWork->SetNumberOfTuples(this->run.Size);
+    for (int p = 0; p < this->run.Size; ++p)
+      rankWork->SetTypedTuple(p, work.data() + 4 * p);
+  }
+};
+
 int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVector**,
                                               vtkInformationVector* outputVector)
 {
-  using Clock = std::chrono::steady_clock;
   vtkImageData* image = vtkImageData::GetData(outputVector, 0);
   vtkPolyData* hits = vtkPolyData::GetData(outputVector, 1);
   vtkPolyData* lines = vtkPolyData::GetData(outputVector, 2);
@@ -278,217 +530,28 @@ int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVec
   this->Interrupted = false;
   this->RankWork->SetNumberOfTuples(0);
 
-  const Run run(this->Controller);
-  Failure failure;
-  auto fail = [&](const std::string& message)
-  {
-    vtkErrorMacro(<< message);
-    this->StoreFailed = failure.store;
-    this->Interrupted = failure.interrupted;
-    image->Initialize();
-    hits->Initialize();
-    return 0;
-  };
-
-  // The scene exactly as RequestInformation loaded it on every process.
-  if (!this->Cache)
-    failure.message = "the scene was not loaded";
-  else if (this->GetPixelSubset())
-    failure.message = "PixelSubset is not supported in distributed tracing: it traces whole frames";
-  else if (this->GeneratePolylines)
-    failure.message = "GeneratePolylines is not supported in distributed tracing";
-  std::optional<asrt::SceneDescription> scene;
-  std::unique_ptr<asrt::FrameTracer> tracer;
-  std::optional<asrt::RowPartition> partition;
-  if (!failure.happened())
-  {
-    try
-    {
-      scene = *this->Cache;
-      tracer = std::make_unique<asrt::FrameTracer>(*scene);
-      partition.emplace(scene->camera.height, run.Size,
-                        this->RowLayout == CONTIGUOUS ? asrt::RowLayout::Contiguous
-                                                      : asrt::RowLayout::Interleaved,
-                        this->RowsPerBlock);
-      // Each process holds its rays' records and hit points; process 0 also the samples of the
-      // whole image while it assembles it.
-      const double own =
-                     static_cast<double>(scene->camera.width) * partition->rowsOf(run.Rank).size(),
-                   all = static_cast<double>(scene->camera.width) * scene->camera.height;
-      const double bytes = own * (sizeof(asrt::RayRecord) + 352.0) +
-                           (run.Rank == 0 ? all * (sizeof(asrt::RayRecord) + 104.0) : 0.0);
-      const double limit = this->MemoryLimit > 0.0 ? this->MemoryLimit : 0.8 * physicalMemory();
-      if (bytes > limit)
-      {
-        std::ostringstream os;
-        os << "process " << run.Rank << " needs about " << bytes / 1e9
-           << " GB for its share of the frame, more than the " << limit / 1e9 << " GB allowed";
-        failure.message = os.str();
-      }
-    }
-    catch (const std::exception& e)
-    {
-      failure.message = e.what();
-    }
-  }
-  if (!run.agree(failure))
-    return fail(failure.message);
-  const int W = scene->camera.width;
-
-  // The store first: an unreachable database should not cost a trace. Process 0 resolves the
-  // connection (it may start the private server) and every process joins the same frame.
-  std::unique_ptr<asrt::RayStore> store;
-  std::int64_t frameId = -1;
-  if (this->StoreFrame)
-  {
-    std::string conninfo;
-    if (run.Rank == 0)
-    {
-      try
-      {
-        conninfo = asrt::storeConnection(this->ConnectionString);
-      }
-      catch (const std::exception& e)
-      {
-        failure = { std::string("cannot start the private PostgreSQL server: ") + e.what(), true };
-      }
-    }
-    if (!run.agree(failure))
-      return fail(failure.message);
-    conninfo = run.broadcast(conninfo);
-    try
-    {
-      store = std::make_unique<asrt::RayStore>(conninfo);
-      store->migrate();
-      frameId = store->beginTiledFrame(*scene, this->Label ? this->Label : "",
-                                       partition->blockCount(), this->ReplaceExisting);
-    }
-    catch (const std::exception& e)
-    {
-      failure = { e.what(), true };
-    }
-    if (!run.agree(failure))
-      return fail(failure.message);
-    const std::vector<double> ids = run.allGather({ static_cast<double>(frameId) });
-    for (double id : ids)
-      if (id != static_cast<double>(frameId))
-        failure = { "the processes began different frames (" +
-                      std::to_string(static_cast<long long>(id)) + " and " +
-                      std::to_string(frameId) + ")",
-                    true };
-    if (!run.agree(failure))
-      return fail(failure.message);
-  }
-  // Whatever fails from here on, a begun frame must not stay behind half-written. Except when
-  // the frame we joined already had tiles: another run is writing it (or was, and died), and
-  // only its owner, or whoever cleans up abandoned frames, may delete it.
-  auto failAndForget = [&](const std::string& message)
-  {
-    const bool othersFrame = message.find("already written") != std::string::npos;
-    if (store && run.Rank == 0 && !othersFrame)
-    {
-      try
-      {
-        store->deleteFrame(frameId);
-      }
-      catch (const std::exception&)
-      {
-        // The frame stays 'writing', invisible; abandonedFrames() finds it.
-      }
-    }
-    if (othersFrame)
-      return fail(message + " (frame " + std::to_string(frameId) +
-                  " was begun by another run: if that run died, RayStore::abandonedFrames finds "
-                  "it and deleteFrame removes it)");
-    return fail(message);
-  };
-
-  // Trace our rows.
-  const std::vector<int> rows = partition->rowsOf(run.Rank);
-  std::vector<std::pair<int, int>> pixels;
-  pixels.reserve(rows.size() * static_cast<std::size_t>(W));
-  for (int j : rows)
-    for (int i = 0; i < W; ++i)
-      pixels.emplace_back(i, j);
-  std::vector<asrt::RayRecord> records;
-  const auto traceStart = Clock::now();
-  try
-  {
-    records = tracer->tracePixels(pixels,
-                                  [this](double f)
-                                  {
-                                    this->UpdateProgress(0.8 * f);
-                                    return !this->GetAbortExecute();
-                                  });
-    if (this->GetAbortExecute())
-      failure = { "interrupted", false, true };
-  }
-  catch (const std::exception& e)
-  {
-    failure.message = e.what();
-  }
-  const double traceSeconds = secondsSince(traceStart);
-  if (!run.agree(failure))
-    return failAndForget(failure.message);
-
+  DataRequest request(this, image, hits);
+  if (!request.prepare())
+    return request.fail(request.failure.message);
+  if (this->StoreFrame && !request.beginStoredFrame())
+    return request.fail(request.failure.message);
+  // Whatever fails from here on, a begun frame must not stay behind half-written.
+  if (!request.traceOwnRows())
+    return request.failAndForget(request.failure.message);
   // The Jacobians across the rows other processes traced.
-  asrt::FrameTracer::computeJacobians(records, run.exchangeNeighbourRows(*partition, records, W));
+  asrt::FrameTracer::computeJacobians(
+    request.records, request.run.exchangeNeighbourRows(*request.partition, request.records,
+                                                       request.scene->camera.width));
   this->UpdateProgress(0.82);
+  request.storeTiles();
+  request.assembleImage();
+  request.shareRankWork();
+  if (!request.run.agree(request.failure))
+    return request.failAndForget(request.failure.message);
 
-  // Our tiles, one per block of rows, each in its own transaction.
-  const auto storeStart = Clock::now();
-  if (store)
-  {
-    try
-    {
-      const std::vector<int> blocks = partition->blocksOf(run.Rank);
-      std::size_t first = 0;
-      for (std::size_t k = 0; k < blocks.size(); ++k)
-      {
-        int tile = blocks[k];
-        const std::size_t count =
-          static_cast<std::size_t>(partition->blockEnd(tile) - partition->blockBegin(tile)) * W;
-        store->writeTile(frameId, tile, count,
-                         [&](std::size_t n, asrt::RayRecord& r) { r = records[first + n]; });
-        first += count;
-        this->InvokeEvent(TileStoredEvent, &tile);
-        this->UpdateProgress(0.82 + 0.13 * static_cast<double>(k + 1) / blocks.size());
-      }
-    }
-    catch (const std::exception& e)
-    {
-      failure = { e.what(), true };
-    }
-  }
-  const double storeSeconds = store ? secondsSince(storeStart) : 0.0;
-
-  // Process 0 assembles the image from everyone's samples.
-  std::vector<double> samples;
-  asrt::packImageSamples(records, samples);
-  samples = run.gatherAtZero(samples);
-  if (run.Rank == 0)
-  {
-    const std::vector<asrt::RayRecord> frame = asrt::unpackImageSamples(samples);
-    samples = std::vector<double>();
-    asrt::recordsToImage(frame, W, 0, scene->camera.height, image);
-  }
-
-  std::int64_t steps = 0;
-  for (const asrt::RayRecord& r : records)
-    steps += r.steps;
-  const std::vector<double> work =
-    run.allGather({ static_cast<double>(steps), static_cast<double>(records.size()), traceSeconds,
-                    storeSeconds });
-  this->RankWork->SetNumberOfTuples(run.Size);
-  for (int p = 0; p < run.Size; ++p)
-    this->RankWork->SetTypedTuple(p, work.data() + 4 * p);
-
-  if (!run.agree(failure))
-    return failAndForget(failure.message);
-
-  asrt::recordsToPolyData(records, hits);
-  asrt::setFrameFieldData(*scene, hits->GetFieldData());
-  this->FrameId = store ? static_cast<vtkIdType>(frameId) : -1;
+  asrt::recordsToPolyData(request.records, hits);
+  asrt::setFrameFieldData(*request.scene, hits->GetFieldData());
+  this->FrameId = request.store ? static_cast<vtkIdType>(request.frameId) : -1;
   this->UpdateProgress(1.0);
   return 1;
 }

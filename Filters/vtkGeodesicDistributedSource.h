@@ -145,6 +145,7 @@ private:
   vtkGeodesicDistributedSource(const vtkGeodesicDistributedSource&) = delete;
   void operator=(const vtkGeodesicDistributedSource&) = delete;
   struct Run;
+  struct DataRequest;
 };
 
 #endif

@@ -1,4 +1,4 @@
-// Distributed tracing (issue 7): strong scaling of one frame over MPI processes, and the load
+// Distributed tracing: strong scaling of one frame over MPI processes, and the load
 // balance of row splits at 2 to 64 processes by simulation. Two modes:
 //
 //   mpiexec -np N asrt_bench_distributed run SCENE.json WxH LAYOUT[,LAYOUT...] OUT

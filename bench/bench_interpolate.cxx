@@ -1,4 +1,4 @@
-// Interpolation between accumulated frames (issue 5): speed of the correspondence and of each
+// Interpolation between accumulated frames: speed of the correspondence and of each
 // frame at 200×200 and 1920×1080; quality against cost of plain and exact mode (PSNR, SSIM over
 // the frame and over the photon-ring band, against frames traced at the same parameters); and
 // the paper's movie table redone. Prints a Markdown section for bench/REPORT.md.

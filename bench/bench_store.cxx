@@ -1,4 +1,4 @@
-// Accumulation in PostgreSQL (issue 4): writes and reads a 200×200 and a 1920×1080 frame of ray
+// Accumulation in PostgreSQL: writes and reads a 200×200 and a 1920×1080 frame of ray
 // records through RayStore on a private durable server (fsync on), the same 1920×1080 records
 // through a raw binary file with fflush + fsync on the same disk, and the predicate read
 // "object_id = 2 AND image_order = 1". Then, in the same run, the variants behind the layout:
@@ -797,8 +797,8 @@ int main(int argc, char* argv[])
     double coldRead = 1e300, likeStoreRead = 1e300;
     {
       // One untimed round first, for every variant: the first 1920×1080 writes of a fresh server
-      // run up to 1.7× slower (its shared memory and the kernel's page pools are still cold), and
-      // best of 5 would otherwise favour whichever variant came later.
+      // run slower (its shared memory and the kernel's page pools are still cold), and best of 5
+      // would otherwise favour whichever variant came later.
       writeFile(file, hd);
       (void)readFile(file);
       std::filesystem::remove(file);
@@ -835,8 +835,8 @@ int main(int argc, char* argv[])
       t0 = now();
       {
         // Released before the store's turn, as every other result is: a 560 MB block still held
-        // makes the next large allocation take fresh pages from the kernel (slow here: it was
-        // measured to add up to 1 s to the store's read that follows).
+        // makes the next large allocation take fresh pages from the kernel, which would slow the
+        // store's read that follows.
         const std::vector<RayRecord> cold = readFile(file);
         coldRead = std::min(coldRead, now() - t0);
       }

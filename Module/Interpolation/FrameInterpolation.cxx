@@ -1,5 +1,7 @@
 #include "FrameInterpolation.h"
 
+#include "SplatKernel.h"
+
 #include <omp.h>
 #ifdef __SSE4_1__
 #include <smmintrin.h>
@@ -33,287 +35,6 @@ const char* toString(PixelClass c)
   return "?";
 }
 
-namespace
-{
-/// Splats whose footprint deviates from the identity by at most this (any entry of s·(D − I))
-/// are drawn with plain bilinear weights: neighbours then lie at most 1.25 px apart, which the
-/// bilinear kernels (support ±1 px) still cover without gaps.
-constexpr float kBilinearDeviation = 0.25f;
-/// A splat counts for visibility where its weight reaches this; lighter touches (its fringe)
-/// blend but never hide what lies behind.
-constexpr float kVisibleWeight = 0.2f;
-/// Frames smaller than this are rendered on one thread: a parallel region costs more than it
-/// saves there (a time slice, on a busy machine).
-constexpr std::size_t kParallelPixels = 16384;
-/// How many list entries ahead of the one being drawn its splat is prefetched.
-constexpr std::int64_t kPrefetchAhead = 16;
-
-bool sameImage(SampleKind ka, const PixelSample& a, SampleKind kb, const PixelSample& b)
-{
-  if (ka != kb)
-    return false;
-  if (ka == SampleKind::Shadow)
-    return true;
-  return (ka == SampleKind::Surface || ka == SampleKind::Escaped) && a.objectId == b.objectId &&
-         a.imageOrder == b.imageOrder;
-}
-
-void buildSide(const FrameSamples& self, const FrameSamples& other,
-               const std::vector<PixelMatch>& matches, std::size_t offset,
-               const InterpolationOptions& opt, SplatSet& out)
-{
-  const int W = self.width, H = self.height;
-  const std::size_t n = self.pixels.size();
-  std::vector<SampleKind> kind(n), otherKind(n);
-  for (std::size_t p = 0; p < n; ++p)
-  {
-    kind[p] = kindOf(self.pixels[p]);
-    otherKind[p] = kindOf(other.pixels[p]);
-  }
-  for (std::size_t p = 0; p < n; ++p)
-  {
-    const PixelSample& s = self.pixels[p];
-    const PixelMatch& m = matches[p];
-    const int i = static_cast<int>(p % W), j = static_cast<int>(p / W);
-    SplatSet::Splat& sp = out.splats[offset + p];
-    sp.dx = m.x - static_cast<float>(i);
-    sp.dy = m.y - static_cast<float>(j);
-    sp.length = static_cast<float>(s.pathLength);
-    sp.dLength = 0;
-    for (int c = 0; c < 3; ++c)
-      sp.color[c] = sp.other[c] = s.rgb[c];
-    sp.cls = static_cast<std::uint8_t>(m.kind == MatchKind::Matched     ? PixelClass::Matched
-                                       : m.kind == MatchKind::Ambiguous ? PixelClass::Ambiguous
-                                                                        : PixelClass::OneSided);
-    const bool surface = kind[p] == SampleKind::Surface;
-    sp.layer =
-      surface ? static_cast<std::uint8_t>(std::clamp(s.imageOrder, 0, 14)) : SplatSet::kBackdrop;
-
-    if (m.kind == MatchKind::Matched)
-    {
-      // The other frame's colour and path length at the position: bilinear over its pixels of
-      // the same image there, else the partner's.
-      const int x0 = static_cast<int>(std::floor(m.x)), y0 = static_cast<int>(std::floor(m.y));
-      const float ax = m.x - static_cast<float>(x0), ay = m.y - static_cast<float>(y0);
-      double sum[4] = { 0, 0, 0, 0 }, wsum = 0;
-      for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di)
-        {
-          const int x = x0 + di, y = y0 + dj;
-          const float w = (di ? ax : 1 - ax) * (dj ? ay : 1 - ay);
-          if (x < 0 || x >= W || y < 0 || y >= H || w <= 0)
-            continue;
-          const std::size_t q = static_cast<std::size_t>(y) * W + x;
-          if (!sameImage(kind[p], s, otherKind[q], other.pixels[q]))
-            continue;
-          for (int c = 0; c < 3; ++c)
-            sum[c] += w * other.pixels[q].rgb[c];
-          sum[3] += w * other.pixels[q].pathLength;
-          wsum += w;
-        }
-      if (wsum <= 0 && m.partner >= 0)
-      {
-        const PixelSample& q = other.pixels[static_cast<std::size_t>(m.partner)];
-        for (int c = 0; c < 3; ++c)
-          sum[c] = q.rgb[c];
-        sum[3] = q.pathLength;
-        wsum = 1;
-      }
-      if (wsum > 0)
-      {
-        for (int c = 0; c < 3; ++c)
-          sp.other[c] =
-            static_cast<std::uint8_t>(std::lround(std::clamp(sum[c] / wsum, 0.0, 255.0)));
-        sp.dLength = static_cast<float>(sum[3] / wsum - s.pathLength);
-      }
-    }
-
-    // Splats of one surface within this margin of each other blend: the relative tolerance, plus
-    // how fast the path length changes to the next pixel of the same image.
-    double slope = 0;
-    if (surface)
-    {
-      const int di[4] = { -1, 1, 0, 0 }, dj[4] = { 0, 0, -1, 1 };
-      for (int k = 0; k < 4; ++k)
-      {
-        const int x = i + di[k], y = j + dj[k];
-        if (x < 0 || x >= W || y < 0 || y >= H)
-          continue;
-        const std::size_t q = static_cast<std::size_t>(y) * W + x;
-        if (sameImage(kind[p], s, kind[q], self.pixels[q]))
-          slope = std::max(slope, std::abs(self.pixels[q].pathLength - s.pathLength));
-      }
-      slope = std::min(slope, 0.25 * std::abs(s.pathLength));
-    }
-    sp.margin = static_cast<float>(opt.depthTolerance * std::abs(s.pathLength) + slope);
-
-    // Only matched pixels know how their neighbourhood maps; a pixel seen in one frame keeps a
-    // one-pixel footprint (its motion is a guess: spreading it would smear the guess).
-    float deviation = 0;
-    for (int k = 0; k < 4; ++k)
-      deviation = std::max(deviation, std::abs(m.jacobian[k] - ((k == 0 || k == 3) ? 1.0f : 0.0f)));
-    sp.footprint = -1;
-    if (m.kind == MatchKind::Matched && deviation > kBilinearDeviation && std::isfinite(deviation))
-    {
-      sp.footprint = static_cast<std::int32_t>(out.jacobians.size());
-      out.jacobians.push_back(m.jacobian);
-      out.jacobianDeviation.push_back(deviation);
-    }
-
-    out.objectId[offset + p] = s.objectId;
-    out.imageOrder[offset + p] = s.imageOrder;
-    out.termination[offset + p] = static_cast<std::uint8_t>(s.termination);
-    out.pathLength[offset + p] = s.pathLength;
-  }
-}
-
-}
-
-SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Correspondence& c,
-                     const InterpolationOptions& options)
-{
-  if (a.width != b.width || a.height != b.height || c.width != a.width || c.height != a.height ||
-      c.aToB.size() != a.pixels.size() || c.bToA.size() != b.pixels.size() ||
-      a.pixels.size() != static_cast<std::size_t>(a.width) * a.height)
-    throw InvalidParameter("buildSplats: the frames and their correspondence do not fit together");
-  if (!(options.maxMagnification >= 1.0f) || !(options.depthTolerance >= 0.0f) ||
-      options.bandRows < 0)
-    throw InvalidParameter("buildSplats: invalid options");
-  SplatSet set;
-  set.width = a.width;
-  set.height = a.height;
-  set.options = options;
-  const std::size_t n = a.pixels.size();
-  set.splats.resize(2 * n);
-  set.objectId.resize(2 * n);
-  set.imageOrder.resize(2 * n);
-  set.termination.resize(2 * n);
-  set.pathLength.resize(2 * n);
-  buildSide(a, b, c.aToB, 0, options, set);
-  buildSide(b, a, c.bToA, n, options, set);
-  // Pairs that match each other.
-  const int W = a.width, H = a.height;
-  auto markMutual =
-    [&](const std::vector<PixelMatch>& from, const std::vector<PixelMatch>& to, std::size_t offset)
-  {
-    for (std::size_t p = 0; p < n; ++p)
-    {
-      const PixelMatch& m = from[p];
-      if (m.kind != MatchKind::Matched)
-        continue;
-      const long qi = std::lround(m.x), qj = std::lround(m.y);
-      if (qi < 0 || qi >= W || qj < 0 || qj >= H)
-        continue;
-      const PixelMatch& back = to[static_cast<std::size_t>(qj) * W + static_cast<std::size_t>(qi)];
-      if (back.kind == MatchKind::Matched && std::abs(back.x - static_cast<float>(p % W)) <= 1.0f &&
-          std::abs(back.y - static_cast<float>(p / W)) <= 1.0f)
-        set.splats[offset + p].cls |= SplatSet::kMutual;
-    }
-  };
-  markMutual(c.aToB, c.bToA, 0);
-  markMutual(c.bToA, c.aToB, n);
-
-  // Layers must never overlap in key: the stride exceeds every path length a splat can reach.
-  float longest = 0;
-  for (const SplatSet::Splat& s : set.splats)
-    longest = std::max({ longest, std::abs(s.length), std::abs(s.length + s.dLength) });
-  set.layerStride = 2.0f * longest + 1.0f;
-
-  // Bands: every splat is listed in each band of rows it can reach at some t (its path from one
-  // end to the other, widened by its largest footprint).
-  const int rows = options.bandRows > 0 ? options.bandRows : std::max(16, H / 16);
-  set.bandRows = rows;
-  const int bands = (H + rows - 1) / rows;
-  constexpr int K = SplatSet::kSegments;
-  const std::size_t lists = static_cast<std::size_t>(bands) * (K + 1) * 4;
-  const float maxExtent = std::sqrt(2.0f) * options.maxMagnification;
-  auto group = [&](std::size_t k)
-  { return (k >= n ? 2 : 0) + ((set.splats[k].cls & SplatSet::kMutual) ? 0 : 1); };
-  // Calls visit(list) for every list splat k belongs in.
-  auto place = [&](std::size_t k, const auto& visit)
-  {
-    const SplatSet::Splat& s = set.splats[k];
-    const std::size_t p = k % n;
-    const float x = static_cast<float>(p % W), y = static_cast<float>(p / W);
-    float ex = 1, ey = 1;
-    if (s.footprint >= 0)
-    {
-      const auto& d = set.jacobians[static_cast<std::size_t>(s.footprint)];
-      ex = std::min(maxExtent, std::max(std::sqrt(2.0f), std::abs(d[0]) + std::abs(d[1])));
-      ey = std::min(maxExtent, std::max(std::sqrt(2.0f), std::abs(d[2]) + std::abs(d[3])));
-    }
-    const float xlo = std::min(x, x + s.dx) - ex, xhi = std::max(x, x + s.dx) + ex;
-    auto bandsOf = [&](float y0, float y1, int& b0, int& b1)
-    {
-      const float lo = std::min(y0, y1) - ey, hi = std::max(y0, y1) + ey;
-      if (!(xhi >= 0 && xlo <= W - 1 && hi >= 0 && lo <= H - 1))
-        return false; // outside the frame
-      b0 = static_cast<int>(std::max(0.0f, lo)) / rows;
-      b1 = static_cast<int>(std::min(static_cast<float>(H - 1), hi)) / rows;
-      return true;
-    };
-    int b0 = 0, b1 = -1;
-    if (!bandsOf(y, y + s.dy, b0, b1))
-      return;
-    const int g = group(k);
-    if (b1 - b0 <= 1)
-    {
-      for (int b = b0; b <= b1; ++b)
-        visit(set.listIndex(b, 0, g), b);
-      return;
-    }
-    // A splat of side B moves with s = 1 − t: slice k of t is slice K − 1 − k of its path.
-    const bool sideB = k >= n;
-    for (int slice = 0; slice < K; ++slice)
-    {
-      const float s0 = static_cast<float>(sideB ? K - 1 - slice : slice) / K;
-      const float s1 = s0 + 1.0f / K;
-      if (bandsOf(y + s0 * s.dy, y + s1 * s.dy, b0, b1))
-        for (int b = b0; b <= b1; ++b)
-          visit(set.listIndex(b, 1 + slice, g), b);
-    }
-  };
-  std::vector<std::int64_t> count(lists + 1, 0);
-  for (std::size_t k = 0; k < 2 * n; ++k)
-    place(k, [&](std::size_t list, int) { ++count[list + 1]; });
-  for (std::size_t l = 0; l < lists; ++l)
-    count[l + 1] += count[l];
-  set.bandStart = count;
-  set.bandSplats.resize(static_cast<std::size_t>(count.back()));
-  set.bandReach.resize(set.bandSplats.size());
-  std::vector<std::int64_t> fill(count.begin(), count.end() - 1);
-  // When (in its own s) a splat may touch band b: y(s) = y + s·dy within the band's rows widened
-  // by its largest reach and a pixel to spare, in 255ths of s rounded outwards, and a 255th more.
-  auto reach = [&](std::size_t k, int b)
-  {
-    const SplatSet::Splat& sp = set.splats[k];
-    const float y = static_cast<float>((k % n) / W);
-    const float spare = (sp.footprint >= 0 ? std::max(1.0f, maxExtent) : 1.0f) + 1.0f;
-    const float lo = static_cast<float>(b * rows) - spare,
-                hi = static_cast<float>(std::min(H, (b + 1) * rows)) + spare;
-    float sLo = 0, sHi = 1;
-    if (std::abs(sp.dy) > 1e-6f)
-    {
-      const float a0 = (lo - y) / sp.dy, a1 = (hi - y) / sp.dy;
-      sLo = std::max(0.0f, std::min(a0, a1));
-      sHi = std::min(1.0f, std::max(a0, a1));
-    }
-    const int qLo = std::clamp(static_cast<int>(std::floor(sLo * 255.0f)) - 1, 0, 255);
-    const int qHi = std::clamp(static_cast<int>(std::ceil(sHi * 255.0f)) + 1, 0, 255);
-    return std::array<std::uint8_t, 2>{ { static_cast<std::uint8_t>(qLo),
-                                          static_cast<std::uint8_t>(qHi) } };
-  };
-  for (std::size_t k = 0; k < 2 * n; ++k)
-    place(k,
-          [&](std::size_t list, int b)
-          {
-            const std::size_t e = static_cast<std::size_t>(fill[list]++);
-            set.bandSplats[e] = static_cast<std::int32_t>(k);
-            set.bandReach[e] = reach(k, b);
-          });
-  return set;
-}
-
 std::array<double, kPixelClassCount> InterpolatedFrame::fractions() const
 {
   std::array<double, kPixelClassCount> f{};
@@ -327,6 +48,15 @@ std::array<double, kPixelClassCount> InterpolatedFrame::fractions() const
 
 namespace
 {
+/// A splat counts for visibility where its weight reaches this; lighter touches (its fringe)
+/// blend but never hide what lies behind.
+constexpr float kVisibleWeight = 0.2f;
+/// Frames smaller than this are rendered on one thread: a parallel region costs more than it
+/// saves there (a time slice, on a busy machine).
+constexpr std::size_t kParallelPixels = 16384;
+/// How many list entries ahead of the one being drawn its splat is prefetched.
+constexpr std::int64_t kPrefetchAhead = 16;
+
 using Accumulator = InterpolationWorkspace::Accumulator;
 
 /// A splat's colour at t as drawn: (r, g, b, 1), so that one multiply-add per touch updates the
@@ -438,10 +168,7 @@ void clampedFootprint(const float m[4], float maxMag, float inv[4], float& hx, f
   inv[2] = v1y * u1x / c1 + v2y * u2x / c2;
   inv[3] = v1y * u1y / c1 + v2y * u2y / c2;
 }
-}
 
-namespace
-{
 /// Fills the pixels no splat reached (class HoleFilled, source −1). Few small holes grow inwards
 /// from their rims, each pass giving a hole pixel the mean of its 8-neighbours known before the
 /// pass (deterministic, O(holes)); large ones, or what remains after 64 passes, by push-pull.
@@ -519,88 +246,122 @@ void fillHoles(InterpolatedFrame& out, InterpolationWorkspace& ws)
         out.rgb[3 * static_cast<std::size_t>(p) + c] = static_cast<std::uint8_t>(
           std::clamp(ws.fill[3 * static_cast<std::size_t>(p) + c], 0.0f, 255.0f) + 0.5f);
 }
-}
 
-void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
-                 InterpolationWorkspace& ws, SplatSides sides)
+/// Which of the four groups of splats (A's mutual, A's other, B's mutual, B's other) a frame
+/// draws, and at what weight.
+struct GroupSelection
 {
-  requireFinite(tIn, "interpolation time");
-  const double t = std::clamp(tIn, 0.0, 1.0);
-  const int W = set.width, H = set.height;
-  const std::size_t n = set.pixelCount();
-  out.width = W;
-  out.height = H;
-  out.t = t;
-  out.rgb.resize(3 * n);
-  out.pixelClass.resize(n);
-  out.source.resize(n);
-  out.holes = 0;
-  if (sides == SplatSides::Both && (t == 0.0 || t == 1.0))
-  {
-    // The ends are the traced frames themselves.
-    const std::size_t offset = t == 0.0 ? 0 : n;
-    for (std::size_t p = 0; p < n; ++p)
-    {
-      const SplatSet::Splat& sp = set.splats[offset + p];
-      std::copy(sp.color, sp.color + 3, &out.rgb[3 * p]);
-      out.pixelClass[p] = static_cast<PixelClass>(sp.cls & ~SplatSet::kMutual);
-      out.source[p] = static_cast<std::int32_t>(offset + p);
-    }
-    return;
-  }
-  // Which groups of splats this frame draws, and at what weight: a mutual pair from the frame
-  // nearer in t at full weight, every other splat from its own frame at (1 − t) or t.
-  const float tf = static_cast<float>(t);
-  bool drawGroup[4];
-  float groupWeight[4];
+  bool draw[4];
+  float weight[4];
+};
+
+/// Both sides: a mutual pair from the frame nearer in t at full weight, every other splat from
+/// its own frame at (1 − t) or t. One side: its own groups at full weight.
+GroupSelection selectGroups(SplatSides sides, float tf)
+{
+  GroupSelection g;
   if (sides == SplatSides::Both)
   {
-    drawGroup[0] = tf < 0.5f;
-    drawGroup[1] = tf < 1.0f;
-    drawGroup[2] = tf >= 0.5f;
-    drawGroup[3] = tf > 0.0f;
-    groupWeight[0] = groupWeight[2] = 1.0f;
-    groupWeight[1] = 1.0f - tf;
-    groupWeight[3] = tf;
+    g.draw[0] = tf < 0.5f;
+    g.draw[1] = tf < 1.0f;
+    g.draw[2] = tf >= 0.5f;
+    g.draw[3] = tf > 0.0f;
+    g.weight[0] = g.weight[2] = 1.0f;
+    g.weight[1] = 1.0f - tf;
+    g.weight[3] = tf;
   }
   else
   {
     const bool a = sides == SplatSides::AOnly;
-    drawGroup[0] = drawGroup[1] = a;
-    drawGroup[2] = drawGroup[3] = !a;
-    std::fill(groupWeight, groupWeight + 4, 1.0f);
+    g.draw[0] = g.draw[1] = a;
+    g.draw[2] = g.draw[3] = !a;
+    std::fill(g.weight, g.weight + 4, 1.0f);
   }
-  const int rows = set.bandRows;
-  const int bands = (H + rows - 1) / rows;
-  const int slice =
-    1 + std::min(SplatSet::kSegments - 1, static_cast<int>(t * SplatSet::kSegments));
-  const int threads = omp_get_max_threads();
-  if (static_cast<int>(ws.bands.size()) < threads)
-    ws.bands.resize(static_cast<std::size_t>(threads));
-  const float maxMag = set.options.maxMagnification;
-  // No footprint reaches further from its centre than this (its singular values are clamped;
-  // with a hair to spare for the rounding of the clamped map).
-  const float maxExtent = 1.0001f * std::sqrt(2.0f) * maxMag;
-  // Accumulators of a band: its rows plus a guard row above and below and a guard column on
-  // each side, so that the four taps of a bilinear splat need no bounds checks.
-  const int stride = W + 2;
-  std::int64_t holes = 0;
+  return g;
+}
 
-  // The bands with the most splats to draw first, so that the threads finish together (each
-  // band's pixels are what they are whichever thread draws it, and whenever).
+/// The ends are the traced frames themselves: the colours of A's splats (offset 0) or B's (n).
+void copyTracedFrame(const SplatSet& set, std::size_t offset, InterpolatedFrame& out)
+{
+  const std::size_t n = set.pixelCount();
+  for (std::size_t p = 0; p < n; ++p)
+  {
+    const SplatSet::Splat& sp = set.splats[offset + p];
+    std::copy(sp.color, sp.color + 3, &out.rgb[3 * p]);
+    out.pixelClass[p] = static_cast<PixelClass>(sp.cls & ~SplatSet::kMutual);
+    out.source[p] = static_cast<std::int32_t>(offset + p);
+  }
+}
+
+/// What drawing and resolving the bands of one frame read. The arrays are plain pointers, and
+/// the functions below copy what their loops use into locals: the deposits store bytes, which
+/// may alias anything, and would otherwise have every field loaded again after each touch.
+struct BandPass
+{
+  BandPass(const SplatSet& splatSet, double t, SplatSides drawn, InterpolatedFrame& out)
+    : set(splatSet)
+    , splats(splatSet.splats.data())
+    , bandSplats(splatSet.bandSplats.data())
+    , bandReach(splatSet.bandReach.data())
+    , bandStart(splatSet.bandStart.data())
+    , jacobianDeviation(splatSet.jacobianDeviation.data())
+    , layerStride(splatSet.layerStride)
+    , W(splatSet.width)
+    , H(splatSet.height)
+    , rows(splatSet.bandRows)
+    , slice(1 + std::min(SplatSet::kSegments - 1, static_cast<int>(t * SplatSet::kSegments)))
+    , n(splatSet.pixelCount())
+    , stride(splatSet.width + 2)
+    , tf(static_cast<float>(t))
+    , maxMag(splatSet.options.maxMagnification)
+    , maxExtent(footprintReach(this->maxMag, kDrawReachMargin))
+    , sides(drawn)
+    , groups(selectGroups(drawn, this->tf))
+    , rgbOut(out.rgb.data())
+    , classOut(out.pixelClass.data())
+    , sourceOut(out.source.data())
+  {
+  }
+
+  const SplatSet& set;
+  const SplatSet::Splat* splats;
+  const std::int32_t* bandSplats;
+  const std::array<std::uint8_t, 2>* bandReach;
+  const std::int64_t* bandStart;
+  const float* jacobianDeviation;
+  float layerStride;
+  int W, H, rows;
+  int slice; ///< the slice of t whose lists are drawn, besides the static ones
+  std::size_t n;
+  /// Accumulators of a band: its rows plus a guard row above and below and a guard column on
+  /// each side, so that the four taps of a bilinear splat need no bounds checks.
+  int stride;
+  float tf, maxMag;
+  float maxExtent; ///< no footprint reaches further from its centre than this
+  SplatSides sides;
+  GroupSelection groups;
+  std::uint8_t* rgbOut;
+  PixelClass* classOut;
+  std::int32_t* sourceOut;
+};
+
+/// The bands into ws.bandOrder, those with the most list entries to draw first, so that the
+/// threads finish together (each band's pixels are what they are whichever thread draws it,
+/// and whenever).
+void orderBandsByWork(const BandPass& pass, int bands, InterpolationWorkspace& ws)
+{
+  const SplatSet& set = pass.set;
   std::vector<int>& order = ws.bandOrder;
   std::vector<std::int64_t>& work = ws.bandWork;
   order.resize(static_cast<std::size_t>(bands));
-  if (ws.bandHoles.size() < static_cast<std::size_t>(bands))
-    ws.bandHoles.resize(static_cast<std::size_t>(bands));
   work.assign(static_cast<std::size_t>(bands), 0);
   for (int b = 0; b < bands; ++b)
   {
     order[static_cast<std::size_t>(b)] = b;
     for (int gs = 0; gs < 8; ++gs)
-      if (drawGroup[gs % 4])
+      if (pass.groups.draw[gs % 4])
       {
-        const std::size_t list = set.listIndex(b, gs < 4 ? 0 : slice, gs % 4);
+        const std::size_t list = set.listIndex(b, gs < 4 ? 0 : pass.slice, gs % 4);
         work[static_cast<std::size_t>(b)] += set.bandStart[list + 1] - set.bandStart[list];
       }
   }
@@ -608,22 +369,209 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
                    [&](int x, int y) {
                      return work[static_cast<std::size_t>(x)] > work[static_cast<std::size_t>(y)];
                    });
+}
 
+/// One splat's touches of the four pixels around its centre, a[0] the accumulator of the one
+/// below and left of it, (ax, ay) the centre's offset from that pixel.
+inline void drawBilinear(Accumulator* a, int stride, float ax, float ay, float key, float margin,
+                         Color4 color, float sideWeight, std::int32_t index, std::uint8_t cls)
+{
+  float w00, w10, w01, w11;
+  bilinearWeights(ax, ay, w00, w10, w01, w11);
+  // Usually all four taps touch: one test for them (the same deposits, in order).
+  if ((w00 > 0) & (w10 > 0) & (w01 > 0) & (w11 > 0))
+  {
+    deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
+    deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
+    deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
+    deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
+    return;
+  }
+  if (w00 > 0)
+    deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
+  if (w10 > 0)
+    deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
+  if (w01 > 0)
+    deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
+  if (w11 > 0)
+    deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
+}
+
+/// One splat's touches of the pixels its clamped footprint m (at its side time) covers, within
+/// the band's rows [r0, r1): the tent kernel in the splat's own coordinates.
+inline void drawFootprint(const float m[4], float maxMag, float x, float y, int W, int r0, int r1,
+                          Accumulator* origin, int stride, float key, float margin, Color4 color,
+                          float sideWeight, std::int32_t index, std::uint8_t cls)
+{
+  float inv[4], hx, hy;
+  clampedFootprint(m, maxMag, inv, hx, hy);
+  const int xa = std::max(0, static_cast<int>(std::ceil(x - hx)));
+  const int xb = std::min(W - 1, static_cast<int>(std::floor(x + hx)));
+  const int ya = std::max(r0, static_cast<int>(std::ceil(y - hy)));
+  const int yb = std::min(r1 - 1, static_cast<int>(std::floor(y + hy)));
+  for (int py = ya; py <= yb; ++py)
+  {
+    const float ry = static_cast<float>(py) - y;
+    Accumulator* line = origin + static_cast<std::ptrdiff_t>(py) * stride;
+    for (int px = xa; px <= xb; ++px)
+    {
+      const float rx = static_cast<float>(px) - x;
+      const float u = inv[0] * rx + inv[1] * ry, v = inv[2] * rx + inv[3] * ry;
+      const float w = splatWeight(u, v);
+      if (w > 0.0f)
+        deposit(line[px], w, key, margin, color, sideWeight, index, cls);
+    }
+  }
+}
+
+/// Draws list `list` into the accumulators of the band of rows [r0, r1) (pixel (px, py) at
+/// origin[py · stride + px]): its splats of one side at side time s, in list order.
+inline void drawList(const BandPass& pass, std::size_t list, int r0, int r1, Accumulator* origin,
+                     bool sideB, float s, float sideWeight)
+{
+  const SplatSet::Splat* const splats = pass.splats;
+  const std::int32_t* const bandSplats = pass.bandSplats;
+  const std::array<std::uint8_t, 2>* const bandReach = pass.bandReach;
+  const float* const jacobianDeviation = pass.jacobianDeviation;
+  const std::array<float, 4>* const jacobians = pass.set.jacobians.data();
+  const float layerStride = pass.layerStride, maxMag = pass.maxMag, maxExtent = pass.maxExtent;
+  const int W = pass.W, stride = pass.stride;
+  const std::size_t n = pass.n;
+  // One side alone shows its own frame's colours: what each frame says is there.
+  const __m128 blend = _mm_set1_ps(pass.sides == SplatSides::Both ? s : 0.0f);
+  std::size_t rowStart = std::numeric_limits<std::size_t>::max() / 2;
+  int row = 0;
+  const std::int64_t end = pass.bandStart[list + 1];
+  // s in 255ths, rounded down and up: s · 255 < lo ⇔ below < lo, s · 255 > hi ⇔ above > hi.
+  const int below = static_cast<int>(std::floor(s * 255.0f)),
+            above = static_cast<int>(std::ceil(s * 255.0f));
+  for (std::int64_t e = pass.bandStart[list]; e < end; ++e)
+  {
+    // Turned away unread when it cannot reach this band at this t.
+    const auto& r = bandReach[e];
+    if (below < r[0] || above > r[1])
+      continue;
+    const std::int32_t index = bandSplats[e];
+    const SplatSet::Splat& sp = splats[index];
+    // The lists skip through the splats (other groups, other bands): too irregular for the
+    // hardware prefetcher, so the splats some way ahead are asked for explicitly.
+    if (e + kPrefetchAhead < end)
+      _mm_prefetch(reinterpret_cast<const char*>(&splats[bandSplats[e + kPrefetchAhead]]),
+                   _MM_HINT_T0);
+    const std::size_t pix = static_cast<std::size_t>(index) - (sideB ? n : 0);
+    if (pix < rowStart || pix >= rowStart + static_cast<std::size_t>(W))
+    {
+      row = static_cast<int>(pix / W);
+      rowStart = static_cast<std::size_t>(row) * W;
+    }
+    const float x = static_cast<float>(pix - rowStart) + s * sp.dx;
+    const float y = static_cast<float>(row) + s * sp.dy;
+    // Many listed splats lie outside this band at this t (those listed in two bands, or for a
+    // whole slice of t): they are turned away before their key and colour are made.
+    const bool bilinear =
+      sp.footprint < 0 || s * jacobianDeviation[sp.footprint] <= kBilinearDeviation;
+    const float fx = std::floor(x), fy = std::floor(y);
+    if (bilinear
+          ? !(fx >= -1.0f && fx < static_cast<float>(W) && fy >= static_cast<float>(r0 - 1) &&
+              fy < static_cast<float>(r1))
+          : !(y + maxExtent >= static_cast<float>(r0) && y - maxExtent < static_cast<float>(r1)))
+      continue; // no tap inside the band (NaN positions end here too)
+    const float key = static_cast<float>(sp.layer) * layerStride + sp.length + s * sp.dLength;
+    const float margin = sp.margin;
+    const std::uint8_t cls = sp.cls;
+    // Colour (r, g, b, 1) at t: own + blend · (other − own).
+    const __m128 own = colorOf(sp.color), other = colorOf(sp.other);
+    const Color4 color = _mm_add_ps(own, _mm_mul_ps(blend, _mm_sub_ps(other, own)));
+
+    if (bilinear)
+    {
+      drawBilinear(origin + static_cast<std::ptrdiff_t>(fy) * stride +
+                     static_cast<std::ptrdiff_t>(fx),
+                   stride, x - fx, y - fy, key, margin, color, sideWeight, index, cls);
+      continue;
+    }
+    const auto& d = jacobians[sp.footprint];
+    const float m[4] = { 1.0f + s * (d[0] - 1.0f), s * d[1], s * d[2], 1.0f + s * (d[3] - 1.0f) };
+    drawFootprint(m, maxMag, x, y, W, r0, r1, origin, stride, key, margin, color, sideWeight, index,
+                  cls);
+  }
+}
+
+/// Draws every list band b draws at t: the static lists of the groups drawn, then their lists of
+/// t's slice.
+inline void drawBand(const BandPass& pass, int b, int r0, int r1, Accumulator* origin)
+{
+  for (int gs = 0; gs < 8; ++gs)
+  {
+    const int g = gs % 4;
+    if (!pass.groups.draw[g])
+      continue;
+    const bool sideB = g >= 2;
+    const float s = sideB ? 1.0f - pass.tf : pass.tf;
+    drawList(pass, pass.set.listIndex(b, gs < 4 ? 0 : pass.slice, g), r0, r1, origin, sideB, s,
+             pass.groups.weight[g]);
+  }
+}
+
+/// Resolves the band of rows [r0, r1) into the output, emptying its accumulators and guard cells
+/// as it reads them; its holes (pixels no splat reached) into bandHoles, in pixel order. Returns
+/// how many there are.
+inline std::int64_t resolveBand(const BandPass& pass, int r0, int r1, Accumulator* origin,
+                                const Accumulator& empty, std::vector<std::int32_t>& bandHoles)
+{
+  const int W = pass.W, stride = pass.stride;
+  std::uint8_t* const rgbOut = pass.rgbOut;
+  PixelClass* const classOut = pass.classOut;
+  std::int32_t* const sourceOut = pass.sourceOut;
+  std::int64_t holes = 0;
+  std::fill(origin + static_cast<std::ptrdiff_t>(r0 - 1) * stride - 1,
+            origin + static_cast<std::ptrdiff_t>(r0) * stride - 1, empty);
+  std::fill(origin + static_cast<std::ptrdiff_t>(r1) * stride - 1,
+            origin + static_cast<std::ptrdiff_t>(r1 + 1) * stride - 1, empty);
+  for (int py = r0; py < r1; ++py)
+  {
+    Accumulator* line = origin + static_cast<std::ptrdiff_t>(py) * stride;
+    line[-1] = line[W] = empty;
+    for (int px = 0; px < W; ++px)
+    {
+      const Accumulator a = line[px];
+      line[px] = empty;
+      const std::size_t p = static_cast<std::size_t>(py) * W + px;
+      if (!(a.weight > 0.0f))
+      {
+        ++holes;
+        bandHoles.push_back(static_cast<std::int32_t>(p));
+        classOut[p] = PixelClass::HoleFilled;
+        sourceOut[p] = -1;
+        rgbOut[3 * p] = rgbOut[3 * p + 1] = rgbOut[3 * p + 2] = 0;
+        continue;
+      }
+      // round(clamp(sum / weight, 0, 255)) per channel, four lanes at once.
+      const __m128 mean = _mm_mul_ps(_mm_load_ps(&a.r), _mm_set1_ps(1.0f / a.weight));
+      const __m128i rounded = _mm_cvttps_epi32(_mm_add_ps(
+        _mm_min_ps(_mm_max_ps(mean, _mm_setzero_ps()), _mm_set1_ps(255.0f)), _mm_set1_ps(0.5f)));
+      alignas(16) std::int32_t channels[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(channels), rounded);
+      rgbOut[3 * p] = static_cast<std::uint8_t>(channels[0]);
+      rgbOut[3 * p + 1] = static_cast<std::uint8_t>(channels[1]);
+      rgbOut[3 * p + 2] = static_cast<std::uint8_t>(channels[2]);
+      sourceOut[p] = a.best;
+      classOut[p] = static_cast<PixelClass>(a.cls & ~SplatSet::kMutual);
+    }
+  }
+  return holes;
+}
+
+/// Draws and resolves every band, on the OpenMP threads, bands handed out in ws.bandOrder.
+/// Returns the number of holes; each band's are in ws.bandHoles.
+std::int64_t drawAndResolveBands(const BandPass& pass, int bands, InterpolationWorkspace& ws)
+{
   const bool emptied = ws.bandsEmpty;
   ws.bandsEmpty = false; // until this render has emptied them again
-  // The arrays as plain pointers and the splat's fields as locals: the deposits store bytes,
-  // which may alias anything, and would otherwise have every one of them loaded again after
-  // each touch.
-  const SplatSet::Splat* const splats = set.splats.data();
-  const std::int32_t* const bandSplats = set.bandSplats.data();
-  const std::array<std::uint8_t, 2>* const bandReach = set.bandReach.data();
-  const std::int64_t* const bandStart = set.bandStart.data();
-  const float* const jacobianDeviation = set.jacobianDeviation.data();
-  const float layerStride = set.layerStride;
-  std::uint8_t* const rgbOut = out.rgb.data();
-  PixelClass* const classOut = out.pixelClass.data();
-  std::int32_t* const sourceOut = out.source.data();
-#pragma omp parallel reduction(+ : holes) if (n > kParallelPixels)
+  const int rows = pass.rows, H = pass.H, stride = pass.stride;
+  const std::vector<int>& order = ws.bandOrder;
+  std::int64_t holes = 0;
+#pragma omp parallel reduction(+ : holes) if (pass.n > kParallelPixels)
   {
     // Resolving a band empties what it read (while it is in cache) and its guard cells, ready
     // for the thread's next band, and so for the next frame: accumulators are only filled anew
@@ -643,152 +591,43 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
       const int r0 = b * rows, r1 = std::min(H, r0 + rows);
       // Pixel (px, py) of the band is origin[py · stride + px].
       Accumulator* origin = acc.data() + stride + 1 - static_cast<std::ptrdiff_t>(r0) * stride;
-      for (int gs = 0; gs < 8; ++gs)
-      {
-        const int g = gs % 4;
-        if (!drawGroup[g])
-          continue;
-        const bool sideB = g >= 2;
-        const float sideWeight = groupWeight[g];
-        const float s = sideB ? 1.0f - tf : tf;
-        // One side alone shows its own frame's colours: what each frame says is there.
-        const __m128 blend = _mm_set1_ps(sides == SplatSides::Both ? s : 0.0f);
-        const std::size_t list = set.listIndex(b, gs < 4 ? 0 : slice, g);
-        std::size_t rowStart = std::numeric_limits<std::size_t>::max() / 2;
-        int row = 0;
-        const std::int64_t end = bandStart[list + 1];
-        // s in 255ths, rounded down and up: s · 255 < lo ⇔ below < lo, s · 255 > hi ⇔ above > hi.
-        const int below = static_cast<int>(std::floor(s * 255.0f)),
-                  above = static_cast<int>(std::ceil(s * 255.0f));
-        for (std::int64_t e = bandStart[list]; e < end; ++e)
-        {
-          // Turned away unread when it cannot reach this band at this t.
-          const auto& r = bandReach[e];
-          if (below < r[0] || above > r[1])
-            continue;
-          const std::int32_t index = bandSplats[e];
-          const SplatSet::Splat& sp = splats[index];
-          // The lists skip through the splats (other groups, other bands): too irregular for the
-          // hardware prefetcher, so the splats some way ahead are asked for explicitly.
-          if (e + kPrefetchAhead < end)
-            _mm_prefetch(reinterpret_cast<const char*>(&splats[bandSplats[e + kPrefetchAhead]]),
-                         _MM_HINT_T0);
-          const std::size_t pix = static_cast<std::size_t>(index) - (sideB ? n : 0);
-          if (pix < rowStart || pix >= rowStart + static_cast<std::size_t>(W))
-          {
-            row = static_cast<int>(pix / W);
-            rowStart = static_cast<std::size_t>(row) * W;
-          }
-          const float x = static_cast<float>(pix - rowStart) + s * sp.dx;
-          const float y = static_cast<float>(row) + s * sp.dy;
-          // Many listed splats lie outside this band at this t (those listed in two bands, or
-          // for a whole slice of t): they are turned away before their key and colour are made.
-          const bool bilinear =
-            sp.footprint < 0 || s * jacobianDeviation[sp.footprint] <= kBilinearDeviation;
-          const float fx = std::floor(x), fy = std::floor(y);
-          if (bilinear ? !(fx >= -1.0f && fx < static_cast<float>(W) &&
-                           fy >= static_cast<float>(r0 - 1) && fy < static_cast<float>(r1))
-                       : !(y + maxExtent >= static_cast<float>(r0) &&
-                           y - maxExtent < static_cast<float>(r1)))
-            continue; // no tap inside the band (NaN positions end here too)
-          const float key = static_cast<float>(sp.layer) * layerStride + sp.length + s * sp.dLength;
-          const float margin = sp.margin;
-          const std::uint8_t cls = sp.cls;
-          // Colour (r, g, b, 1) at t: own + blend · (other − own).
-          const __m128 own = colorOf(sp.color), other = colorOf(sp.other);
-          const Color4 color = _mm_add_ps(own, _mm_mul_ps(blend, _mm_sub_ps(other, own)));
-
-          if (bilinear)
-          {
-            const float ax = x - fx, ay = y - fy;
-            Accumulator* a =
-              origin + static_cast<std::ptrdiff_t>(fy) * stride + static_cast<std::ptrdiff_t>(fx);
-            const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay,
-                        w11 = ax * ay;
-            // Usually all four taps touch: one test for them (the same deposits, in order).
-            if ((w00 > 0) & (w10 > 0) & (w01 > 0) & (w11 > 0))
-            {
-              deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
-              deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
-              deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
-              deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
-              continue;
-            }
-            if (w00 > 0)
-              deposit(a[0], w00, key, margin, color, sideWeight, index, cls);
-            if (w10 > 0)
-              deposit(a[1], w10, key, margin, color, sideWeight, index, cls);
-            if (w01 > 0)
-              deposit(a[stride], w01, key, margin, color, sideWeight, index, cls);
-            if (w11 > 0)
-              deposit(a[stride + 1], w11, key, margin, color, sideWeight, index, cls);
-            continue;
-          }
-          const auto& d = set.jacobians[static_cast<std::size_t>(sp.footprint)];
-          const float m[4] = { 1.0f + s * (d[0] - 1.0f), s * d[1], s * d[2],
-                               1.0f + s * (d[3] - 1.0f) };
-          float inv[4], hx, hy;
-          clampedFootprint(m, maxMag, inv, hx, hy);
-          const int xa = std::max(0, static_cast<int>(std::ceil(x - hx)));
-          const int xb = std::min(W - 1, static_cast<int>(std::floor(x + hx)));
-          const int ya = std::max(r0, static_cast<int>(std::ceil(y - hy)));
-          const int yb = std::min(r1 - 1, static_cast<int>(std::floor(y + hy)));
-          for (int py = ya; py <= yb; ++py)
-          {
-            const float ry = static_cast<float>(py) - y;
-            Accumulator* line = origin + static_cast<std::ptrdiff_t>(py) * stride;
-            for (int px = xa; px <= xb; ++px)
-            {
-              const float rx = static_cast<float>(px) - x;
-              const float u = inv[0] * rx + inv[1] * ry, v = inv[2] * rx + inv[3] * ry;
-              const float w =
-                std::max(0.0f, 1.0f - std::abs(u)) * std::max(0.0f, 1.0f - std::abs(v));
-              if (w > 0.0f)
-                deposit(line[px], w, key, margin, color, sideWeight, index, cls);
-            }
-          }
-        }
-      }
-
-      std::fill(origin + static_cast<std::ptrdiff_t>(r0 - 1) * stride - 1,
-                origin + static_cast<std::ptrdiff_t>(r0) * stride - 1, empty);
-      std::fill(origin + static_cast<std::ptrdiff_t>(r1) * stride - 1,
-                origin + static_cast<std::ptrdiff_t>(r1 + 1) * stride - 1, empty);
-      for (int py = r0; py < r1; ++py)
-      {
-        Accumulator* line = origin + static_cast<std::ptrdiff_t>(py) * stride;
-        line[-1] = line[W] = empty;
-        for (int px = 0; px < W; ++px)
-        {
-          const Accumulator a = line[px];
-          line[px] = empty;
-          const std::size_t p = static_cast<std::size_t>(py) * W + px;
-          if (!(a.weight > 0.0f))
-          {
-            ++holes;
-            bandHoles.push_back(static_cast<std::int32_t>(p));
-            classOut[p] = PixelClass::HoleFilled;
-            sourceOut[p] = -1;
-            rgbOut[3 * p] = rgbOut[3 * p + 1] = rgbOut[3 * p + 2] = 0;
-            continue;
-          }
-          // round(clamp(sum / weight, 0, 255)) per channel, four lanes at once.
-          const __m128 mean = _mm_mul_ps(_mm_load_ps(&a.r), _mm_set1_ps(1.0f / a.weight));
-          const __m128i rounded = _mm_cvttps_epi32(
-            _mm_add_ps(_mm_min_ps(_mm_max_ps(mean, _mm_setzero_ps()), _mm_set1_ps(255.0f)),
-                       _mm_set1_ps(0.5f)));
-          alignas(16) std::int32_t channels[4];
-          _mm_store_si128(reinterpret_cast<__m128i*>(channels), rounded);
-          rgbOut[3 * p] = static_cast<std::uint8_t>(channels[0]);
-          rgbOut[3 * p + 1] = static_cast<std::uint8_t>(channels[1]);
-          rgbOut[3 * p + 2] = static_cast<std::uint8_t>(channels[2]);
-          sourceOut[p] = a.best;
-          classOut[p] = static_cast<PixelClass>(a.cls & ~SplatSet::kMutual);
-        }
-      }
+      drawBand(pass, b, r0, r1, origin);
+      holes += resolveBand(pass, r0, r1, origin, empty, bandHoles);
     }
   }
   ws.bandsEmpty = true;
+  return holes;
+}
+}
+
+void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
+                 InterpolationWorkspace& ws, SplatSides sides)
+{
+  requireFinite(tIn, "interpolation time");
+  const double t = std::clamp(tIn, 0.0, 1.0);
+  const int W = set.width, H = set.height;
+  const std::size_t n = set.pixelCount();
+  out.width = W;
+  out.height = H;
+  out.t = t;
+  out.rgb.resize(3 * n);
+  out.pixelClass.resize(n);
+  out.source.resize(n);
+  out.holes = 0;
+  if (sides == SplatSides::Both && (t == 0.0 || t == 1.0))
+  {
+    copyTracedFrame(set, t == 0.0 ? 0 : n, out);
+    return;
+  }
+  const BandPass pass(set, t, sides, out);
+  const int bands = (H + pass.rows - 1) / pass.rows;
+  const int threads = omp_get_max_threads();
+  if (static_cast<int>(ws.bands.size()) < threads)
+    ws.bands.resize(static_cast<std::size_t>(threads));
+  if (ws.bandHoles.size() < static_cast<std::size_t>(bands))
+    ws.bandHoles.resize(static_cast<std::size_t>(bands));
+  orderBandsByWork(pass, bands, ws);
+  const std::int64_t holes = drawAndResolveBands(pass, bands, ws);
   out.holes = holes;
   if (holes > 0)
   {

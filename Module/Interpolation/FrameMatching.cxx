@@ -316,50 +316,282 @@ void setJacobian(PixelMatch& m, const Mat2& D)
     m.jacobian[k] = static_cast<float>(std::clamp(D(k / 2, k % 2), -64.0, 64.0));
 }
 
-/// Matches every pixel of `from` into `to`.
-std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
-                                    const PointIndexFactory& makeIndex, const MatchOptions& opt,
-                                    const std::function<void(double)>& progress, double progress0,
-                                    double progressSpan)
+/// The other frame's rays, one searchable set per (object, image order), and the set each pixel
+/// of the frame matched from is looked for in.
+struct TargetGroups
 {
-  const int W = from.f.width, H = from.f.height;
-  const std::size_t n = from.f.pixels.size();
-  std::vector<PixelMatch> out(n);
-
-  // The other frame's rays, one searchable set per (object, image order).
   std::map<GroupKey, Group> groups;
-  for (std::size_t q = 0; q < n; ++q)
-    if (to.pointLike(q))
-    {
-      Group& g = groups[groupOf(to.f.pixels[q])];
-      g.pixels.push_back(static_cast<std::int32_t>(q));
-      g.points.push_back(to.f.pixels[q].point);
-      g.maxFootprint = std::max(g.maxFootprint, to.footprint[q]);
-    }
-  // Built here, outside any OpenMP region: VTK builds its locators with vtkSMPTools (TBB).
-  for (auto& [key, g] : groups)
-    g.index = makeIndex(g.points);
-  std::vector<const Group*> groupOfPixel(n, nullptr);
-  for (std::size_t p = 0; p < n; ++p)
-    if (from.pointLike(p))
-    {
-      const auto it = groups.find(groupOf(from.f.pixels[p]));
-      if (it != groups.end())
-        groupOfPixel[p] = &it->second;
-    }
+  std::vector<const Group*> ofPixel; ///< null: a lost ray, or its image is not in the other frame
 
+  TargetGroups(const FrameView& from, const FrameView& to, const PointIndexFactory& makeIndex)
+  {
+    const std::size_t n = from.f.pixels.size();
+    for (std::size_t q = 0; q < n; ++q)
+      if (to.pointLike(q))
+      {
+        Group& g = this->groups[groupOf(to.f.pixels[q])];
+        g.pixels.push_back(static_cast<std::int32_t>(q));
+        g.points.push_back(to.f.pixels[q].point);
+        g.maxFootprint = std::max(g.maxFootprint, to.footprint[q]);
+      }
+    // Built here, outside any OpenMP region: VTK builds its locators with vtkSMPTools (TBB).
+    for (auto& [key, g] : this->groups)
+      g.index = makeIndex(g.points);
+    this->ofPixel.assign(n, nullptr);
+    for (std::size_t p = 0; p < n; ++p)
+      if (from.pointLike(p))
+      {
+        const auto it = this->groups.find(groupOf(from.f.pixels[p]));
+        if (it != this->groups.end())
+          this->ofPixel[p] = &it->second;
+      }
+  }
+  TargetGroups(const TargetGroups&) = delete;
+  TargetGroups& operator=(const TargetGroups&) = delete;
+};
+
+/// One thread's scratch for matching the pixels of a frame of n pixels. The patch of rays near a
+/// point lives in dense arrays, stamped with the index of the pixel being matched, so that
+/// membership costs O(1) (patches are large where an image is squeezed).
+struct MatchScratch
+{
+  std::vector<std::int64_t> near;
+  std::vector<std::int32_t> patch, stack, images;
+  std::vector<std::int32_t> stamp, label;
+  std::vector<std::pair<double, std::int32_t>> nearest, byLength;
+
+  explicit MatchScratch(std::size_t n)
+    : stamp(n, -1)
+    , label(n, 0)
+  {
+  }
+};
+
+/// The shadow maps onto the other frame's shadow by their centroids and radii.
+void matchShadowPixel(const FrameView& to, const ShadowShape& shadowFrom,
+                      const ShadowShape& shadowTo, int i, int j, PixelMatch& m)
+{
+  const int W = to.f.width, H = to.f.height;
+  const double scale = shadowTo.radius / shadowFrom.radius;
+  const Vec2 x = shadowTo.centroid + scale * (Vec2(i, j) - shadowFrom.centroid);
+  m.x = static_cast<float>(x.x());
+  m.y = static_cast<float>(x.y());
+  setJacobian(m, scale * Mat2::Identity());
+  m.kind = MatchKind::Matched;
+  const long qi = std::lround(x.x()), qj = std::lround(x.y());
+  if (qi >= 0 && qi < W && qj >= 0 && qj < H &&
+      to.kind[static_cast<std::size_t>(qj) * W + qi] == SampleKind::Shadow)
+    m.partner = static_cast<std::int32_t>(qj * W + qi);
+}
+
+/// Labels the rays of sc.patch (stamped `query`) by 8-connected component in the pixel grid,
+/// q0's component first (label 1). Returns the number of components.
+std::int32_t labelPatches(const FrameView& to, std::int32_t q0, std::int32_t query,
+                          MatchScratch& sc)
+{
+  const int W = to.f.width, H = to.f.height;
+  std::int32_t patches = 0;
+  const auto labelPatch = [&](std::int32_t seed)
+  {
+    sc.label[static_cast<std::size_t>(seed)] = ++patches;
+    sc.stack.assign(1, seed);
+    while (!sc.stack.empty())
+    {
+      const std::int32_t c = sc.stack.back();
+      sc.stack.pop_back();
+      const int ci = c % W, cj = c / W;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di)
+        {
+          const int ni = ci + di, nj = cj + dj;
+          if ((di == 0 && dj == 0) || ni < 0 || ni >= W || nj < 0 || nj >= H)
+            continue;
+          const std::size_t nb = static_cast<std::size_t>(nj) * W + ni;
+          if (sc.stamp[nb] != query || sc.label[nb])
+            continue;
+          sc.label[nb] = patches;
+          sc.stack.push_back(static_cast<std::int32_t>(nb));
+        }
+    }
+  };
+  labelPatch(q0);
+  for (const std::int32_t c : sc.patch)
+    if (!sc.label[static_cast<std::size_t>(c)])
+      labelPatch(c);
+  return patches;
+}
+
+/// The images of the same order that show the point of sample s (pixel p), into sc.images: q0's
+/// (the nearest ray's) first. The rays whose hits lie near the point form, in the pixel grid, one
+/// connected patch per image (a small ball's preimage under a locally smooth map): patches not
+/// connected to q0's are other images, if one of their hits is within tolerance of the point.
+void imagesOfPoint(const FrameView& to, const Group& g, std::size_t p, const PixelSample& s,
+                   std::int32_t q0, double tol, MatchScratch& sc)
+{
+  g.index->within(s.point, tol * to.footprint[q0], sc.near);
+  const std::int32_t query = static_cast<std::int32_t>(p);
+  sc.patch.clear();
+  for (const std::int64_t k : sc.near)
+  {
+    const std::int32_t c = g.pixels[static_cast<std::size_t>(k)];
+    sc.patch.push_back(c);
+    sc.stamp[static_cast<std::size_t>(c)] = query;
+    sc.label[static_cast<std::size_t>(c)] = 0;
+  }
+  const std::int32_t patches = labelPatches(to, q0, query, sc);
+  sc.images.assign(1, q0);
+  if (patches <= 1)
+    return;
+  // Each other patch is another image if the point lies on it: within a pixel of its nearest hit
+  // by that pixel's local map (a distance alone is too loose where an image is squeezed along
+  // one axis).
+  sc.nearest.assign(static_cast<std::size_t>(patches) + 1,
+                    { std::numeric_limits<double>::infinity(), -1 });
+  for (const std::int32_t c : sc.patch)
+  {
+    const std::int32_t l = sc.label[static_cast<std::size_t>(c)];
+    if (l == 1)
+      continue;
+    const double d = (s.point - to.f.pixels[c].point).norm();
+    auto& best = sc.nearest[static_cast<std::size_t>(l)];
+    if (d <= tol * to.footprint[c] && d < best.first)
+      best = { d, c };
+  }
+  for (std::int32_t l = 2; l <= patches; ++l)
+  {
+    const std::int32_t c = sc.nearest[static_cast<std::size_t>(l)].second;
+    if (c < 0)
+      continue;
+    const Vec2 delta = to.offset(static_cast<std::size_t>(c), s);
+    if (!delta.allFinite() || delta.cwiseAbs().maxCoeff() <= 1.0)
+      sc.images.push_back(c);
+  }
+}
+
+/// Of nested images of one order (sc.images, more than one), the one whose path length is
+/// closest to s's is the same image (the paper's rule), into q; false when two are equally
+/// close and cannot be told apart.
+bool closestByPathLength(const FrameView& to, const PixelSample& s, const MatchOptions& opt,
+                         MatchScratch& sc, std::int32_t& q)
+{
+  sc.byLength.clear();
+  for (const std::int32_t c : sc.images)
+    sc.byLength.emplace_back(std::abs(to.f.pixels[c].pathLength - s.pathLength), c);
+  std::sort(sc.byLength.begin(), sc.byLength.end());
+  if (sc.byLength[1].first - sc.byLength[0].first <=
+      opt.pathLengthTie * std::max(1.0, s.pathLength))
+    return false;
+  q = sc.byLength[0].second;
+  return true;
+}
+
+/// Sub-pixel position of the point of s near pixel q of the other frame: q may move to a nearer
+/// pixel of the same image, delta is the point's offset from it (within its cell). False when
+/// the point is not seen there: the local map puts it beyond the frame's edge (it has left the
+/// view), or more than a pixel beyond the image's last ray (the nearest ray was merely close).
+bool refinePosition(const FrameView& to, const PixelSample& s, std::int32_t& q, Vec2& delta)
+{
+  const int W = to.f.width, H = to.f.height;
+  // The nearest hit in space need not be the nearest pixel where an image is squeezed: step to
+  // the pixel the local map points at (up to 3 px at a time) while that brings the point closer,
+  // within the same image.
+  delta = to.offset(static_cast<std::size_t>(q), s);
+  bool leavesView = false;
+  for (int step = 0; step < 8 && delta.allFinite() && delta.cwiseAbs().maxCoeff() > 0.5; ++step)
+  {
+    const int ni = q % W + static_cast<int>(std::clamp(std::lround(delta.x()), -3L, 3L));
+    const int nj = q / W + static_cast<int>(std::clamp(std::lround(delta.y()), -3L, 3L));
+    if (ni < 0 || ni >= W || nj < 0 || nj >= H)
+    {
+      leavesView = true;
+      break;
+    }
+    const std::size_t next = static_cast<std::size_t>(nj) * W + ni;
+    if (!to.sameImage(static_cast<std::size_t>(q), next))
+      break;
+    const Vec2 d = to.offset(next, s);
+    if (!d.allFinite() || d.cwiseAbs().maxCoeff() >= delta.cwiseAbs().maxCoeff())
+      break;
+    q = static_cast<std::int32_t>(next);
+    delta = d;
+  }
+  if (!delta.allFinite())
+    delta.setZero();
+  if (delta.cwiseAbs().maxCoeff() > 1.0 || (leavesView && delta.cwiseAbs().maxCoeff() > 0.5))
+    return false;
+  // Otherwise the point stays within the pixel's cell.
+  delta = delta.cwiseMax(-0.5).cwiseMin(0.5);
+  return true;
+}
+
+/// Pixel p matched at `delta` from pixel q of the other frame, its Jacobian from both frames'
+/// (u, v) maps, else from their tangents; NaN (filled from the neighbours later) if neither.
+void setMatched(const FrameView& from, const FrameView& to, std::size_t p, std::int32_t q,
+                const Vec2& delta, PixelMatch& m)
+{
+  const int W = to.f.width;
+  Mat2 Jq = Mat2::Zero(), Jp = Mat2::Zero();
+  Eigen::Matrix<double, 3, 2> Tq = Eigen::Matrix<double, 3, 2>::Zero(), Tp = Tq;
+  const bool uvq = to.uvJacobian(static_cast<std::size_t>(q), Jq);
+  const bool tq = to.tangents(static_cast<std::size_t>(q), Tq);
+  m.x = static_cast<float>(static_cast<double>(q % W) + delta.x());
+  m.y = static_cast<float>(static_cast<double>(q / W) + delta.y());
+  m.partner = q;
+  m.kind = MatchKind::Matched;
+  if (uvq && from.uvJacobian(p, Jp))
+    setJacobian(m, Jq.inverse() * Jp);
+  else if (tq && from.tangents(p, Tp))
+  {
+    const Mat2 G = Tq.transpose() * Tq;
+    if (std::abs(G.determinant()) > 1e-12 * G.squaredNorm())
+      setJacobian(m, G.inverse() * (Tq.transpose() * Tp));
+    else
+      m.jacobian[0] = std::numeric_limits<float>::quiet_NaN();
+  }
+  else
+    m.jacobian[0] = std::numeric_limits<float>::quiet_NaN(); // from the neighbours, later
+}
+
+/// Matches pixel p, whose ray hit a point of group g's image, into the other frame; left
+/// one-sided when the point is not seen there.
+void matchPointPixel(const FrameView& from, const FrameView& to, const Group& g, std::size_t p,
+                     const MatchOptions& opt, MatchScratch& sc, PixelMatch& m)
+{
+  const double tol = opt.tolerance;
+  const PixelSample& s = from.f.pixels[p];
+  const std::int64_t k0 = g.index->nearestWithin(s.point, tol * g.maxFootprint);
+  if (k0 < 0)
+    return;
+  const std::int32_t q0 = g.pixels[static_cast<std::size_t>(k0)];
+  const double d0 = (s.point - to.f.pixels[q0].point).norm();
+  if (d0 > tol * to.footprint[q0])
+    return; // the nearest ray of this image is too far: the point is not seen there
+  imagesOfPoint(to, g, p, s, q0, tol, sc);
+  std::int32_t q = q0;
+  if (sc.images.size() > 1 && !closestByPathLength(to, s, opt, sc, q))
+  {
+    m.kind = MatchKind::Ambiguous;
+    return;
+  }
+  Vec2 delta;
+  if (refinePosition(to, s, q, delta))
+    setMatched(from, to, p, q, delta, m);
+}
+
+/// Matches every pixel of `from` on its own (the OpenMP threads share them), reporting progress
+/// from progress0 over progressSpan.
+void matchPixels(const FrameView& from, const FrameView& to, const TargetGroups& targets,
+                 const MatchOptions& opt, const std::function<void(double)>& progress,
+                 double progress0, double progressSpan, std::vector<PixelMatch>& out)
+{
+  const int W = from.f.width;
+  const std::size_t n = from.f.pixels.size();
   const ShadowShape shadowFrom = shadowOf(from), shadowTo = shadowOf(to);
   const bool shadowsMatch = shadowFrom.count > 0 && shadowTo.count > 0;
-
   std::atomic<std::size_t> done{ 0 };
-  const double tol = opt.tolerance;
 #pragma omp parallel
   {
-    std::vector<std::int64_t> near;
-    std::vector<std::int32_t> patch, stack, images;
-    std::vector<std::int32_t> stamp(n, -1), label(n, 0);
-    std::vector<std::pair<double, std::int32_t>> nearest;
-    std::vector<std::pair<double, std::int32_t>> byLength;
+    MatchScratch scratch(n);
 #pragma omp for schedule(dynamic, 512)
     for (std::int64_t pp = 0; pp < static_cast<std::int64_t>(n); ++pp)
     {
@@ -372,189 +604,31 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
         progress(progress0 + progressSpan * static_cast<double>(done.load()) / n);
       if ((pp & 0xff) == 0xff)
         done += 256;
-
       if (from.kind[p] == SampleKind::Shadow)
       {
-        if (!shadowsMatch)
-          continue;
-        const double scale = shadowTo.radius / shadowFrom.radius;
-        const Vec2 x = shadowTo.centroid + scale * (Vec2(i, j) - shadowFrom.centroid);
-        m.x = static_cast<float>(x.x());
-        m.y = static_cast<float>(x.y());
-        setJacobian(m, scale * Mat2::Identity());
-        m.kind = MatchKind::Matched;
-        const long qi = std::lround(x.x()), qj = std::lround(x.y());
-        if (qi >= 0 && qi < W && qj >= 0 && qj < H &&
-            to.kind[static_cast<std::size_t>(qj) * W + qi] == SampleKind::Shadow)
-          m.partner = static_cast<std::int32_t>(qj * W + qi);
+        if (shadowsMatch)
+          matchShadowPixel(to, shadowFrom, shadowTo, i, j, m);
         continue;
       }
-      const Group* g = groupOfPixel[p];
-      if (!g)
-        continue; // lost ray, or no ray of the other frame hit this object in this order
-      const PixelSample& s = from.f.pixels[p];
-      const std::int64_t k0 = g->index->nearestWithin(s.point, tol * g->maxFootprint);
-      if (k0 < 0)
-        continue;
-      const std::int32_t q0 = g->pixels[static_cast<std::size_t>(k0)];
-      const double d0 = (s.point - to.f.pixels[q0].point).norm();
-      if (d0 > tol * to.footprint[q0])
-        continue; // the nearest ray of this image is too far: the point is not seen there
-
-      // Other images of the same order. The rays whose hits lie near the point form, in the
-      // pixel grid, one connected patch per image (a small ball's preimage under a locally smooth
-      // map): patches not connected to q0's are other images, if one of their hits is within
-      // tolerance of the point.
-      g->index->within(s.point, tol * to.footprint[q0], near);
-      // The patch lives in dense per-thread arrays, stamped with this pixel's index, so that
-      // membership costs O(1) (patches are large where an image is squeezed).
-      const std::int32_t query = static_cast<std::int32_t>(p);
-      patch.clear();
-      for (const std::int64_t k : near)
-      {
-        const std::int32_t c = g->pixels[static_cast<std::size_t>(k)];
-        patch.push_back(c);
-        stamp[static_cast<std::size_t>(c)] = query;
-        label[static_cast<std::size_t>(c)] = 0;
-      }
-      std::int32_t patches = 0;
-      const auto labelPatch = [&](std::int32_t seed)
-      {
-        label[static_cast<std::size_t>(seed)] = ++patches;
-        stack.assign(1, seed);
-        while (!stack.empty())
-        {
-          const std::int32_t c = stack.back();
-          stack.pop_back();
-          const int ci = c % W, cj = c / W;
-          for (int dj = -1; dj <= 1; ++dj)
-            for (int di = -1; di <= 1; ++di)
-            {
-              const int ni = ci + di, nj = cj + dj;
-              if ((di == 0 && dj == 0) || ni < 0 || ni >= W || nj < 0 || nj >= H)
-                continue;
-              const std::size_t nb = static_cast<std::size_t>(nj) * W + ni;
-              if (stamp[nb] != query || label[nb])
-                continue;
-              label[nb] = patches;
-              stack.push_back(static_cast<std::int32_t>(nb));
-            }
-        }
-      };
-      labelPatch(q0);
-      for (const std::int32_t c : patch)
-        if (!label[static_cast<std::size_t>(c)])
-          labelPatch(c);
-      images.assign(1, q0);
-      if (patches > 1)
-      {
-        // Each other patch is another image if the point lies on it: within a pixel of its
-        // nearest hit by that pixel's local map (a distance alone is too loose where an image is
-        // squeezed along one axis).
-        nearest.assign(static_cast<std::size_t>(patches) + 1,
-                       { std::numeric_limits<double>::infinity(), -1 });
-        for (const std::int32_t c : patch)
-        {
-          const std::int32_t l = label[static_cast<std::size_t>(c)];
-          if (l == 1)
-            continue;
-          const double d = (s.point - to.f.pixels[c].point).norm();
-          auto& best = nearest[static_cast<std::size_t>(l)];
-          if (d <= tol * to.footprint[c] && d < best.first)
-            best = { d, c };
-        }
-        for (std::int32_t l = 2; l <= patches; ++l)
-        {
-          const std::int32_t c = nearest[static_cast<std::size_t>(l)].second;
-          if (c < 0)
-            continue;
-          const Vec2 delta = to.offset(static_cast<std::size_t>(c), s);
-          if (!delta.allFinite() || delta.cwiseAbs().maxCoeff() <= 1.0)
-            images.push_back(c);
-        }
-      }
-      std::int32_t q = q0;
-      if (images.size() > 1)
-      {
-        // Nested images of one order: the one whose path length is closest is the same image
-        // (the paper's rule); equally close ones cannot be told apart.
-        byLength.clear();
-        for (const std::int32_t c : images)
-          byLength.emplace_back(std::abs(to.f.pixels[c].pathLength - s.pathLength), c);
-        std::sort(byLength.begin(), byLength.end());
-        if (byLength[1].first - byLength[0].first <=
-            opt.pathLengthTie * std::max(1.0, s.pathLength))
-        {
-          m.kind = MatchKind::Ambiguous;
-          continue;
-        }
-        q = byLength[0].second;
-      }
-
-      // Sub-pixel position of the point near q. The nearest hit in space need not be the nearest
-      // pixel where an image is squeezed: step to the pixel the local map points at (up to 3 px
-      // at a time) while that brings the point closer, within the same image.
-      Vec2 delta = to.offset(static_cast<std::size_t>(q), s);
-      bool leavesView = false;
-      for (int step = 0; step < 8 && delta.allFinite() && delta.cwiseAbs().maxCoeff() > 0.5; ++step)
-      {
-        const int ni = q % W + static_cast<int>(std::clamp(std::lround(delta.x()), -3L, 3L));
-        const int nj = q / W + static_cast<int>(std::clamp(std::lround(delta.y()), -3L, 3L));
-        if (ni < 0 || ni >= W || nj < 0 || nj >= H)
-        {
-          leavesView = true;
-          break;
-        }
-        const std::size_t next = static_cast<std::size_t>(nj) * W + ni;
-        if (!to.sameImage(static_cast<std::size_t>(q), next))
-          break;
-        const Vec2 d = to.offset(next, s);
-        if (!d.allFinite() || d.cwiseAbs().maxCoeff() >= delta.cwiseAbs().maxCoeff())
-          break;
-        q = static_cast<std::int32_t>(next);
-        delta = d;
-      }
-      if (!delta.allFinite())
-        delta.setZero();
-      // A point the local map puts beyond the frame's edge has left the view; one it puts more
-      // than a pixel beyond the image's last ray is not seen there either (the nearest ray was
-      // merely close): both are one-sided.
-      if (delta.cwiseAbs().maxCoeff() > 1.0 || (leavesView && delta.cwiseAbs().maxCoeff() > 0.5))
-        continue;
-      // Otherwise the point stays within the pixel's cell.
-      delta = delta.cwiseMax(-0.5).cwiseMin(0.5);
-      Mat2 Jq = Mat2::Zero(), Jp = Mat2::Zero();
-      Eigen::Matrix<double, 3, 2> Tq = Eigen::Matrix<double, 3, 2>::Zero(), Tp = Tq;
-      const bool uvq = to.uvJacobian(static_cast<std::size_t>(q), Jq);
-      const bool tq = to.tangents(static_cast<std::size_t>(q), Tq);
-      m.x = static_cast<float>(static_cast<double>(q % W) + delta.x());
-      m.y = static_cast<float>(static_cast<double>(q / W) + delta.y());
-      m.partner = q;
-      m.kind = MatchKind::Matched;
-      if (uvq && from.uvJacobian(p, Jp))
-        setJacobian(m, Jq.inverse() * Jp);
-      else if (tq && from.tangents(p, Tp))
-      {
-        const Mat2 G = Tq.transpose() * Tq;
-        if (std::abs(G.determinant()) > 1e-12 * G.squaredNorm())
-          setJacobian(m, G.inverse() * (Tq.transpose() * Tp));
-        else
-          m.jacobian[0] = std::numeric_limits<float>::quiet_NaN();
-      }
-      else
-        m.jacobian[0] = std::numeric_limits<float>::quiet_NaN(); // from the neighbours, below
+      if (const Group* g = targets.ofPixel[p])
+        matchPointPixel(from, to, *g, p, opt, scratch, m);
     }
   }
+}
 
-  auto sameImage = [&](std::size_t p, std::size_t q)
-  {
-    if (from.kind[p] == SampleKind::Shadow)
-      return from.kind[q] == SampleKind::Shadow;
-    return from.sameImage(p, q);
-  };
-  auto matched = [&](std::size_t q) { return out[q].kind == MatchKind::Matched; };
+/// Whether pixels p and q of a frame show the same image, the shadow counting as one.
+bool sameImageOrShadow(const FrameView& v, std::size_t p, std::size_t q)
+{
+  if (v.kind[p] == SampleKind::Shadow)
+    return v.kind[q] == SampleKind::Shadow;
+  return v.sameImage(p, q);
+}
 
-  // Matched pixels without a Jacobian of their own: the spacing of their neighbours' positions.
+/// Matched pixels without a Jacobian of their own: the spacing of their neighbours' positions.
+void jacobiansFromNeighbours(const FrameView& from, std::vector<PixelMatch>& out)
+{
+  const int W = from.f.width, H = from.f.height;
+  const std::size_t n = from.f.pixels.size();
 #pragma omp parallel for schedule(static)
   for (std::int64_t pp = 0; pp < static_cast<std::int64_t>(n); ++pp)
   {
@@ -572,7 +646,8 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
         if (ii < 0 || ii >= W || jj < 0 || jj >= H)
           return nullptr;
         const std::size_t q = static_cast<std::size_t>(jj) * W + ii;
-        return matched(q) && sameImage(p, q) ? &out[q] : nullptr;
+        return out[q].kind == MatchKind::Matched && sameImageOrShadow(from, p, q) ? &out[q]
+                                                                                  : nullptr;
       };
       const PixelMatch *minus = at(-1), *plus = at(1);
       Vec2 col(axis == 0 ? 1 : 0, axis == 1 ? 1 : 0);
@@ -587,10 +662,56 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
     // Written after the loop reads: other threads only read matched neighbours' positions.
     setJacobian(m, D);
   }
+}
 
-  // One-sided and ambiguous pixels move as their matched neighbours do: those of the same image
-  // within the radius if any, else any matched ones within it, else a push-pull extrapolation of
-  // the whole matched motion field.
+/// The pixels marked in needsField move by a push-pull extrapolation of the whole matched motion
+/// field (position offset and Jacobian); where nothing matched at all, every pixel stays put.
+void extrapolateMatchedField(int W, int H, const std::vector<std::uint8_t>& needsField,
+                             std::vector<PixelMatch>& out)
+{
+  const std::size_t n = out.size();
+  std::vector<float> field(n * 6, 0.0f), weight(n, 0.0f);
+  for (std::size_t p = 0; p < n; ++p)
+    if (out[p].kind == MatchKind::Matched)
+    {
+      const PixelMatch& o = out[p];
+      const float vals[6] = { o.x - static_cast<float>(p % W),
+                              o.y - static_cast<float>(p / W),
+                              o.jacobian[0],
+                              o.jacobian[1],
+                              o.jacobian[2],
+                              o.jacobian[3] };
+      std::copy(vals, vals + 6, &field[6 * p]);
+      weight[p] = 1.0f;
+    }
+  const bool any = pushPullFill(W, H, 6, field.data(), weight.data());
+  for (std::size_t p = 0; p < n; ++p)
+    if (needsField[p])
+    {
+      PixelMatch& m = out[p];
+      if (!any) // nothing matched at all: every pixel stays where it is
+      {
+        m.x = static_cast<float>(p % W);
+        m.y = static_cast<float>(p / W);
+        m.jacobian = { { 1, 0, 0, 1 } };
+        continue;
+      }
+      m.x = static_cast<float>(p % W) + field[6 * p];
+      m.y = static_cast<float>(p / W) + field[6 * p + 1];
+      for (int c = 0; c < 4; ++c)
+        m.jacobian[c] = field[6 * p + 2 + c];
+    }
+}
+
+/// One-sided and ambiguous pixels move as their matched neighbours do: those of the same image
+/// within the radius if any, else any matched ones within it, else a push-pull extrapolation of
+/// the whole matched motion field.
+void extrapolateUnmatched(const FrameView& from, const MatchOptions& opt,
+                          std::vector<PixelMatch>& out)
+{
+  const int W = from.f.width, H = from.f.height;
+  const std::size_t n = from.f.pixels.size();
+  auto matched = [&](std::size_t q) { return out[q].kind == MatchKind::Matched; };
   const int R = std::max(1, opt.extrapolationRadius);
   std::vector<std::uint8_t> needsField(n, 0);
   bool anyNeedsField = false;
@@ -614,7 +735,7 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
                                  o.jacobian[1], o.jacobian[2], o.jacobian[3] };
         for (int set = 0; set < 2; ++set)
         {
-          if (set == 0 && !sameImage(p, q))
+          if (set == 0 && !sameImageOrShadow(from, p, q))
             continue;
           acc[set][6] += w;
           for (int c = 0; c < 6; ++c)
@@ -635,39 +756,22 @@ std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
       m.jacobian[c] = static_cast<float>(a[2 + c] / a[6]);
   }
   if (anyNeedsField)
+    extrapolateMatchedField(W, H, needsField, out);
+}
+
+/// Matches every pixel of `from` into `to`.
+std::vector<PixelMatch> matchOneWay(const FrameView& from, const FrameView& to,
+                                    const PointIndexFactory& makeIndex, const MatchOptions& opt,
+                                    const std::function<void(double)>& progress, double progress0,
+                                    double progressSpan)
+{
+  std::vector<PixelMatch> out(from.f.pixels.size());
   {
-    std::vector<float> field(n * 6, 0.0f), weight(n, 0.0f);
-    for (std::size_t p = 0; p < n; ++p)
-      if (matched(p))
-      {
-        const PixelMatch& o = out[p];
-        const float vals[6] = { o.x - static_cast<float>(p % W),
-                                o.y - static_cast<float>(p / W),
-                                o.jacobian[0],
-                                o.jacobian[1],
-                                o.jacobian[2],
-                                o.jacobian[3] };
-        std::copy(vals, vals + 6, &field[6 * p]);
-        weight[p] = 1.0f;
-      }
-    const bool any = pushPullFill(W, H, 6, field.data(), weight.data());
-    for (std::size_t p = 0; p < n; ++p)
-      if (needsField[p])
-      {
-        PixelMatch& m = out[p];
-        if (!any) // nothing matched at all: every pixel stays where it is
-        {
-          m.x = static_cast<float>(p % W);
-          m.y = static_cast<float>(p / W);
-          m.jacobian = { { 1, 0, 0, 1 } };
-          continue;
-        }
-        m.x = static_cast<float>(p % W) + field[6 * p];
-        m.y = static_cast<float>(p / W) + field[6 * p + 1];
-        for (int c = 0; c < 4; ++c)
-          m.jacobian[c] = field[6 * p + 2 + c];
-      }
+    const TargetGroups targets(from, to, makeIndex);
+    matchPixels(from, to, targets, opt, progress, progress0, progressSpan, out);
   }
+  jacobiansFromNeighbours(from, out);
+  extrapolateUnmatched(from, opt, out);
   return out;
 }
 }
