@@ -277,7 +277,8 @@ struct vtkGeodesicFrameInterpolator::Internals
       if (store)
         self->LastStoredFrameId = static_cast<vtkIdType>(
           store->writeFrame(asrt::frameFromFieldData(source->GetHitsOutput()->GetFieldData()),
-                            self->Label ? self->Label : "", records, false, seconds));
+                            self->Label ? self->Label : "", records,
+                            asrt::FrameWriteOptions().tracedIn(seconds)));
     }
     if (records.size() != pixels.size())
     {

@@ -1,6 +1,7 @@
 #include "EmbeddedPostgres.h"
 
 #include "AsrtTypes.h"
+#include "PgSession.h"
 
 #include <libpq-fe.h>
 
@@ -615,23 +616,6 @@ bool postmasterAlive(const std::string& dir, long pid)
   return true;
 }
 
-struct PgConnDeleter
-{
-  void operator()(PGconn* c) const { PQfinish(c); }
-};
-struct PgResultDeleter
-{
-  void operator()(PGresult* r) const { PQclear(r); }
-};
-using Connection = std::unique_ptr<PGconn, PgConnDeleter>;
-using Result = std::unique_ptr<PGresult, PgResultDeleter>;
-
-std::string trimmed(const char* s)
-{
-  std::string t = s ? s : "";
-  t.erase(t.find_last_not_of(" \n") + 1);
-  return t;
-}
 }
 
 std::string EmbeddedPostgres::defaultDataDirectory()
@@ -723,33 +707,43 @@ void EmbeddedPostgres::ensureDatabase(const std::string& name) const
 {
   if (name.empty() || name.size() > 63)
     throw InvalidParameter("a database name must have 1 to 63 bytes, got '" + name + "'");
-  Connection conn(PQconnectdb((conninfo("postgres") + " connect_timeout=10").c_str()));
-  if (!conn || PQstatus(conn.get()) != CONNECTION_OK)
-    throw std::runtime_error("cannot connect to the PostgreSQL server of " + DataDir + ": " +
-                             trimmed(conn ? PQerrorMessage(conn.get()) : "out of memory"));
+  pg::Connection conn;
+  try
+  {
+    conn = pg::connect(conninfo("postgres"));
+  }
+  catch (const StoreError& e)
+  {
+    throw std::runtime_error(std::string(e.what()) + " (the server of " + DataDir + ")");
+  }
   auto exists = [&]
   {
-    const char* params[] = { name.c_str() };
-    Result r(PQexecParams(conn.get(), "SELECT 1 FROM pg_database WHERE datname = $1", 1, nullptr,
-                          params, nullptr, nullptr, 0));
-    if (PQresultStatus(r.get()) != PGRES_TUPLES_OK)
-      throw std::runtime_error("cannot list databases: " + trimmed(PQerrorMessage(conn.get())));
+    const pg::Result r = pg::Params().text(name).exec(
+      conn.get(), "SELECT 1 FROM pg_database WHERE datname = $1", "cannot list databases");
     return PQntuples(r.get()) > 0;
   };
   if (exists())
     return;
-  char* ident = PQescapeIdentifier(conn.get(), name.c_str(), name.size());
-  if (!ident)
-    throw InvalidParameter("bad database name '" + name +
-                           "': " + trimmed(PQerrorMessage(conn.get())));
-  const std::string sql = std::string("CREATE DATABASE ") + ident;
-  PQfreemem(ident);
-  Result r(PQexec(conn.get(), sql.c_str()));
-  // Another client may have created it in between (duplicate_database, or a unique violation on
-  // pg_database): what matters is that it exists now.
-  if (PQresultStatus(r.get()) != PGRES_COMMAND_OK && !exists())
-    throw std::runtime_error("cannot create database '" + name +
-                             "': " + trimmed(PQerrorMessage(conn.get())));
+  std::string ident;
+  try
+  {
+    ident = pg::quoteIdentifier(conn.get(), name, "bad database name '" + name + "'");
+  }
+  catch (const StoreError& e)
+  {
+    throw InvalidParameter(e.what());
+  }
+  try
+  {
+    pg::exec(conn.get(), "CREATE DATABASE " + ident, "cannot create database '" + name + "'");
+  }
+  catch (const StoreError&)
+  {
+    // Another client may have created it in between (duplicate_database, or a unique violation
+    // on pg_database): what matters is that it exists now.
+    if (!exists())
+      throw;
+  }
 }
 
 std::string EmbeddedPostgres::ensureRunning()

@@ -701,7 +701,7 @@ struct StalledWrite
                     std::this_thread::sleep_for(std::chrono::milliseconds(5));
                   r = syntheticRecord(seed, k, 97);
                 },
-                false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+                asrt::FrameWriteOptions().fromConcurrentProducer());
             });
         })
   {
@@ -813,7 +813,7 @@ TEST_F(StoreParallelWrite, KilledWriterLeavesNothingVisibleAndMigrateSweepsItsCo
                                          std::this_thread::sleep_for(std::chrono::milliseconds(10));
                                        r = syntheticRecord(seed, k, 97);
                                      },
-                                     false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+                                     asrt::FrameWriteOptions().fromConcurrentProducer());
                                    return int(Ok);
                                  });
   ASSERT_GT(child, 0);
