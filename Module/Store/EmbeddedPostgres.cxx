@@ -247,10 +247,17 @@ struct Outcome
   std::string Output;
 };
 
-/// Runs a PostgreSQL program with an argument vector (never through a shell: paths may hold
-/// spaces and quotes), as the server user, from "/", with PG* variables removed from its
-/// environment so that a user's PGHOST or PGPORT cannot redirect it.
-Outcome runCommand(const ServerUser& su, const Command& cmd)
+/// Why a forked child could not execute its program, sent to the parent over a pipe.
+struct ChildFailure
+{
+  int Stage;
+  int Err;
+};
+
+/// The environment of a PostgreSQL program: ours without the PG* variables (so that a user's
+/// PGHOST or PGPORT cannot redirect it) and, when it runs as the server user, with that user's
+/// HOME, USER and LOGNAME.
+std::vector<std::string> commandEnvironment(const ServerUser& su, const Command& cmd)
 {
   std::vector<std::string> envStrings;
   for (char** e = environ; e && *e; ++e)
@@ -273,6 +280,108 @@ Outcome runCommand(const ServerUser& su, const Command& cmd)
     envStrings.push_back("USER=" + su.Name);
     envStrings.push_back("LOGNAME=" + su.Name);
   }
+  return envStrings;
+}
+
+/// In the forked child: sets up its descriptors and user and executes the program; on failure,
+/// reports the stage to `errFd` and exits. Only async-signal-safe calls (see dropPrivileges).
+[[noreturn]] void execChild(const ServerUser& su, const Command& cmd, char* const* argv,
+                            char* const* envp, int maxFd, int errFd, int outFd)
+{
+  auto fail = [&](int stage)
+  {
+    const ChildFailure report{ stage, errno };
+    if (write(errFd, &report, sizeof report) < 0)
+    {
+    }
+    _exit(127);
+  };
+  const int devNull = open("/dev/null", O_RDONLY);
+  if (devNull < 0 || dup2(devNull, 0) < 0)
+    fail(1);
+  if (const int err = dropPrivileges(su))
+  {
+    errno = err;
+    fail(2);
+  }
+  if (chdir("/") != 0)
+    fail(3);
+  if (outFd >= 0)
+  {
+    if (dup2(outFd, 1) < 0 || dup2(outFd, 2) < 0)
+      fail(4);
+  }
+  else
+  {
+    // Opened after dropping privileges, so the log belongs to the server user.
+    const int log =
+      open(cmd.LogPath.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0600);
+    if (log < 0 || dup2(log, 1) < 0 || dup2(log, 2) < 0)
+      fail(5);
+  }
+  // Inherited descriptors (our lock file above all) must not live on in the postmaster.
+#ifdef CLOSE_RANGE_CLOEXEC
+  if (close_range(3, ~0u, CLOSE_RANGE_CLOEXEC) != 0)
+#endif
+    for (int fd = 3; fd < maxFd; ++fd)
+      fcntl(fd, F_SETFD, FD_CLOEXEC);
+  execve(argv[0], argv, envp);
+  fail(6);
+  _exit(127);
+}
+
+/// Collects the output of child `pid` from `outFd` (none if negative, which is then closed by the
+/// caller) until it has exited and closed it; returns its wait status. Kills it and throws after
+/// cmd.TimeoutSeconds.
+int awaitChild(pid_t pid, int outFd, const Command& cmd, std::string& output)
+{
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(cmd.TimeoutSeconds);
+  int status = 0;
+  bool exited = false;
+  bool eof = outFd < 0;
+  while (!exited || !eof)
+  {
+    if (!eof)
+    {
+      pollfd p{ outFd, POLLIN, 0 };
+      if (poll(&p, 1, 50) > 0)
+      {
+        char buf[4096];
+        const ssize_t n = read(outFd, buf, sizeof buf);
+        if (n > 0)
+          output.append(buf, static_cast<std::size_t>(n));
+        else if (n == 0 || errno != EINTR)
+          eof = true;
+      }
+    }
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!exited)
+    {
+      const pid_t w = waitpid(pid, &status, WNOHANG);
+      exited = w == pid || (w < 0 && errno != EINTR);
+    }
+    if (std::chrono::steady_clock::now() > deadline)
+    {
+      if (!exited)
+      {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+      }
+      throw std::runtime_error(cmd.Argv[0] + " did not finish within " +
+                               std::to_string(cmd.TimeoutSeconds) + " s" +
+                               (output.empty() ? "" : ":\n" + output));
+    }
+  }
+  return status;
+}
+
+/// Runs a PostgreSQL program with an argument vector (never through a shell: paths may hold
+/// spaces and quotes), as the server user, from "/", with PG* variables removed from its
+/// environment so that a user's PGHOST or PGPORT cannot redirect it.
+Outcome runCommand(const ServerUser& su, const Command& cmd)
+{
+  const std::vector<std::string> envStrings = commandEnvironment(su, cmd);
   std::vector<char*> argv, envp;
   for (const std::string& a : cmd.Argv)
     argv.push_back(const_cast<char*>(a.c_str()));
@@ -301,53 +410,7 @@ Outcome runCommand(const ServerUser& su, const Command& cmd)
 
   const pid_t pid = fork();
   if (pid == 0)
-  {
-    struct
-    {
-      int Stage;
-      int Err;
-    } report{ 0, 0 };
-    auto fail = [&](int stage)
-    {
-      report.Stage = stage;
-      report.Err = errno;
-      if (write(errPipe[1], &report, sizeof report) < 0)
-      {
-      }
-      _exit(127);
-    };
-    const int devNull = open("/dev/null", O_RDONLY);
-    if (devNull < 0 || dup2(devNull, 0) < 0)
-      fail(1);
-    if (const int err = dropPrivileges(su))
-    {
-      errno = err;
-      fail(2);
-    }
-    if (chdir("/") != 0)
-      fail(3);
-    if (outPipe[1] >= 0)
-    {
-      if (dup2(outPipe[1], 1) < 0 || dup2(outPipe[1], 2) < 0)
-        fail(4);
-    }
-    else
-    {
-      // Opened after dropping privileges, so the log belongs to the server user.
-      const int log =
-        open(cmd.LogPath.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0600);
-      if (log < 0 || dup2(log, 1) < 0 || dup2(log, 2) < 0)
-        fail(5);
-    }
-    // Inherited descriptors (our lock file above all) must not live on in the postmaster.
-#ifdef CLOSE_RANGE_CLOEXEC
-    if (close_range(3, ~0u, CLOSE_RANGE_CLOEXEC) != 0)
-#endif
-      for (int fd = 3; fd < maxFd; ++fd)
-        fcntl(fd, F_SETFD, FD_CLOEXEC);
-    execve(argv[0], argv.data(), envp.data());
-    fail(6);
-  }
+    execChild(su, cmd, argv.data(), envp.data(), maxFd, errPipe[1], outPipe[1]);
   const int forkErr = errno;
   close(errPipe[1]);
   if (outPipe[1] >= 0)
@@ -360,11 +423,7 @@ Outcome runCommand(const ServerUser& su, const Command& cmd)
     throw std::runtime_error("fork: " + errnoText(forkErr));
   }
 
-  struct
-  {
-    int Stage;
-    int Err;
-  } report{ 0, 0 };
+  ChildFailure report{ 0, 0 };
   ssize_t got;
   do
     got = read(errPipe[0], &report, sizeof report);
@@ -372,45 +431,16 @@ Outcome runCommand(const ServerUser& su, const Command& cmd)
   close(errPipe[0]);
 
   Outcome result;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(cmd.TimeoutSeconds);
   int status = 0;
-  bool exited = false;
-  bool eof = outPipe[0] < 0;
-  while (!exited || !eof)
+  try
   {
-    if (!eof)
-    {
-      pollfd p{ outPipe[0], POLLIN, 0 };
-      if (poll(&p, 1, 50) > 0)
-      {
-        char buf[4096];
-        const ssize_t n = read(outPipe[0], buf, sizeof buf);
-        if (n > 0)
-          result.Output.append(buf, static_cast<std::size_t>(n));
-        else if (n == 0 || errno != EINTR)
-          eof = true;
-      }
-    }
-    else
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (!exited)
-    {
-      const pid_t w = waitpid(pid, &status, WNOHANG);
-      exited = w == pid || (w < 0 && errno != EINTR);
-    }
-    if (std::chrono::steady_clock::now() > deadline)
-    {
-      if (!exited)
-      {
-        kill(pid, SIGKILL);
-        waitpid(pid, &status, 0);
-      }
-      if (outPipe[0] >= 0)
-        close(outPipe[0]);
-      throw std::runtime_error(cmd.Argv[0] + " did not finish within " +
-                               std::to_string(cmd.TimeoutSeconds) + " s" +
-                               (result.Output.empty() ? "" : ":\n" + result.Output));
-    }
+    status = awaitChild(pid, outPipe[0], cmd, result.Output);
+  }
+  catch (...)
+  {
+    if (outPipe[0] >= 0)
+      close(outPipe[0]);
+    throw;
   }
   if (outPipe[0] >= 0)
     close(outPipe[0]);
@@ -616,6 +646,25 @@ bool postmasterAlive(const std::string& dir, long pid)
   return true;
 }
 
+/// A socket directory outside the data directory: created for the server user, or checked to
+/// be that user's directory.
+void prepareSocketDirectory(const ServerUser& su, const std::string& socketDir)
+{
+  struct stat st
+  {
+  };
+  if (lstat(socketDir.c_str(), &st) != 0)
+  {
+    if (mkdir(socketDir.c_str(), 0700) != 0 ||
+        (su.Switch && chown(socketDir.c_str(), su.Uid, su.Gid) != 0))
+      throw std::runtime_error("cannot create the socket directory " + socketDir + ": " +
+                               errnoText(errno));
+  }
+  else if (!S_ISDIR(st.st_mode) || st.st_uid != su.Uid)
+    throw std::runtime_error("the socket directory " + socketDir +
+                             " exists but is not a directory owned by " + su.Name + ": remove it");
+  chmod(socketDir.c_str(), 0700);
+}
 }
 
 std::string EmbeddedPostgres::defaultDataDirectory()
@@ -846,23 +895,7 @@ std::string EmbeddedPostgres::ensureRunning()
   {
     const std::string socketDir = socketDirectory();
     if (socketDir != DataDir)
-    {
-      struct stat st
-      {
-      };
-      if (lstat(socketDir.c_str(), &st) != 0)
-      {
-        if (mkdir(socketDir.c_str(), 0700) != 0 ||
-            (su.Switch && chown(socketDir.c_str(), su.Uid, su.Gid) != 0))
-          throw std::runtime_error("cannot create the socket directory " + socketDir + ": " +
-                                   errnoText(errno));
-      }
-      else if (!S_ISDIR(st.st_mode) || st.st_uid != su.Uid)
-        throw std::runtime_error("the socket directory " + socketDir +
-                                 " exists but is not a directory owned by " + su.Name +
-                                 ": remove it");
-      chmod(socketDir.c_str(), 0700);
-    }
+      prepareSocketDirectory(su, socketDir);
     std::string conf =
       "# Written by ASRT at each start (the socket follows the directory).\n"
       "listen_addresses = ''\n"

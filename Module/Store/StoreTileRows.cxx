@@ -19,6 +19,20 @@ const char* const TileTableNumbers =
   "SELECT m[1]::bigint, m[2]::integer FROM pg_class c CROSS JOIN LATERAL "
   "regexp_match(c.relname::text, '^ray_blocks_([0-9]+)_([0-9]+)$') AS m";
 
+/// Dropping tables waits for the lock on them: two seconds lets reads and writes under way
+/// finish, and otherwise gives up (the tables are left for a later call) rather than stall the
+/// caller, whose own work is done.
+void limitLockWait(PGconn* conn)
+{
+  pg::exec(conn, "SET LOCAL lock_timeout = '2s'", "setting a lock timeout failed");
+}
+
+/// Drops `tables` (comma-separated) that still exist.
+void dropTablesIfExist(PGconn* conn, const std::string& tables, const std::string& what)
+{
+  pg::exec(conn, "DROP TABLE IF EXISTS " + tables, what);
+}
+
 /// Drops `ownFrame`'s (or, when negative, every frame's) tables of `candidates` that are orphans,
 /// in the caller's transaction.
 void dropOrphanTables(PGconn* conn, const PGresult* candidates, std::int64_t ownFrame)
@@ -44,7 +58,7 @@ void dropOrphanTables(PGconn* conn, const PGresult* candidates, std::int64_t own
       "looking for the frame failed");
     if (pg::getBool(orphan.get(), 0, 0))
     {
-      pg::exec(conn, "DROP TABLE IF EXISTS " + table, "dropping the rays of a failed write failed");
+      dropTablesIfExist(conn, table, "dropping the rays of a failed write failed");
     }
   }
 }
@@ -202,7 +216,7 @@ void dropUnattachedTiles(PGconn* conn, std::int64_t ownFrame) noexcept
     pg::exec(conn, pg::WriteBegin, "starting a transaction failed");
     if (ownFrame >= 0)
     {
-      pg::exec(conn, "SET LOCAL lock_timeout = '2s'", "setting a lock timeout failed");
+      limitLockWait(conn);
     }
     dropOrphanTables(conn, r.get(), ownFrame);
     pg::exec(conn, "COMMIT", "committing failed");
@@ -235,9 +249,8 @@ void dropOrphanBlocks(PGconn* conn) noexcept
         const std::string tables = blockTableList(r.get());
         if (!tables.empty())
         {
-          pg::exec(conn, "SET LOCAL lock_timeout = '2s'", "setting a lock timeout failed");
-          pg::exec(conn, "DROP TABLE IF EXISTS " + tables,
-                   "dropping the rays of deleted frames failed");
+          limitLockWait(conn);
+          dropTablesIfExist(conn, tables, "dropping the rays of deleted frames failed");
         }
         pg::exec(conn, "COMMIT", "committing failed");
       });

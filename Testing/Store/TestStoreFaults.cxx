@@ -1,4 +1,4 @@
-// asrt::RayStore under real faults (issue 4): writers killed in the middle of a COPY, servers
+// asrt::RayStore under real faults: writers killed in the middle of a COPY, servers
 // stopped between and during writes, wrong credentials and schema versions, concurrent writers in
 // separate processes, hostile text through the whole path. Each test that breaks its server gets
 // a server of its own.
