@@ -41,7 +41,6 @@ const std::int32_t SpecialInts[] = { std::numeric_limits<std::int32_t>::min(), -
 RayRecord knownRecord(std::size_t k)
 {
   std::size_t f = 0;
-  auto real = [&] { return fromBits(SpecialDoubles[(k + f++) % SpecialCount]); };
   auto integer = [&]
   {
     const std::int32_t v = std::int32_t(k * 37 + f++);
@@ -50,33 +49,42 @@ RayRecord knownRecord(std::size_t k)
   RayRecord r;
   r.i = integer();
   r.j = integer();
-  for (int m = 0; m < 3; ++m)
-    r.origin[m] = real();
-  for (int m = 0; m < 3; ++m)
-    r.direction[m] = real();
-  for (int m = 0; m < 4; ++m)
-    r.momentum[m] = real();
   r.termination = Termination((k + f++) % 6);
   r.objectId = integer();
-  for (int m = 0; m < 3; ++m)
-    r.hitPoint[m] = real();
-  for (int m = 0; m < 3; ++m)
-    r.hitNormal[m] = real();
-  r.u = real();
-  r.v = real();
-  r.chordError = real();
-  r.affineLength = real();
-  r.winding = real();
   r.imageOrder = integer();
   r.steps = k % 5 == 0 ? std::numeric_limits<std::int64_t>::min() + std::int64_t(k)
                        : std::int64_t(k) * 1000003 - (std::int64_t(1) << 40);
-  r.maxAbsH = real();
-  for (int m = 0; m < 3; ++m)
-    r.color[m] = real();
-  r.dudi = real();
-  r.dudj = real();
-  r.dvdi = real();
-  r.dvdj = real();
+  double* const reals[] = { &r.origin.x(),
+                            &r.origin.y(),
+                            &r.origin.z(),
+                            &r.direction.x(),
+                            &r.direction.y(),
+                            &r.direction.z(),
+                            &r.momentum[0],
+                            &r.momentum[1],
+                            &r.momentum[2],
+                            &r.momentum[3],
+                            &r.hitPoint.x(),
+                            &r.hitPoint.y(),
+                            &r.hitPoint.z(),
+                            &r.hitNormal.x(),
+                            &r.hitNormal.y(),
+                            &r.hitNormal.z(),
+                            &r.u,
+                            &r.v,
+                            &r.chordError,
+                            &r.affineLength,
+                            &r.winding,
+                            &r.maxAbsH,
+                            &r.color.x(),
+                            &r.color.y(),
+                            &r.color.z(),
+                            &r.dudi,
+                            &r.dudj,
+                            &r.dvdi,
+                            &r.dvdj };
+  for (double* x : reals)
+    *x = fromBits(SpecialDoubles[(k + f++) % SpecialCount]);
   return r;
 }
 
