@@ -174,22 +174,28 @@ struct RayStore::Impl
 
 namespace
 {
-/// One call of writeFrame(), phase by phase, for one attempt (one scene row).
+/// What one writeFrame() call stores.
+struct FrameToWrite
+{
+  const SceneDescription& scene;
+  const std::string& label;
+  const storage::SceneTexts& texts;
+  std::size_t count;
+  const RecordProducer& next;
+  const FrameWriteOptions& options;
+  std::chrono::steady_clock::time_point start; ///< write_seconds counts from it
+};
+
+/// One attempt (one scene row) at writing a frame, phase by phase, over the store's connection
+/// and `helpers`.
 class FrameWrite
 {
 public:
-  FrameWrite(PGconn* conn, const storage::SceneTexts& texts, const SceneDescription& scene,
-             const std::string& label, std::size_t count, const RecordProducer& next,
-             const FrameWriteOptions& options, std::vector<PGconn*> helpers)
+  FrameWrite(PGconn* conn, const FrameToWrite& frame, std::vector<PGconn*> helpers)
     : Conn(conn)
-    , Texts(texts)
-    , Scene(scene)
-    , Label(label)
-    , Count(count)
-    , Next(next)
-    , Options(options)
+    , Frame(frame)
     , Helpers(std::move(helpers))
-    , Bounds(tileBounds(count, this->Helpers.size() + 1))
+    , Bounds(tileBounds(frame.count, this->Helpers.size() + 1))
     , Tiles(int(this->Helpers.size()) + 1)
   {
   }
@@ -203,7 +209,7 @@ public:
                              this->claimIdentity();
                              const std::int64_t id = this->insertRow(sceneId);
                              this->writeRays(id);
-                             storage::copyPaths(this->Conn, id, this->Options.paths);
+                             storage::copyPaths(this->Conn, id, this->Frame.options.paths);
                              for (int tile = 0; tile < this->Tiles; ++tile)
                              {
                                storage::recordTile(this->Conn, id, tile, this->tileCount(tile),
@@ -215,8 +221,6 @@ public:
                            });
   }
 
-  /// The time the write began (write_seconds counts from it), before any attempt.
-  void startedAt(std::chrono::steady_clock::time_point start) { this->Start = start; }
   /// Whether this attempt deleted a frame it replaces (whose tables are then orphans).
   bool replaced() const { return this->Replaced; }
   /// After a failure: drops what the helper connections committed for the frame (the main
@@ -241,7 +245,7 @@ private:
   void claimIdentity()
   {
     const std::optional<storage::FrameOfIdentity> old =
-      storage::lockFrameOfIdentity(this->Conn, this->Texts);
+      storage::lockFrameOfIdentity(this->Conn, this->Frame.texts);
     if (!old)
     {
       return;
@@ -254,7 +258,7 @@ private:
                        std::to_string(old->id) + " (label \"" + old->label +
                        "\"); delete it first if its writers are gone");
     }
-    storage::deleteReplaced(this->Conn, *old, this->Options.replace);
+    storage::deleteReplaced(this->Conn, *old, this->Frame.options.replace);
     this->Replaced = true;
   }
 
@@ -262,8 +266,9 @@ private:
   {
     try
     {
-      const std::int64_t id = *storage::insertFrame(this->Conn, sceneId, this->Texts, this->Scene,
-                                                    this->Label, this->Tiles, false);
+      const std::int64_t id =
+        *storage::insertFrame(this->Conn, sceneId, this->Frame.texts, this->Frame.scene,
+                              this->Frame.label, this->Tiles, false);
       if (this->Tiles > 1)
       {
         this->WritingId = id;
@@ -287,7 +292,7 @@ private:
   {
     if (this->Tiles == 1)
     {
-      storage::copyTile(this->Conn, id, 0, this->Count, this->Next);
+      storage::copyTile(this->Conn, id, 0, this->Frame.count, this->Frame.next);
       return;
     }
     pg::Params().i64(id).exec(this->Conn, storage::writerLock("pg_advisory_xact_lock"),
@@ -316,7 +321,7 @@ private:
       {
         throw StoreError("writing the rays failed: another connection of the write failed");
       }
-      this->Next(k, r);
+      this->Frame.next(k, r);
     };
     fan.run(
       [&](PGconn* conn, std::size_t k)
@@ -333,12 +338,12 @@ private:
   void complete(std::int64_t id)
   {
     const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - this->Start).count();
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - this->Frame.start).count();
     pg::Params()
       .i64(id)
-      .i64(std::int64_t(this->Count))
+      .i64(std::int64_t(this->Frame.count))
       .f64(seconds)
-      .f64(this->Options.traceSeconds)
+      .f64(this->Frame.options.traceSeconds)
       .exec(this->Conn,
             "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = $3, "
             "trace_seconds = nullif($4, 'NaN'), completed_at = clock_timestamp() WHERE id = $1",
@@ -346,16 +351,10 @@ private:
   }
 
   PGconn* Conn;
-  const storage::SceneTexts& Texts;
-  const SceneDescription& Scene;
-  const std::string& Label;
-  std::size_t Count;
-  const RecordProducer& Next;
-  const FrameWriteOptions& Options;
+  const FrameToWrite& Frame;
   std::vector<PGconn*> Helpers;
   std::vector<std::size_t> Bounds;
   int Tiles;
-  std::chrono::steady_clock::time_point Start;
   bool Replaced = false;
   std::int64_t WritingId = -1; ///< the frame of a parallel write, once it has an id
 };
@@ -378,11 +377,11 @@ std::int64_t RayStore::Impl::writeFrame(const SceneDescription& scene, const std
   {
     helpers = this->helpersFor(count / kParallelMinRays);
   }
+  const FrameToWrite frame{ scene, label, texts, count, next, options, start };
   for (int attempt = 0;; ++attempt)
   {
     const std::int64_t sceneId = storage::sceneRow(this->conn(), texts);
-    FrameWrite write(this->conn(), texts, scene, label, count, next, options, helpers);
-    write.startedAt(start);
+    FrameWrite write(this->conn(), frame, helpers);
     try
     {
       const std::int64_t frameId = write.run(sceneId);
@@ -519,29 +518,34 @@ int RayStore::writeConnections() const
 
 namespace
 {
-/// beginTiledFrame()'s transaction: the 'writing' frame of this identity, inserted or joined;
-/// nullopt when the row it conflicted with vanished before it could be looked at. `replaced`
-/// says whether a complete frame was deleted for it.
-std::optional<std::int64_t> beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId,
-                                                  const storage::SceneTexts& texts,
-                                                  const SceneDescription& scene,
-                                                  const std::string& label, int tileCount,
-                                                  bool replace, bool& replaced)
+/// What beginTiledFrame()'s transaction did: the 'writing' frame of this identity, inserted or
+/// joined (none when the row it conflicted with vanished before it could be looked at), and
+/// whether a complete frame was deleted for it.
+struct TiledFrameStart
+{
+  std::optional<std::int64_t> id;
+  bool replaced = false;
+};
+
+TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId,
+                                      const storage::SceneTexts& texts,
+                                      const SceneDescription& scene, const std::string& label,
+                                      int tileCount, bool replace)
 {
   return pg::transaction(
     conn, pg::WriteBegin,
-    [&]() -> std::optional<std::int64_t>
+    [&]() -> TiledFrameStart
     {
-      std::optional<std::int64_t> id =
-        storage::insertFrame(conn, sceneId, texts, scene, label, tileCount, true);
-      if (!id)
+      TiledFrameStart start{ storage::insertFrame(conn, sceneId, texts, scene, label, tileCount,
+                                                  true) };
+      if (!start.id)
       {
         const std::optional<storage::FrameOfIdentity> old =
           storage::lockFrameOfIdentity(conn, texts);
         if (!old)
         {
           pg::exec(conn, "ROLLBACK", "ending the transaction failed");
-          return std::nullopt;
+          return start;
         }
         if (old->status == "writing")
         {
@@ -552,15 +556,16 @@ std::optional<std::int64_t> beginOrJoinTiledFrame(PGconn* conn, std::int64_t sce
               std::to_string(old->tileCount) + " tiles, not " + std::to_string(tileCount));
           }
           pg::exec(conn, "COMMIT", "committing the frame failed");
-          return old->id;
+          start.id = old->id;
+          return start;
         }
         storage::deleteReplaced(conn, *old, replace);
-        replaced = true;
+        start.replaced = true;
         // No conflict is possible any more: the old row is deleted and locked by us.
-        id = storage::insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
+        start.id = storage::insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
       }
       pg::exec(conn, "COMMIT", "committing the frame failed");
-      return id;
+      return start;
     });
 }
 
@@ -644,11 +649,10 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
   for (int attempt = 0; attempt < TiledFrameBeginAttempts; ++attempt)
   {
     const std::int64_t sceneId = storage::sceneRow(conn, texts);
-    bool replaced = false;
-    std::optional<std::int64_t> id;
+    TiledFrameStart start;
     try
     {
-      id = beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace, replaced);
+      start = beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace);
     }
     catch (const storage::SceneVanished&)
     {
@@ -659,13 +663,13 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
       storage::dropUnusedScenes(conn, sceneId);
       throw;
     }
-    if (replaced)
+    if (start.replaced)
     {
       storage::dropOrphanBlocks(conn);
     }
-    if (id)
+    if (start.id)
     {
-      return *id;
+      return *start.id;
     }
   }
   throw StoreError("starting the tiled frame failed: its row kept disappearing under concurrent "
