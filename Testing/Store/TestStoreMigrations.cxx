@@ -96,11 +96,11 @@ std::vector<RayRecord> knownRecords(std::size_t first, std::size_t count)
   return out;
 }
 
-asrt::SceneDescription scene(double mass)
+/// Scene `k`: its name alone tells the frames of a test apart.
+asrt::SceneDescription scene(int k)
 {
   asrt::SceneDescription d;
-  d.name = "migrated scene";
-  d.mass = mass;
+  d.name = "migrated scene " + std::to_string(k);
   d.camera.width = 97;
   d.camera.height = 61;
   return d;
@@ -204,9 +204,9 @@ TEST(StoreMigrations, VersionOneRaysComeBackBitExact)
   const std::vector<RayRecord> large = knownRecords(0, 2 * LegacyBlock + 45);
   const std::vector<RayRecord> single = knownRecords(100000, 1);
   const std::vector<RayRecord> whole = knownRecords(200000, LegacyBlock);
-  const std::int64_t a = insertLegacyFrame(db.Conn, 1, scene(1.0), { large });
-  const std::int64_t b = insertLegacyFrame(db.Conn, 1, scene(2.0), { single });
-  const std::int64_t c = insertLegacyFrame(db.Conn, 1, scene(3.0), { whole });
+  const std::int64_t a = insertLegacyFrame(db.Conn, 1, scene(1), { large });
+  const std::int64_t b = insertLegacyFrame(db.Conn, 1, scene(2), { single });
+  const std::int64_t c = insertLegacyFrame(db.Conn, 1, scene(3), { whole });
   // The rows are what version 1's own view decodes (the test's layout is version 1's).
   EXPECT_EQ(db.value("SELECT count(*) FROM rays_v WHERE frame_id = " + std::to_string(a)),
             std::to_string(large.size()));
@@ -236,9 +236,9 @@ TEST(StoreMigrations, VersionTwoTiledRaysComeBackBitExact)
     tiles.push_back(knownRecords(first, sizes[t]));
     all.insert(all.end(), tiles.back().begin(), tiles.back().end());
   }
-  const std::int64_t tiled = insertLegacyFrame(db.Conn, 2, scene(1.0), tiles);
+  const std::int64_t tiled = insertLegacyFrame(db.Conn, 2, scene(1), tiles);
   const std::vector<RayRecord> plain = knownRecords(50000, 777);
-  const std::int64_t one = insertLegacyFrame(db.Conn, 2, scene(2.0), { plain });
+  const std::int64_t one = insertLegacyFrame(db.Conn, 2, scene(2), { plain });
   EXPECT_EQ(db.value("SELECT min(ray) || '-' || max(ray) FROM rays_v WHERE frame_id = " +
                      std::to_string(tiled) + " AND tile = 3"),
             std::to_string(LegacyBlock + 32) + "-" + std::to_string(LegacyBlock + 93));
@@ -255,7 +255,7 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
   store.migrate(1);
   Db db(ci);
   const std::vector<RayRecord> first = knownRecords(7, LegacyBlock + 3);
-  const std::int64_t a = insertLegacyFrame(db.Conn, 1, scene(1.0), { first });
+  const std::int64_t a = insertLegacyFrame(db.Conn, 1, scene(1), { first });
   store.migrate(2);
   EXPECT_EQ(store.schemaVersion(), 2);
   // Version 2 made the frame one of one tile.
@@ -264,7 +264,7 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
             "0:" + std::to_string(first.size()));
   const std::vector<RayRecord> second = knownRecords(90000, 40);
   const std::int64_t b =
-    insertLegacyFrame(db.Conn, 2, scene(2.0), { knownRecords(90000, 25), knownRecords(90025, 15) });
+    insertLegacyFrame(db.Conn, 2, scene(2), { knownRecords(90000, 25), knownRecords(90025, 15) });
 
   store.migrate(3);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
