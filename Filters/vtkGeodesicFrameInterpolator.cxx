@@ -268,9 +268,9 @@ struct vtkGeodesicFrameInterpolator::Internals
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (store)
-        self->LastStoredFrameId = static_cast<vtkIdType>(
-          store->writeFrame(asrt::frameFromFieldData(source->GetHitsOutput()->GetFieldData()),
-                            self->Label ? self->Label : "", records, false, seconds));
+        self->LastStoredFrameId = static_cast<vtkIdType>(store->writeFrame(
+          asrt::frameFromFieldData(source->GetHitsOutput()->GetFieldData()),
+          self->Label ? self->Label : "", records, asrt::FrameWriteOptions().tracedIn(seconds)));
     }
     if (records.size() != pixels.size())
     {

@@ -49,8 +49,9 @@ void vtkGeodesicPostgreSQLWriter::WriteData()
     this->UpdateProgress(0.1);
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     store.migrate();
-    this->FrameId = static_cast<vtkIdType>(store.writeFrame(frame, this->Label ? this->Label : "",
-                                                            records, paths, this->ReplaceExisting));
+    this->FrameId = static_cast<vtkIdType>(store.writeFrame(
+      frame, this->Label ? this->Label : "", records,
+      asrt::FrameWriteOptions().withPaths(std::move(paths)).replacing(this->ReplaceExisting)));
     this->UpdateProgress(1.0);
   }
   catch (const std::exception& e)

@@ -1,6 +1,8 @@
 #include "EmbeddedPostgres.h"
 
 #include "AsrtTypes.h"
+#include "PgSession.h"
+#include "PostgresProcess.h"
 
 #include <libpq-fe.h>
 
@@ -31,77 +33,25 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#ifdef __linux__
-#include <linux/close_range.h>
-#endif
-
-extern char** environ;
-
 namespace fs = std::filesystem;
 
 namespace asrt
 {
 namespace
 {
+using embedded::Command;
+using embedded::dropPrivileges;
+using embedded::errnoText;
+using embedded::Outcome;
+using embedded::runCommand;
+using embedded::ServerUser;
+using embedded::serverUser;
+
 constexpr int LockTimeoutSeconds = 120;
 constexpr int PgCtlTimeoutSeconds = 60;
 // A unix socket path (with its terminating NUL) must fit in sockaddr_un::sun_path (108 bytes);
 // PostgreSQL appends "/.s.PGSQL.<port>" (at most 15 characters) to the directory.
 constexpr std::size_t MaxSocketPath = 107;
-
-std::string errnoText(int err)
-{
-  return std::strerror(err);
-}
-
-/// The operating-system account the server runs as.
-struct ServerUser
-{
-  uid_t Uid = 0;
-  gid_t Gid = 0;
-  std::string Name;
-  std::string Home;
-  std::vector<gid_t> Groups;
-  bool Switch = false; ///< true when we are root and must drop to this user in children
-};
-
-ServerUser serverUser()
-{
-  ServerUser su;
-  const uid_t me = geteuid();
-  if (me == 0)
-  {
-    const passwd* pw = getpwnam("postgres");
-    if (!pw)
-      throw std::runtime_error(
-        "running as root, but there is no 'postgres' system user to run the PostgreSQL server as "
-        "(PostgreSQL refuses to run as root): install the Debian package postgresql-15, or run "
-        "as a normal user");
-    su.Uid = pw->pw_uid;
-    su.Gid = pw->pw_gid;
-    su.Name = pw->pw_name;
-    su.Home = pw->pw_dir ? pw->pw_dir : "/";
-    su.Switch = true;
-    int n = 0;
-    getgrouplist(pw->pw_name, pw->pw_gid, nullptr, &n);
-    su.Groups.resize(static_cast<std::size_t>(std::max(n, 1)));
-    if (getgrouplist(pw->pw_name, pw->pw_gid, su.Groups.data(), &n) < 0)
-      n = 0;
-    su.Groups.resize(static_cast<std::size_t>(n));
-    if (su.Groups.empty())
-      su.Groups.push_back(su.Gid);
-    return su;
-  }
-  su.Uid = me;
-  su.Gid = getegid();
-  const passwd* pw = getpwuid(me);
-  if (!pw)
-    throw std::runtime_error("the current user (uid " + std::to_string(me) +
-                             ") has no passwd entry, so it has no name to use as database role");
-  su.Name = pw->pw_name;
-  su.Home = pw->pw_dir ? pw->pw_dir : "";
-  return su;
-}
 
 struct Binaries
 {
@@ -218,216 +168,6 @@ std::vector<std::string> splitLines(const std::string& text)
   for (std::string line; std::getline(in, line);)
     lines.push_back(line);
   return lines;
-}
-
-/// Switches a forked child to the server user; returns 0 or the errno. Async-signal-safe calls
-/// only: the parent may have other threads (OpenMP) whose locks a fork child must not touch.
-int dropPrivileges(const ServerUser& su)
-{
-  if (!su.Switch)
-    return 0;
-  if (setgroups(su.Groups.size(), su.Groups.data()) != 0 || setgid(su.Gid) != 0 ||
-      setuid(su.Uid) != 0)
-    return errno;
-  return 0;
-}
-
-struct Command
-{
-  std::vector<std::string> Argv;
-  std::string PgData;  ///< PGDATA for the child when not empty
-  std::string LogPath; ///< when set, stdout and stderr append here; else they are captured
-  int TimeoutSeconds = 120;
-};
-
-struct Outcome
-{
-  int ExitCode = 0;
-  std::string Output;
-};
-
-/// Runs a PostgreSQL program with an argument vector (never through a shell: paths may hold
-/// spaces and quotes), as the server user, from "/", with PG* variables removed from its
-/// environment so that a user's PGHOST or PGPORT cannot redirect it.
-Outcome runCommand(const ServerUser& su, const Command& cmd)
-{
-  std::vector<std::string> envStrings;
-  for (char** e = environ; e && *e; ++e)
-  {
-    const std::string kv = *e;
-    const std::string key = kv.substr(0, kv.find('='));
-    if (key.rfind("PG", 0) == 0 || key == "LC_ALL" || key == "LC_MESSAGES")
-      continue;
-    if (su.Switch && (key == "HOME" || key == "USER" || key == "LOGNAME"))
-      continue;
-    envStrings.push_back(kv);
-  }
-  // Server messages in English, so that errors read the same everywhere and tests can match them.
-  envStrings.push_back("LC_MESSAGES=C");
-  if (!cmd.PgData.empty())
-    envStrings.push_back("PGDATA=" + cmd.PgData);
-  if (su.Switch)
-  {
-    envStrings.push_back("HOME=" + su.Home);
-    envStrings.push_back("USER=" + su.Name);
-    envStrings.push_back("LOGNAME=" + su.Name);
-  }
-  std::vector<char*> argv, envp;
-  for (const std::string& a : cmd.Argv)
-    argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  for (const std::string& e : envStrings)
-    envp.push_back(const_cast<char*>(e.c_str()));
-  envp.push_back(nullptr);
-
-  rlimit lim{};
-  const int maxFd =
-    (getrlimit(RLIMIT_NOFILE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY && lim.rlim_cur < 65536)
-      ? static_cast<int>(lim.rlim_cur)
-      : 65536;
-
-  int errPipe[2];
-  if (pipe2(errPipe, O_CLOEXEC) != 0)
-    throw std::runtime_error("pipe: " + errnoText(errno));
-  int outPipe[2] = { -1, -1 };
-  if (cmd.LogPath.empty() && pipe2(outPipe, O_CLOEXEC) != 0)
-  {
-    const int err = errno;
-    close(errPipe[0]);
-    close(errPipe[1]);
-    throw std::runtime_error("pipe: " + errnoText(err));
-  }
-
-  const pid_t pid = fork();
-  if (pid == 0)
-  {
-    struct
-    {
-      int Stage;
-      int Err;
-    } report{ 0, 0 };
-    auto fail = [&](int stage)
-    {
-      report.Stage = stage;
-      report.Err = errno;
-      if (write(errPipe[1], &report, sizeof report) < 0)
-      {
-      }
-      _exit(127);
-    };
-    const int devNull = open("/dev/null", O_RDONLY);
-    if (devNull < 0 || dup2(devNull, 0) < 0)
-      fail(1);
-    if (const int err = dropPrivileges(su))
-    {
-      errno = err;
-      fail(2);
-    }
-    if (chdir("/") != 0)
-      fail(3);
-    if (outPipe[1] >= 0)
-    {
-      if (dup2(outPipe[1], 1) < 0 || dup2(outPipe[1], 2) < 0)
-        fail(4);
-    }
-    else
-    {
-      // Opened after dropping privileges, so the log belongs to the server user.
-      const int log =
-        open(cmd.LogPath.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0600);
-      if (log < 0 || dup2(log, 1) < 0 || dup2(log, 2) < 0)
-        fail(5);
-    }
-    // Inherited descriptors (our lock file above all) must not live on in the postmaster.
-#ifdef CLOSE_RANGE_CLOEXEC
-    if (close_range(3, ~0u, CLOSE_RANGE_CLOEXEC) != 0)
-#endif
-      for (int fd = 3; fd < maxFd; ++fd)
-        fcntl(fd, F_SETFD, FD_CLOEXEC);
-    execve(argv[0], argv.data(), envp.data());
-    fail(6);
-  }
-  const int forkErr = errno;
-  close(errPipe[1]);
-  if (outPipe[1] >= 0)
-    close(outPipe[1]);
-  if (pid < 0)
-  {
-    close(errPipe[0]);
-    if (outPipe[0] >= 0)
-      close(outPipe[0]);
-    throw std::runtime_error("fork: " + errnoText(forkErr));
-  }
-
-  struct
-  {
-    int Stage;
-    int Err;
-  } report{ 0, 0 };
-  ssize_t got;
-  do
-    got = read(errPipe[0], &report, sizeof report);
-  while (got < 0 && errno == EINTR);
-  close(errPipe[0]);
-
-  Outcome result;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(cmd.TimeoutSeconds);
-  int status = 0;
-  bool exited = false;
-  bool eof = outPipe[0] < 0;
-  while (!exited || !eof)
-  {
-    if (!eof)
-    {
-      pollfd p{ outPipe[0], POLLIN, 0 };
-      if (poll(&p, 1, 50) > 0)
-      {
-        char buf[4096];
-        const ssize_t n = read(outPipe[0], buf, sizeof buf);
-        if (n > 0)
-          result.Output.append(buf, static_cast<std::size_t>(n));
-        else if (n == 0 || errno != EINTR)
-          eof = true;
-      }
-    }
-    else
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (!exited)
-    {
-      const pid_t w = waitpid(pid, &status, WNOHANG);
-      exited = w == pid || (w < 0 && errno != EINTR);
-    }
-    if (std::chrono::steady_clock::now() > deadline)
-    {
-      if (!exited)
-      {
-        kill(pid, SIGKILL);
-        waitpid(pid, &status, 0);
-      }
-      if (outPipe[0] >= 0)
-        close(outPipe[0]);
-      throw std::runtime_error(cmd.Argv[0] + " did not finish within " +
-                               std::to_string(cmd.TimeoutSeconds) + " s" +
-                               (result.Output.empty() ? "" : ":\n" + result.Output));
-    }
-  }
-  if (outPipe[0] >= 0)
-    close(outPipe[0]);
-
-  if (got == static_cast<ssize_t>(sizeof report))
-  {
-    static const char* const stages[] = { "start",   "open /dev/null",  "switch user",
-                                          "chdir /", "redirect output", "open the log file",
-                                          "execute" };
-    const std::string what = report.Stage == 2   ? "switch to user " + su.Name
-                             : report.Stage == 5 ? "open the log file " + cmd.LogPath
-                             : (report.Stage > 0 && report.Stage < 7) ? stages[report.Stage]
-                                                                      : stages[0];
-    throw std::runtime_error("could not run " + cmd.Argv[0] + ": " + what +
-                             " failed: " + errnoText(report.Err));
-  }
-  result.ExitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return result;
 }
 
 /// Whether a forked child running as the server user can use the directory: a parent directory
@@ -615,22 +355,24 @@ bool postmasterAlive(const std::string& dir, long pid)
   return true;
 }
 
-struct PgConnDeleter
+/// A socket directory outside the data directory: created for the server user, or checked to
+/// be that user's directory.
+void prepareSocketDirectory(const ServerUser& su, const std::string& socketDir)
 {
-  void operator()(PGconn* c) const { PQfinish(c); }
-};
-struct PgResultDeleter
-{
-  void operator()(PGresult* r) const { PQclear(r); }
-};
-using Connection = std::unique_ptr<PGconn, PgConnDeleter>;
-using Result = std::unique_ptr<PGresult, PgResultDeleter>;
-
-std::string trimmed(const char* s)
-{
-  std::string t = s ? s : "";
-  t.erase(t.find_last_not_of(" \n") + 1);
-  return t;
+  struct stat st
+  {
+  };
+  if (lstat(socketDir.c_str(), &st) != 0)
+  {
+    if (mkdir(socketDir.c_str(), 0700) != 0 ||
+        (su.Switch && chown(socketDir.c_str(), su.Uid, su.Gid) != 0))
+      throw std::runtime_error("cannot create the socket directory " + socketDir + ": " +
+                               errnoText(errno));
+  }
+  else if (!S_ISDIR(st.st_mode) || st.st_uid != su.Uid)
+    throw std::runtime_error("the socket directory " + socketDir +
+                             " exists but is not a directory owned by " + su.Name + ": remove it");
+  chmod(socketDir.c_str(), 0700);
 }
 }
 
@@ -723,33 +465,43 @@ void EmbeddedPostgres::ensureDatabase(const std::string& name) const
 {
   if (name.empty() || name.size() > 63)
     throw InvalidParameter("a database name must have 1 to 63 bytes, got '" + name + "'");
-  Connection conn(PQconnectdb((conninfo("postgres") + " connect_timeout=10").c_str()));
-  if (!conn || PQstatus(conn.get()) != CONNECTION_OK)
-    throw std::runtime_error("cannot connect to the PostgreSQL server of " + DataDir + ": " +
-                             trimmed(conn ? PQerrorMessage(conn.get()) : "out of memory"));
+  pg::Connection conn;
+  try
+  {
+    conn = pg::connect(conninfo("postgres"));
+  }
+  catch (const StoreError& e)
+  {
+    throw std::runtime_error(std::string(e.what()) + " (the server of " + DataDir + ")");
+  }
   auto exists = [&]
   {
-    const char* params[] = { name.c_str() };
-    Result r(PQexecParams(conn.get(), "SELECT 1 FROM pg_database WHERE datname = $1", 1, nullptr,
-                          params, nullptr, nullptr, 0));
-    if (PQresultStatus(r.get()) != PGRES_TUPLES_OK)
-      throw std::runtime_error("cannot list databases: " + trimmed(PQerrorMessage(conn.get())));
+    const pg::Result r = pg::Params().text(name).exec(
+      conn.get(), "SELECT 1 FROM pg_database WHERE datname = $1", "cannot list databases");
     return PQntuples(r.get()) > 0;
   };
   if (exists())
     return;
-  char* ident = PQescapeIdentifier(conn.get(), name.c_str(), name.size());
-  if (!ident)
-    throw InvalidParameter("bad database name '" + name +
-                           "': " + trimmed(PQerrorMessage(conn.get())));
-  const std::string sql = std::string("CREATE DATABASE ") + ident;
-  PQfreemem(ident);
-  Result r(PQexec(conn.get(), sql.c_str()));
-  // Another client may have created it in between (duplicate_database, or a unique violation on
-  // pg_database): what matters is that it exists now.
-  if (PQresultStatus(r.get()) != PGRES_COMMAND_OK && !exists())
-    throw std::runtime_error("cannot create database '" + name +
-                             "': " + trimmed(PQerrorMessage(conn.get())));
+  std::string ident;
+  try
+  {
+    ident = pg::quoteIdentifier(conn.get(), name, "bad database name '" + name + "'");
+  }
+  catch (const StoreError& e)
+  {
+    throw InvalidParameter(e.what());
+  }
+  try
+  {
+    pg::exec(conn.get(), "CREATE DATABASE " + ident, "cannot create database '" + name + "'");
+  }
+  catch (const StoreError&)
+  {
+    // Another client may have created it in between (duplicate_database, or a unique violation
+    // on pg_database): what matters is that it exists now.
+    if (!exists())
+      throw;
+  }
 }
 
 std::string EmbeddedPostgres::ensureRunning()
@@ -852,23 +604,7 @@ std::string EmbeddedPostgres::ensureRunning()
   {
     const std::string socketDir = socketDirectory();
     if (socketDir != DataDir)
-    {
-      struct stat st
-      {
-      };
-      if (lstat(socketDir.c_str(), &st) != 0)
-      {
-        if (mkdir(socketDir.c_str(), 0700) != 0 ||
-            (su.Switch && chown(socketDir.c_str(), su.Uid, su.Gid) != 0))
-          throw std::runtime_error("cannot create the socket directory " + socketDir + ": " +
-                                   errnoText(errno));
-      }
-      else if (!S_ISDIR(st.st_mode) || st.st_uid != su.Uid)
-        throw std::runtime_error("the socket directory " + socketDir +
-                                 " exists but is not a directory owned by " + su.Name +
-                                 ": remove it");
-      chmod(socketDir.c_str(), 0700);
-    }
+      prepareSocketDirectory(su, socketDir);
     std::string conf =
       "# Written by ASRT at each start (the socket follows the directory).\n"
       "listen_addresses = ''\n"

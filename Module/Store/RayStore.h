@@ -15,7 +15,7 @@
 // view rays_v, which decodes the words; a predicate given to readFrame is evaluated there, on the
 // server, and only the selected rays travel.
 //
-// Tiled frames (issue 7): several processes (ranks) write the tiles of one frame concurrently,
+// Tiled frames: several processes (ranks) write the tiles of one frame concurrently,
 // each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
 // on, with status 'writing'; the transaction of the tile that brings the count of written tiles
 // to the frame's tile count also makes it 'complete'. Everything that reads frames (listFrames,
@@ -30,6 +30,7 @@
 #define asrt_RayStore_h
 
 #include "RayRecord.h"
+#include "RecordAllocation.h"
 #include "SceneDescription.h"
 #include "asrtStoreModule.h"
 
@@ -40,6 +41,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace asrt
@@ -94,13 +96,43 @@ struct FrameInfo
   std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
 
-/// `count` default records in a new vector whose memory `threads` threads (0: one per core) fault
-/// in at once before the records are constructed. Faulting in fresh pages (the kernel clears each
-/// one) is most of what filling a large result costs: 0.25-0.65 s of one core for a 1920×1080
-/// frame's 560 MB here, 0.11-0.16 s with two threads and the kernel's batched population
-/// (MADV_POPULATE_WRITE, Linux 5.14; on other kernels the records are simply constructed).
-/// readFrame() returns its records in such a vector.
-ASRTSTORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads = 0);
+/// How writeFrame() stores a frame, besides its scene, label and records.
+struct FrameWriteOptions
+{
+  /// Storing the same scene with the same parameters again throws a StoreError ("duplicate
+  /// frame") unless `replace`, which replaces the old frame in the same transaction.
+  bool replace = false;
+  /// How long tracing the frame took, stored with it; NaN when the writer does not say.
+  double traceSeconds = std::numeric_limits<double>::quiet_NaN();
+  /// The paths of some of its rays, stored in the same transaction (bit-exact, in the given
+  /// order). At most one path per pixel, each pixel inside the frame's resolution: anything else
+  /// is refused (StoreError) before touching the database.
+  std::vector<RayPath> paths;
+  /// For the streaming writeFrame(): `next` may be called from several threads at once (see
+  /// there). The writeFrame() of records in memory always allows it.
+  bool concurrentProducer = false;
+
+  FrameWriteOptions& replacing(bool r = true)
+  {
+    this->replace = r;
+    return *this;
+  }
+  FrameWriteOptions& tracedIn(double seconds)
+  {
+    this->traceSeconds = seconds;
+    return *this;
+  }
+  FrameWriteOptions& withPaths(std::vector<RayPath> p)
+  {
+    this->paths = std::move(p);
+    return *this;
+  }
+  FrameWriteOptions& fromConcurrentProducer(bool c = true)
+  {
+    this->concurrentProducer = c;
+    return *this;
+  }
+};
 
 class ASRTSTORE_EXPORT RayStore
 {
@@ -115,7 +147,7 @@ public:
   /// over one: another connection's table and commit would cost more than they save).
   static constexpr std::size_t kParallelMinRays = 65536;
   /// Two: on two cores, the server's two backends take the write's CPU time in parallel (one
-  /// backend alone takes twice the time of the fsync'd file; bench/REPORT.md, "store").
+  /// backend alone is the bottleneck of a write; bench/REPORT.md, "store").
   static constexpr int kDefaultWriteConnections = 2;
 
   /// Connects. `conninfo` is a libpq connection string or URI; empty means libpq's defaults and
@@ -136,26 +168,19 @@ public:
   int schemaVersion();
 
   /// Stores a frame in one transaction. Its identity is effectiveSceneText(scene): storing the
-  /// same scene with the same parameters again throws a StoreError ("duplicate frame") unless
-  /// `replace`, which replaces the old frame in the same transaction. Labels and names must be
-  /// valid UTF-8 without NUL bytes (anything else is refused before touching the database); they
-  /// are bound as parameters, never spliced into SQL. Returns the frame's id.
+  /// same scene with the same parameters again is a duplicate (see FrameWriteOptions::replace).
+  /// Labels and names must be valid UTF-8 without NUL bytes (anything else is refused before
+  /// touching the database); they are bound as parameters, never spliced into SQL. Returns the
+  /// frame's id.
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
-                          const std::vector<RayRecord>& records, bool replace = false,
-                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
-  /// As above, with the paths of some of its rays stored in the same transaction (bit-exact, in
-  /// the given order). At most one path per pixel, each pixel inside the frame's resolution:
-  /// anything else is refused (StoreError) before touching the database.
-  std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
-                          const std::vector<RayRecord>& records, const std::vector<RayPath>& paths,
-                          bool replace = false,
-                          double traceSeconds = std::numeric_limits<double>::quiet_NaN());
+                          const std::vector<RayRecord>& records,
+                          const FrameWriteOptions& options = FrameWriteOptions());
   /// As above, with the records produced one at a time by `next(index, record)` for index in
   /// [0, count), e.g. straight from a tracer. If it throws, the transaction is rolled back (no
   /// trace of the frame remains) and the exception propagates.
   ///
-  /// With `concurrentProducer` (the overloads above pass it: their records are in memory), `next`
-  /// may be called from several threads at once, for different indices (each thread in
+  /// With options.concurrentProducer (the overload above sets it: its records are in memory),
+  /// `next` may be called from several threads at once, for different indices (each thread in
   /// increasing order), and a frame of at least 2 × kParallelMinRays rays is written over up to
   /// writeConnections() connections at once, as that many tiles of consecutive rays (FrameInfo's
   /// tileCount). It is still one frame, made visible by one commit: the other connections load
@@ -166,9 +191,7 @@ public:
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
                           std::size_t count,
                           const std::function<void(std::size_t, RayRecord&)>& next,
-                          bool replace = false,
-                          double traceSeconds = std::numeric_limits<double>::quiet_NaN(),
-                          const std::vector<RayPath>& paths = {}, bool concurrentProducer = false);
+                          const FrameWriteOptions& options = FrameWriteOptions());
 
   /// Connections a parallel write uses at most (see writeFrame); default kDefaultWriteConnections.
   /// 1 writes every frame over this store's own connection. The others are opened when first

@@ -88,7 +88,8 @@ std::int64_t traceAndStore(const FrameTracer& tracer, RayStore& store,
   std::int64_t id = -1;
   try
   {
-    id = store.writeFrame(d, options.label, total, next, options.replace);
+    id = store.writeFrame(d, options.label, total, next,
+                          FrameWriteOptions().replacing(options.replace));
   }
   catch (...)
   {

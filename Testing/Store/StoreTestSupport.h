@@ -5,9 +5,11 @@
 
 #include "FrameTracer.h"
 #include "RayStore.h"
+#include "SceneFile.h"
 
 #include <libpq-fe.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -319,6 +321,124 @@ std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSe
     v = db.value(sql);
   }
   return v;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Databases written by earlier versions. Their layout is written out here (with RecordFields),
+// from what versions 1 and 2 stored, rather than taken from RayStore: one bytea column per field,
+// the values of a block of up to 4096 rays as big-endian words; version 2 added tiles.
+
+/// Rays per block of ray_blocks in versions 1 and 2.
+constexpr std::size_t LegacyBlock = 4096;
+
+/// Runs a statement with text parameters (bytea ones, marked by a leading "\x" in `binary`, in
+/// binary) and returns the first value.
+inline std::string legacyExec(PGconn* c, const std::string& sql,
+                              const std::vector<std::string>& params,
+                              const std::vector<bool>& binary = {})
+{
+  std::vector<const char*> values;
+  std::vector<int> lengths, formats;
+  for (std::size_t k = 0; k < params.size(); ++k)
+  {
+    values.push_back(params[k].c_str());
+    lengths.push_back(int(params[k].size()));
+    formats.push_back(k < binary.size() && binary[k] ? 1 : 0);
+  }
+  PGresult* r = PQexecParams(c, sql.c_str(), int(params.size()), nullptr, values.data(),
+                             lengths.data(), formats.data(), 0);
+  const ExecStatusType st = PQresultStatus(r);
+  std::string v;
+  if (st == PGRES_TUPLES_OK && PQntuples(r) > 0)
+    v = PQgetvalue(r, 0, 0);
+  const std::string msg = PQresultErrorMessage(r);
+  PQclear(r);
+  if (st != PGRES_TUPLES_OK && st != PGRES_COMMAND_OK)
+    throw std::runtime_error(sql + ": " + msg);
+  return v;
+}
+
+/// Stores a frame as schema version `version` (1 or 2) did: its row, its tiles' rows (version 2)
+/// and the blocks of every tile. Returns the frame's id.
+inline std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneDescription& scene,
+                                      const std::vector<std::vector<RayRecord>>& tiles,
+                                      const std::string& status = "complete")
+{
+  std::size_t rays = 0;
+  for (const auto& t : tiles)
+    rays += t.size();
+  const std::string effective = asrt::effectiveSceneText(scene);
+  const std::string sceneId = legacyExec(
+    c,
+    "INSERT INTO scenes (content_hash, description, description_text) VALUES "
+    "(sha256(convert_to($1, 'UTF8')), '{}', $1) ON CONFLICT (content_hash) DO UPDATE SET "
+    "description_text = EXCLUDED.description_text RETURNING id",
+    { "the scene of " + effective });
+  auto num = [](double x)
+  {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.17g", x);
+    return std::string(b);
+  };
+  std::string cols = "scene_id, frame_hash, effective_text, name, label, mass, spin, charge, "
+                     "camera_x, camera_y, camera_z, focal_x, focal_y, focal_z, up_x, up_y, up_z, "
+                     "view_angle, width, height, method, step, relative_tolerance, "
+                     "absolute_tolerance, status, ray_count, write_seconds, completed_at";
+  std::string vals = "$1, sha256(convert_to($2, 'UTF8')), $2, $3, 'legacy', $4, $5, 0, 0, -30, "
+                     "0, 0, 0, 0, 0, 0, 1, 30, $6, $7, 'auto', 0, 1e-9, 1e-12, $8, $9, 1, "
+                     "CASE WHEN $8 = 'complete' THEN now() END";
+  if (version >= 2)
+  {
+    cols += ", tile_count";
+    vals += ", " + std::to_string(tiles.size());
+  }
+  const std::int64_t id = std::stoll(legacyExec(
+    c, "INSERT INTO frames (" + cols + ") VALUES (" + vals + ") RETURNING id",
+    { sceneId, effective, scene.name, num(scene.spacetime.mass), num(scene.spacetime.spin),
+      std::to_string(scene.camera.width), std::to_string(scene.camera.height), status,
+      std::to_string(status == "complete" ? rays : 0) }));
+  std::string blockCols = "frame_id, block, first_ray, n", blockVals = "$1, $2, $3, $4";
+  int next = 5;
+  if (version >= 2)
+  {
+    blockCols += ", tile";
+    blockVals += ", $" + std::to_string(next++);
+  }
+  for (const RecordField& f : RecordFields)
+  {
+    blockCols += std::string(", ") + f.name;
+    blockVals += ", $" + std::to_string(next++);
+  }
+  for (std::size_t t = 0; t < tiles.size(); ++t)
+  {
+    if (version >= 2)
+      legacyExec(c, "INSERT INTO frame_tiles (frame_id, tile, ray_count) VALUES ($1, $2, $3)",
+                 { std::to_string(id), std::to_string(t), std::to_string(tiles[t].size()) });
+    for (std::size_t first = 0, b = 0; first < tiles[t].size(); first += LegacyBlock, ++b)
+    {
+      const std::size_t n = std::min(LegacyBlock, tiles[t].size() - first);
+      std::vector<std::string> params = { std::to_string(id), std::to_string(b),
+                                          std::to_string(first), std::to_string(n) };
+      if (version >= 2)
+        params.push_back(std::to_string(t));
+      std::vector<bool> binary(params.size(), false);
+      for (const RecordField& f : RecordFields)
+      {
+        std::string bytes;
+        for (std::size_t k = 0; k < n; ++k)
+        {
+          const std::uint64_t w = f.word(tiles[t][first + k]);
+          for (int m = f.size - 1; m >= 0; --m)
+            bytes.push_back(char(w >> (8 * m)));
+        }
+        params.push_back(bytes);
+        binary.push_back(true);
+      }
+      legacyExec(c, "INSERT INTO ray_blocks (" + blockCols + ") VALUES (" + blockVals + ")", params,
+                 binary);
+    }
+  }
+  return id;
 }
 
 /// Exit codes of forked children (they must not use gtest assertions).

@@ -231,7 +231,8 @@ TEST(RayStoreFrames, RoundTripIsBitExact)
   asrt::SceneDescription s = scene();
   s.camera.position = asrt::Vec3(0.1, -30.000000000000004, 1e-300);
   s.integrator.relativeTolerance = 1.2345678901234567e-9;
-  const std::int64_t id = store.writeFrame(s, "round trip", records, false, 12.5);
+  const std::int64_t id =
+    store.writeFrame(s, "round trip", records, asrt::FrameWriteOptions().tracedIn(12.5));
   expectSame(store.readFrame(id), records);
 
   const asrt::FrameInfo f = store.frameInfo(id);
@@ -311,7 +312,8 @@ TEST(RayStoreFrames, SameSceneAndParametersIsTheSameFrame)
   EXPECT_NE(dup.find("frame " + std::to_string(first)), std::string::npos) << dup;
   expectSame(store.readFrame(first), a);
 
-  const std::int64_t replaced = store.writeFrame(scene(), "replaced", b, true);
+  const std::int64_t replaced =
+    store.writeFrame(scene(), "replaced", b, asrt::FrameWriteOptions().replacing());
   EXPECT_NE(replaced, first);
   EXPECT_EQ(store.findFrame(scene()), replaced);
   EXPECT_NE(errorOf([&] { store.frameInfo(first); }).find("no frame"), std::string::npos);
@@ -614,7 +616,8 @@ TEST(RayStorePaths, RoundTripIsBitExactAndSqlSeesEveryPoint)
   store.migrate();
   const auto records = synthetic(300, 64);
   const auto paths = syntheticPaths();
-  const std::int64_t id = store.writeFrame(scene(), "paths", records, paths);
+  const std::int64_t id =
+    store.writeFrame(scene(), "paths", records, asrt::FrameWriteOptions().withPaths(paths));
   expectSame(store.readFrame(id), records);
   expectSamePaths(store.readPaths(id), paths);
   EXPECT_EQ(store.frameInfo(id).pathCount, 5);
@@ -657,15 +660,22 @@ TEST(RayStorePaths, BadPathsAreRefusedBeforeTheDatabase)
   const auto records = synthetic(100, 64);
   auto paths = syntheticPaths();
   paths[3].i = 64; // the frame is 64 × 48
-  std::string e = errorOf([&] { store.writeFrame(scene(), "outside", records, paths); });
+  std::string e = errorOf(
+    [&]
+    { store.writeFrame(scene(), "outside", records, asrt::FrameWriteOptions().withPaths(paths)); });
   EXPECT_NE(e.find("path 3 (pixel 64, 20) lies outside the 64 x 48 frame"), std::string::npos) << e;
   paths = syntheticPaths();
   paths[4].i = 5;
   paths[4].j = 7;
-  e = errorOf([&] { store.writeFrame(scene(), "twice", records, paths); });
+  e = errorOf(
+    [&]
+    { store.writeFrame(scene(), "twice", records, asrt::FrameWriteOptions().withPaths(paths)); });
   EXPECT_NE(e.find("path 4 (pixel 5, 7): that pixel already has a path"), std::string::npos) << e;
   paths[4].j = -1;
-  e = errorOf([&] { store.writeFrame(scene(), "negative", records, paths); });
+  e = errorOf(
+    [&] {
+      store.writeFrame(scene(), "negative", records, asrt::FrameWriteOptions().withPaths(paths));
+    });
   EXPECT_NE(e.find("lies outside"), std::string::npos) << e;
   EXPECT_EQ(db.value("SELECT (SELECT count(*) FROM frames) + (SELECT count(*) FROM scenes) + "
                      "(SELECT count(*) FROM ray_paths)"),
@@ -681,8 +691,12 @@ TEST(RayStorePaths, LateFailureLeavesNeitherRaysNorPaths)
   // The server refuses the frame's last statement, after both COPYs went through.
   db.value("ALTER TABLE frame_tiles ADD CONSTRAINT veto CHECK (ray_count <> 777)");
   const auto records = synthetic(777, 64);
-  const std::string e =
-    errorOf([&] { store.writeFrame(scene(), "vetoed", records, syntheticPaths()); });
+  const std::string e = errorOf(
+    [&]
+    {
+      store.writeFrame(scene(), "vetoed", records,
+                       asrt::FrameWriteOptions().withPaths(syntheticPaths()));
+    });
   EXPECT_NE(e.find("recording the frame's rays failed"), std::string::npos) << e;
   EXPECT_NE(e.find("veto"), std::string::npos) << e;
   EXPECT_EQ(db.value("SELECT (SELECT count(*) FROM frames) || ':' || (SELECT count(*) FROM "
@@ -692,7 +706,8 @@ TEST(RayStorePaths, LateFailureLeavesNeitherRaysNorPaths)
             "0:0:0:0:0");
   EXPECT_TRUE(store.listFrames().empty());
   db.value("ALTER TABLE frame_tiles DROP CONSTRAINT veto");
-  const std::int64_t id = store.writeFrame(scene(), "allowed", records, syntheticPaths());
+  const std::int64_t id = store.writeFrame(scene(), "allowed", records,
+                                           asrt::FrameWriteOptions().withPaths(syntheticPaths()));
   expectSame(store.readFrame(id), records);
   expectSamePaths(store.readPaths(id), syntheticPaths());
 }
@@ -708,7 +723,8 @@ TEST(RayStoreFrames, ReplacedAndDeletedFramesLeaveNothingBehind)
   EXPECT_EQ(blockTables(db), "2");
   // Replacing drops the old frame's table of rays once the new frame is in.
   const std::int64_t second =
-    store.writeFrame(scene(), "second", synthetic(3000, 64, 3), syntheticPaths(), true);
+    store.writeFrame(scene(), "second", synthetic(3000, 64, 3),
+                     asrt::FrameWriteOptions().withPaths(syntheticPaths()).replacing());
   EXPECT_NE(second, first);
   EXPECT_EQ(blockTables(db), "2");
   EXPECT_EQ(db.value("SELECT sum(n) FROM ray_blocks"), "3100");
@@ -801,7 +817,8 @@ TEST(RayStoreSql, ReadmeQueriesAnswerWhatTheySay)
     }
   }
   const std::int64_t first = store.writeFrame(scene(1.0), "first", a);
-  const std::int64_t second = store.writeFrame(scene(2.0), "second", b, paths);
+  const std::int64_t second =
+    store.writeFrame(scene(2.0), "second", b, asrt::FrameWriteOptions().withPaths(paths));
   // The README asks about frame 2; here that is whatever id the second frame got.
   auto forSecond = [&](std::string q)
   {

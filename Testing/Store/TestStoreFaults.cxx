@@ -1,4 +1,4 @@
-// asrt::RayStore under real faults (issue 4): writers killed in the middle of a COPY, servers
+// asrt::RayStore under real faults: writers killed in the middle of a COPY, servers
 // stopped between and during writes, wrong credentials and schema versions, concurrent writers in
 // separate processes, hostile text through the whole path. Each test that breaks its server gets
 // a server of its own.
@@ -701,7 +701,7 @@ struct StalledWrite
                     std::this_thread::sleep_for(std::chrono::milliseconds(5));
                   r = syntheticRecord(seed, k, 97);
                 },
-                false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+                asrt::FrameWriteOptions().fromConcurrentProducer());
             });
         })
   {
@@ -813,7 +813,7 @@ TEST_F(StoreParallelWrite, KilledWriterLeavesNothingVisibleAndMigrateSweepsItsCo
                                          std::this_thread::sleep_for(std::chrono::milliseconds(10));
                                        r = syntheticRecord(seed, k, 97);
                                      },
-                                     false, std::numeric_limits<double>::quiet_NaN(), {}, true);
+                                     asrt::FrameWriteOptions().fromConcurrentProducer());
                                    return int(Ok);
                                  });
   ASSERT_GT(child, 0);

@@ -1,0 +1,334 @@
+#include "StoreFrameRows.h"
+
+#include "SceneFile.h"
+#include "StoreRecordCodec.h"
+
+#include <nlohmann/json.hpp>
+
+#include <exception>
+#include <set>
+#include <utility>
+
+namespace asrt
+{
+namespace storage
+{
+namespace
+{
+/// A scene row may vanish between its upsert and its look-up only when a concurrent deletion
+/// removes it as unused in that instant; five attempts in a row losing that race means the
+/// scene's frames are being deleted as fast as they are written, and the caller should hear so.
+constexpr int SceneRowAttempts = 5;
+
+const char* const FrameColumns =
+  "f.id, f.scene_id, encode(s.content_hash, 'hex'), encode(f.frame_hash, 'hex'), f.name, f.label, "
+  "f.mass, f.spin, f.charge, f.camera_x, f.camera_y, f.camera_z, f.focal_x, f.focal_y, f.focal_z, "
+  "f.up_x, f.up_y, f.up_z, f.view_angle, f.width, f.height, f.method, f.step, "
+  "f.relative_tolerance, f.absolute_tolerance, f.status, coalesce(f.write_seconds, 'NaN'), "
+  "coalesce(f.trace_seconds, 'NaN'), "
+  "to_char(f.created_at AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS.US\"Z\"'), f.ray_count, "
+  "f.tile_count, (SELECT count(*) FROM ray_paths p WHERE p.frame_id = f.id) "
+  "FROM frames f JOIN scenes s ON s.id = f.scene_id WHERE f.status = 'complete'";
+
+FrameInfo frameFromRow(const PGresult* r, int row)
+{
+  using pg::getF64;
+  using pg::getI32;
+  using pg::getI64;
+  using pg::getText;
+  FrameInfo f;
+  int c = 0;
+  f.id = getI64(r, row, c++);
+  f.sceneId = getI64(r, row, c++);
+  f.sceneHash = getText(r, row, c++);
+  f.frameHash = getText(r, row, c++);
+  f.name = getText(r, row, c++);
+  f.label = getText(r, row, c++);
+  FrameKey& k = f.key;
+  k.spacetime.mass = getF64(r, row, c++);
+  k.spacetime.spin = getF64(r, row, c++);
+  k.spacetime.charge = getF64(r, row, c++);
+  for (Vec3* v : { &k.cameraPosition, &k.focalPoint, &k.viewUp })
+  {
+    for (int m = 0; m < 3; ++m)
+    {
+      (*v)[m] = getF64(r, row, c++);
+    }
+  }
+  k.viewAngle = getF64(r, row, c++);
+  k.width = getI32(r, row, c++);
+  k.height = getI32(r, row, c++);
+  k.method = getText(r, row, c++);
+  k.step = getF64(r, row, c++);
+  k.relativeTolerance = getF64(r, row, c++);
+  k.absoluteTolerance = getF64(r, row, c++);
+  f.status = getText(r, row, c++);
+  f.writeSeconds = getF64(r, row, c++);
+  f.traceSeconds = getF64(r, row, c++);
+  f.createdAt = getText(r, row, c++);
+  f.rayCount = getI64(r, row, c++);
+  f.tileCount = getI32(r, row, c++);
+  f.pathCount = getI64(r, row, c++);
+  return f;
+}
+}
+
+SceneTexts sceneTexts(const SceneDescription& d)
+{
+  SceneTexts t;
+  try
+  {
+    t.frame = effectiveSceneText(d);
+    nlohmann::json j = nlohmann::json::parse(t.frame);
+    j.erase("spacetime");
+    for (const char* k : { "position", "focalPoint", "viewUp", "viewAngle", "resolution" })
+    {
+      j["camera"].erase(k);
+    }
+    for (const char* k : { "method", "step", "relativeTolerance", "absoluteTolerance" })
+    {
+      j["integrator"].erase(k);
+    }
+    t.scene = j.dump();
+  }
+  catch (const std::exception& e)
+  {
+    throw StoreError(std::string("cannot serialise the scene description: ") + e.what());
+  }
+  pg::requireText(t.frame, "the scene description");
+  // JSON may escape a NUL as \u0000, which the text check cannot see and jsonb refuses: refuse it
+  // here, before the database, like a NUL anywhere else.
+  if (t.frame.find("\\u0000") != std::string::npos)
+    throw StoreError("the scene description contains a NUL character (\\u0000); it was not stored");
+  return t;
+}
+
+std::int64_t sceneRow(PGconn* conn, const SceneTexts& texts)
+{
+  for (int attempt = 0; attempt < SceneRowAttempts; ++attempt)
+  {
+    const std::int64_t id = pg::transaction(
+      conn, pg::WriteBegin,
+      [&]
+      {
+        pg::Params()
+          .bytes(texts.scene)
+          .text(texts.scene)
+          .exec(conn,
+                "INSERT INTO scenes (content_hash, description, description_text) "
+                "VALUES (sha256($1), $2::jsonb, $2) ON CONFLICT (content_hash) DO NOTHING",
+                "storing the scene failed");
+        pg::Result found = pg::Params()
+                             .bytes(texts.scene)
+                             .exec(conn, "SELECT id FROM scenes WHERE content_hash = sha256($1)",
+                                   "finding the scene failed");
+        const std::int64_t sceneId = PQntuples(found.get()) ? pg::getI64(found.get(), 0, 0) : -1;
+        pg::exec(conn, "COMMIT", "committing the scene failed");
+        return sceneId;
+      });
+    if (id >= 0)
+    {
+      return id;
+    }
+  }
+  throw StoreError("storing the scene failed: its row kept disappearing under concurrent "
+                   "deletions");
+}
+
+void dropUnusedScenes(PGconn* conn, std::int64_t sceneId) noexcept
+{
+  if (PQstatus(conn) != CONNECTION_OK || PQtransactionStatus(conn) != PQTRANS_IDLE)
+  {
+    return;
+  }
+  try
+  {
+    pg::Params().i64(sceneId).exec(
+      conn,
+      "DELETE FROM scenes WHERE id IN (SELECT s.id FROM scenes s WHERE ($1 < 0 OR s.id = $1) "
+      "AND NOT EXISTS (SELECT 1 FROM frames f WHERE f.scene_id = s.id) FOR UPDATE SKIP LOCKED)",
+      "removing an unused scene failed");
+  }
+  catch (const StoreError&)
+  {
+    // A frame committed in the meantime refers to it (foreign key): it stays, as it should.
+  }
+}
+
+std::optional<std::int64_t> insertFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
+                                        const SceneDescription& scene, const std::string& label,
+                                        int tileCount, bool ifAbsent)
+{
+  const CameraParameters& cam = scene.camera;
+  const IntegratorConfig& ic = scene.integrator;
+  pg::Params ins;
+  ins.i64(sceneId).bytes(texts.frame).text(texts.frame).text(scene.name).text(label);
+  ins.f64(scene.spacetime.mass).f64(scene.spacetime.spin).f64(scene.spacetime.charge);
+  for (const Vec3* v : { &cam.position, &cam.focalPoint, &cam.viewUp })
+  {
+    ins.f64(v->x()).f64(v->y()).f64(v->z());
+  }
+  ins.f64(cam.viewAngle).i32(cam.width).i32(cam.height).text(ic.method).f64(ic.step);
+  ins.f64(ic.relativeTolerance).f64(ic.absoluteTolerance).i32(tileCount);
+  try
+  {
+    pg::Result r = ins.exec(
+      conn,
+      std::string("INSERT INTO frames (scene_id, frame_hash, effective_text, name, label, mass, "
+                  "spin, charge, camera_x, camera_y, camera_z, focal_x, focal_y, focal_z, up_x, "
+                  "up_y, up_z, view_angle, width, height, method, step, relative_tolerance, "
+                  "absolute_tolerance, tile_count, status) VALUES ($1, sha256($2), $3, $4, $5, $6, "
+                  "$7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, "
+                  "$23, $24, $25, 'writing')") +
+        (ifAbsent ? " ON CONFLICT (frame_hash) DO NOTHING" : "") + " RETURNING id",
+      "creating the frame failed");
+    if (PQntuples(r.get()) == 0)
+    {
+      return std::nullopt;
+    }
+    return pg::getI64(r.get(), 0, 0);
+  }
+  catch (const StoreError& e)
+  {
+    if (e.sqlState() == "23503")
+    {
+      throw SceneVanished();
+    }
+    throw;
+  }
+}
+
+std::optional<FrameOfIdentity> lockFrameOfIdentity(PGconn* conn, const SceneTexts& texts)
+{
+  pg::Result r =
+    pg::Params()
+      .bytes(texts.frame)
+      .exec(conn,
+            "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = sha256($1) FOR "
+            "UPDATE",
+            "looking for an existing frame failed");
+  if (PQntuples(r.get()) == 0)
+  {
+    return std::nullopt;
+  }
+  return FrameOfIdentity{ pg::getI64(r.get(), 0, 0), pg::getText(r.get(), 0, 1),
+                          pg::getI32(r.get(), 0, 2), pg::getText(r.get(), 0, 3) };
+}
+
+void deleteReplaced(PGconn* conn, const FrameOfIdentity& old, bool replace)
+{
+  if (!replace)
+  {
+    throw StoreError("duplicate frame: this scene with these parameters is already stored as "
+                     "frame " +
+                     std::to_string(old.id) + " (label \"" + old.label +
+                     "\"); pass replace = true to replace it");
+  }
+  deleteFrameRow(conn, old.id, "deleting the frame to be replaced failed");
+}
+
+void deleteFrameRow(PGconn* conn, std::int64_t id, const std::string& what)
+{
+  pg::Params().i64(id).exec(conn, "DELETE FROM frames WHERE id = $1", what);
+}
+
+std::vector<FrameInfo> selectFrames(PGconn* conn, const pg::Params& params,
+                                    const std::string& condition, const std::string& what)
+{
+  pg::Result r = params.exec(conn, std::string("SELECT ") + FrameColumns + condition, what);
+  std::vector<FrameInfo> frames;
+  for (int row = 0; row < PQntuples(r.get()); ++row)
+  {
+    frames.push_back(frameFromRow(r.get(), row));
+  }
+  return frames;
+}
+
+pg::Result completeFrameColumn(PGconn* conn, std::int64_t id, const std::string& column,
+                               const std::string& what)
+{
+  pg::Result r = pg::Params().i64(id).exec(
+    conn, "SELECT " + column + " FROM frames WHERE id = $1 AND status = 'complete'", what);
+  if (PQntuples(r.get()) == 0)
+  {
+    throw StoreError("there is no frame " + std::to_string(id));
+  }
+  return r;
+}
+
+void checkPaths(const SceneDescription& scene, const std::vector<RayPath>& paths)
+{
+  std::set<std::pair<int, int>> seen;
+  for (std::size_t k = 0; k < paths.size(); ++k)
+  {
+    const RayPath& p = paths[k];
+    const std::string which = "path " + std::to_string(k) + " (pixel " + std::to_string(p.i) +
+                              ", " + std::to_string(p.j) + ")";
+    if (p.i < 0 || p.j < 0 || p.i >= scene.camera.width || p.j >= scene.camera.height)
+    {
+      throw StoreError(which + " lies outside the " + std::to_string(scene.camera.width) + " x " +
+                       std::to_string(scene.camera.height) + " frame; nothing was stored");
+    }
+    if (!seen.insert({ p.i, p.j }).second)
+    {
+      throw StoreError(which + ": that pixel already has a path; nothing was stored");
+    }
+    if (p.points.size() > (std::size_t(1) << 30) / kPathPointBytes - 1)
+    {
+      throw StoreError(which + " has " + std::to_string(p.points.size()) +
+                       " points, more than PostgreSQL holds in one value; nothing was stored");
+    }
+  }
+}
+
+void copyPaths(PGconn* conn, std::int64_t frameId, const std::vector<RayPath>& paths)
+{
+  if (paths.empty())
+  {
+    return;
+  }
+  pg::CopyWriter writer(conn,
+                        "COPY ray_paths (frame_id, i, j, seq, termination, n, points) FROM STDIN "
+                        "(FORMAT binary)",
+                        "the paths");
+  for (std::size_t k = 0; k < paths.size(); ++k)
+  {
+    const RayPath& path = paths[k];
+    writer.row(7);
+    writer.i64(frameId);
+    writer.i32(path.i);
+    writer.i32(path.j);
+    writer.i32(std::int32_t(k));
+    writer.i32(std::int32_t(path.termination));
+    writer.i32(std::int32_t(path.points.size()));
+    encodePathPoints(path.points, writer.bytes(path.points.size() * kPathPointBytes));
+  }
+  writer.finish();
+}
+
+std::vector<RayPath> readPathRows(PGconn* conn, std::int64_t id)
+{
+  std::vector<RayPath> paths;
+  pg::Params().i64(id).stream(
+    conn, "SELECT i, j, termination, n, points FROM ray_paths WHERE frame_id = $1 ORDER BY seq",
+    "reading the paths failed",
+    [&](const PGresult* row)
+    {
+      RayPath p;
+      p.i = pg::getI32(row, 0, 0);
+      p.j = pg::getI32(row, 0, 1);
+      p.termination = Termination(pg::getI32(row, 0, 2));
+      const std::int32_t n = pg::getI32(row, 0, 3);
+      if (n < 0 || PQgetlength(row, 0, 4) != std::int64_t(n) * kPathPointBytes)
+      {
+        throw StoreError("reading the paths of frame " + std::to_string(id) +
+                         " failed: the path of pixel (" + std::to_string(p.i) + ", " +
+                         std::to_string(p.j) + ") is malformed");
+      }
+      decodePathPoints(PQgetvalue(row, 0, 4), std::size_t(n), p.points);
+      paths.push_back(std::move(p));
+    });
+  return paths;
+}
+}
+}

@@ -1,0 +1,33 @@
+// Every schema the store has had, frozen as the literal SQL that made it. A migration from an old
+// version runs these texts and nothing generated from today's code: adding a ray field (or
+// changing how the current version writes) must not change what an old database is upgraded
+// from. A new layout is a new version with new literals; these never change. Internal to
+// ASRT::Store.
+#ifndef asrt_StoreSchemaHistory_h
+#define asrt_StoreSchemaHistory_h
+
+namespace asrt
+{
+namespace storage
+{
+/// Migration 1 (an empty database to version 1): tables and the view rays_v. A script.
+extern const char* const SchemaV1;
+/// Migration 2 (version 1 to 2): tiles. A script.
+extern const char* const SchemaV2;
+/// Migration 3 (version 2 to 3), first step: the tables of packed records. A script.
+extern const char* const SchemaV3Tables;
+/// Migration 3, second step, once per tile of version 2 after TileTableV3 made its table: its rays
+/// re-packed. A tile statement.
+extern const char* const SchemaV3ConvertTile;
+/// Migration 3, last step, once the tiles are attached to ray_blocks_v3: the old table gone, the
+/// paths, the views. A script.
+extern const char* const SchemaV3Finish;
+/// Version 3's table of one tile's rays: the table migration 3 makes for each tile, and the one
+/// every write of the current version makes. A tile statement.
+extern const char* const TileTableV3;
+/// Version 3's attachment of a tile's table to a partitioned parent. A tile statement.
+extern const char* const AttachTileV3;
+}
+}
+
+#endif
