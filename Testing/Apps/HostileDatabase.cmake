@@ -1,0 +1,1 @@
+# Hostile-input CLI tests: Database.
