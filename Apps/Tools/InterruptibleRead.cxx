@@ -63,6 +63,8 @@ std::string readWholeFile(const std::string& path, std::size_t limit, const std:
 {
   auto failure = [&](const std::string& why)
   { return std::runtime_error("cannot read " + what + " \"" + path + "\": " + why); };
+  if (interruptRequested())
+    throw ReadInterrupted();
   Descriptor file;
   // Opening a FIFO blocks until someone opens it for writing; an interrupt ends the wait (EINTR).
   while ((file.fd = open(path.c_str(), O_RDONLY | O_CLOEXEC)) < 0)
