@@ -222,6 +222,8 @@ vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::
   writer->SetInputData(hits);
   // Ctrl-C cancels the statement under way, a wait for a lock included; the frame rolls back.
   writer->SetCancelRequested(&tools::interruptRequested);
+  if (tools::interruptRequested())
+    throw Interrupted();
   writer->Write();
   if (messages.failed())
   {

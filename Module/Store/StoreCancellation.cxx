@@ -46,7 +46,8 @@ WriteCancellation::~WriteCancellation()
 
 void WriteCancellation::check() const
 {
-  if (this->requested())
+  // The predicate itself too: it may have turned true since the watcher last asked.
+  if (this->requested() || (this->Cancelled && this->Cancelled()))
   {
     throw StoreError("writing the frame was cancelled; nothing was stored", CancelledState);
   }

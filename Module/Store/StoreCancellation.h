@@ -36,7 +36,7 @@ public:
 
   /// Whether the predicate turned true (cheap: for every record produced).
   bool requested() const { return this->Requested.load(std::memory_order_relaxed); }
-  /// Throws StoreError "writing the frame was cancelled" if requested().
+  /// Throws StoreError "writing the frame was cancelled" if requested() or the predicate is true.
   void check() const;
   /// Stops watching now (before COMMIT: a commit is not to be cancelled half-way).
   void stop();
