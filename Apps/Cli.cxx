@@ -1,6 +1,7 @@
 #include "Cli.h"
 
 #include "DataFiles.h"
+#include "InterruptibleRead.h"
 #include "Progress.h"
 #include "Propagator.h"
 #include "StoreConnection.h"
@@ -337,6 +338,36 @@ std::string outputPath(const Options& options, const std::string& scenePath,
   if (!dir.empty() && !fs::SystemTools::MakeDirectory(dir).IsSuccess())
     throw std::runtime_error("cannot create the directory \"" + dir + "\"");
   return out;
+}
+
+std::string readSceneFile(const std::string& path)
+{
+  try
+  {
+    std::string text = tools::readWholeFile(path, kMaxSceneFileBytes, "scene file");
+    // The source holds the text as a C string: a NUL would cut it short unseen.
+    if (text.find('\0') != std::string::npos)
+      throw InputError("cannot read scene file \"" + path + "\": it holds a NUL byte (not JSON)");
+    return text;
+  }
+  catch (const tools::ReadInterrupted&)
+  {
+    throw Interrupted();
+  }
+  catch (const InputError&)
+  {
+    throw;
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw InputError(e.what());
+  }
+}
+
+void setSceneFile(vtkGeodesicSource* source, const std::string& path)
+{
+  source->SetSceneText(readSceneFile(path).c_str());
+  source->SetSceneFileName(path.c_str());
 }
 
 void traceFrame(vtkGeodesicSource* source, const std::string& label, bool quiet)

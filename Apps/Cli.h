@@ -127,6 +127,16 @@ std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<O
 std::string outputPath(const Options& options, const std::string& scenePath,
                        const std::string& suffix);
 
+/// Scene files are read whole by the program itself, at most this many bytes.
+constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
+/// The scene file's text, read so that Ctrl-C or SIGTERM stops even a read that blocks (a FIFO).
+/// Throws InputError if it cannot be read (missing, too large, not text), Interrupted on an
+/// interrupt.
+std::string readSceneFile(const std::string& path);
+/// Gives the source the scene file at `path` as read by readSceneFile (its file name as well:
+/// errors name it, textures are found beside it).
+void setSceneFile(vtkGeodesicSource* source, const std::string& path);
+
 /// Updates the source with a progress bar labelled `label` (none when `quiet`). Throws
 /// InputError with the source's message if it failed (everything that fails in the source is the
 /// scene or its parameters), Interrupted on Ctrl-C.

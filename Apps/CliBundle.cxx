@@ -2,6 +2,7 @@
 #include "Cli.h"
 
 #include "DataFiles.h"
+#include "Progress.h"
 #include "RayBundleView.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicSource.h"
@@ -102,8 +103,8 @@ int runBundle(const std::vector<std::string>& args)
     interactive ? std::string() : outputPath(options, scenePath, "-bundle.png");
 
   vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scenePath.c_str());
   applySceneOverrides(options, source);
+  setSceneFile(source, scenePath);
   source->GeneratePolylinesOn();
   // The image size decides the rays' directions: learn it (the scene's, or the override).
   {
@@ -127,21 +128,28 @@ int runBundle(const std::vector<std::string>& args)
   traceFrame(source, "bundle " + name, options.has("quiet"));
   const vtkIdType count = source->GetPolylinesOutput()->GetNumberOfCells();
 
+  // The rays' file and the picture appear together.
+  tools::AtomicFileSet files;
   if (options.has("vtp"))
-  {
-    tools::writeVtp(source->GetPolylinesOutput(), options.get("vtp"));
-    std::printf("wrote %s\n", options.get("vtp").c_str());
-  }
+    tools::writeVtp(source->GetPolylinesOutput(), files.add(options.get("vtp")));
   char title[256];
   std::snprintf(title, sizeof title, "%s: %lld rays", name.c_str(), static_cast<long long>(count));
   style.title = title;
   vtkSmartPointer<vtkRenderer> renderer = tools::makeRayBundleRenderer(source, style);
   if (interactive)
   {
+    files.commit();
+    if (options.has("vtp"))
+      std::printf("wrote %s\n", options.get("vtp").c_str());
     tools::showInteractive(renderer, size.first, size.second, "asrt bundle " + name);
     return kOk;
   }
-  tools::renderToPng(renderer, size.first, size.second, output);
+  tools::renderToPng(renderer, size.first, size.second, files.add(output));
+  if (tools::interruptRequested())
+    throw Interrupted();
+  files.commit();
+  if (options.has("vtp"))
+    std::printf("wrote %s\n", options.get("vtp").c_str());
   std::printf("%s: %lld rays -> %s\n", name.c_str(), static_cast<long long>(count), output.c_str());
   return kOk;
 }

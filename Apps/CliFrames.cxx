@@ -2,6 +2,7 @@
 #include "Cli.h"
 
 #include "DataFiles.h"
+#include "Progress.h"
 #include "RayStore.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicPostgreSQLReader.h"
@@ -180,17 +181,23 @@ int runShow(const std::vector<std::string>& args)
   if (options.has("where"))
     reader->SetPredicate(options.get("where").c_str());
   reader->Update();
+  if (tools::interruptRequested())
+    throw Interrupted();
   if (messages.failed())
     throw DatabaseError(messages.firstError());
+  // The exports appear together, or none of them.
+  tools::AtomicFileSet files;
   if (options.has("png"))
-    tools::writePng(reader->GetImageOutput(), options.get("png"));
+    tools::writePng(reader->GetImageOutput(), files.add(options.get("png")));
   if (options.has("vti"))
-    tools::writeVti(reader->GetImageOutput(), options.get("vti"));
+    tools::writeVti(reader->GetImageOutput(), files.add(options.get("vti")));
   if (options.has("vtp"))
-    tools::writeVtp(reader->GetHitsOutput(), options.get("vtp"));
-  for (const char* format : { "png", "vti", "vtp" })
-    if (options.has(format))
-      std::printf("  wrote %s\n", options.get(format).c_str());
+    tools::writeVtp(reader->GetHitsOutput(), files.add(options.get("vtp")));
+  if (tools::interruptRequested())
+    throw Interrupted();
+  files.commit();
+  for (const std::string& path : files.paths())
+    std::printf("  wrote %s\n", path.c_str());
   return kOk;
 }
 }

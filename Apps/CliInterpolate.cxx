@@ -158,7 +158,7 @@ int runInterpolate(const std::vector<std::string>& args)
     if (fromScenes)
     {
       auto source = vtkSmartPointer<vtkGeodesicSource>::New();
-      source->SetSceneFileName(names[k].c_str());
+      setSceneFile(source, names[k]);
       if (const auto size = options.size("resolution"))
         source->SetResolution(size->first, size->second);
       traceFrame(source, "trace " + names[k], quiet);
@@ -222,8 +222,11 @@ int runInterpolate(const std::vector<std::string>& args)
     vtkImageData* frame = interpolator->GetOutput();
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
-    tools::writePng(frame, prefix + number + ".png");
-    tools::writeVti(frame, prefix + number + ".vti");
+    tools::AtomicFileSet files; // the frame's picture and dataset appear together
+    tools::writePng(frame, files.add(prefix + number + ".png"));
+    tools::writeVti(frame, files.add(prefix + number + ".vti"));
+    check();
+    files.commit();
     series.add(time, prefix + number + ".vti");
     movie->addFrame(frame);
 
@@ -235,6 +238,7 @@ int runInterpolate(const std::vector<std::string>& args)
     lines.push_back(line);
     bar.update(static_cast<double>(k + 1) / count);
   }
+  check();
   series.write(prefix + ".pvd");
   movie->close();
   bar.finish("-> " + prefix + "-*.png");

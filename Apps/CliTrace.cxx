@@ -4,6 +4,7 @@
 
 #include "CameraOrbit.h"
 #include "DataFiles.h"
+#include "Progress.h"
 #include "PvdCollection.h"
 #include "RayStore.h"
 #include "VtkMessages.h"
@@ -134,7 +135,8 @@ std::vector<FrameSetting> sweepFrames(const std::string& spec)
   return frames;
 }
 
-std::vector<FrameSetting> orbitFrames(const std::string& spec, const std::string& scenePath,
+std::vector<FrameSetting> orbitFrames(const std::string& spec,
+                                      const std::function<std::string()>& sceneText,
                                       const Options& options)
 {
   const std::size_t colon = spec.find(':');
@@ -142,7 +144,7 @@ std::vector<FrameSetting> orbitFrames(const std::string& spec, const std::string
   const double degrees =
     colon == std::string::npos ? 360.0 : parseNumber("--orbit", spec.substr(colon + 1));
   // The camera to turn: the scene's, with the command line's overrides.
-  tools::CameraPose pose = tools::sceneCamera(scenePath);
+  tools::CameraPose pose = tools::sceneCameraOfText(sceneText());
   auto override = [&options](const char* name, Vec3& v)
   {
     if (auto given = options.vector3(name))
@@ -218,10 +220,80 @@ vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::
   writer->SetLabel(label.c_str());
   writer->SetReplaceExisting(replace);
   writer->SetInputData(hits);
+  // Ctrl-C cancels the statement under way, a wait for a lock included; the frame rolls back.
+  writer->SetCancelRequested(&tools::interruptRequested);
+  if (tools::interruptRequested())
+    throw Interrupted();
   writer->Write();
   if (messages.failed())
+  {
+    if (tools::interruptRequested())
+      throw Interrupted();
     throw DatabaseError(withCommandLineAdvice(messages.firstError()));
+  }
   return writer->GetFrameId();
+}
+
+void stopIfInterrupted()
+{
+  if (tools::interruptRequested())
+    throw Interrupted();
+}
+
+/// Where the files of one frame go, and which of them there are.
+struct FrameFiles
+{
+  std::string png, vti, hits, rays; ///< empty: not written
+};
+
+/// Writes a frame's files to their temporaries in `files` (none is in place before
+/// files.commit()); an interrupt between two files stops with Interrupted, and the set then
+/// removes them all.
+FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bool polylines,
+                           const std::string& base, tools::AtomicFileSet& files)
+{
+  FrameFiles names;
+  stopIfInterrupted();
+  if (formats.png)
+  {
+    names.png = base + ".png";
+    tools::writePng(source->GetImageOutput(), files.add(names.png));
+    stopIfInterrupted();
+  }
+  if (formats.vti)
+  {
+    names.vti = base + ".vti";
+    tools::writeVti(source->GetImageOutput(), files.add(names.vti));
+    stopIfInterrupted();
+  }
+  if (formats.vtp)
+  {
+    names.hits = base + "-hits.vtp";
+    tools::writeVtp(source->GetHitsOutput(), files.add(names.hits));
+    stopIfInterrupted();
+  }
+  if (polylines)
+  {
+    names.rays = base + "-rays.vtp";
+    tools::writeVtp(source->GetPolylinesOutput(), files.add(names.rays));
+    stopIfInterrupted();
+  }
+  return names;
+}
+
+/// The .pvd files of a series, as one set.
+void writeCollections(const std::vector<std::pair<const tools::PvdCollection*, std::string>>& all)
+{
+  tools::AtomicFileSet files;
+  for (const auto& [collection, path] : all)
+    if (collection->size() > 0)
+      collection->write(files.add(path));
+  stopIfInterrupted();
+  files.commit();
+  for (const auto& [collection, path] : all)
+    if (collection->size() > 0)
+      std::printf("  wrote %s (ParaView time series of %zu frames)\n", path.c_str(),
+                  collection->size());
 }
 
 /// --mpi-split: the row layout and the rows per interleaved block.
@@ -287,6 +359,55 @@ void printRankWork(vtkGeodesicDistributedSource* source, const std::string& spli
                 static_cast<long long>(p), work->GetComponent(p, 0), work->GetComponent(p, 1),
                 work->GetComponent(p, 2), work->GetComponent(p, 3));
 }
+
+/// Where and how every frame of a run is written, and the series so far.
+struct FrameOutput
+{
+  Formats formats;
+  bool polylines = false;
+  bool store = false;
+  std::string conninfo, label;
+  bool replace = false;
+  vtkGeodesicDistributedSource* distributed = nullptr;
+  std::string split;
+  tools::PvdCollection images, hitSeries, raySeries;
+};
+
+/// The write phase of traced frame k. Its files and its stored copy appear together: the files
+/// are written to temporaries, then the frame is stored (an interrupt or an error until its commit
+/// leaves nothing), then the files are renamed into place. Past the commit the frame is finished
+/// and reported, and an interrupt then stops the run after it.
+void finishFrame(vtkGeodesicSource* source, FrameOutput& output, std::size_t k,
+                 const std::string& base, const std::string& title)
+{
+  vtkPolyData* hits = source->GetHitsOutput();
+  tools::AtomicFileSet files;
+  const FrameFiles written = writeFrameFiles(source, output.formats, output.polylines, base, files);
+  vtkIdType id = -1;
+  if (output.store)
+    id = output.distributed ? output.distributed->GetFrameId()
+                            : storeFrame(hits, output.conninfo, output.label, output.replace);
+  files.commit();
+  const double time = static_cast<double>(k);
+  if (!written.vti.empty())
+    output.images.add(time, written.vti);
+  if (!written.hits.empty())
+    output.hitSeries.add(time, written.hits);
+  if (!written.rays.empty())
+    output.raySeries.add(time, written.rays);
+  std::printf("%s: %gx%g, M = %g, a = %g, %s\n", title.c_str(), fieldValue(hits, "Resolution", 0),
+              fieldValue(hits, "Resolution", 1), fieldValue(hits, "Mass"), fieldValue(hits, "Spin"),
+              fieldString(hits, "IntegrationMethod").c_str());
+  for (const std::string& file : files.paths())
+    std::printf("  wrote %s\n", file.c_str());
+  if (output.distributed)
+    printRankWork(output.distributed, output.split);
+  if (output.store)
+    std::printf("  stored as frame %lld%s\n", static_cast<long long>(id),
+                output.distributed ? " (one tile per block of rows)" : "");
+  std::fflush(stdout);
+  stopIfInterrupted();
+}
 }
 
 int runTrace(const std::vector<std::string>& args)
@@ -344,16 +465,24 @@ int runTrace(const std::vector<std::string>& args)
   }
   else
     source = vtkSmartPointer<vtkGeodesicSource>::New();
-  source->SetSceneFileName(scenePath.c_str());
   applySceneOverrides(options, source);
   source->SetGeneratePolylines(polylines);
   source->SetPolylineStride(stride);
 
+  // The scene file is read once the command line is known to be good (the orbit's needs the
+  // camera from it).
+  auto sceneText = [&]
+  {
+    if (!source->GetSceneText())
+      setSceneFile(source, scenePath);
+    return std::string(source->GetSceneText());
+  };
   std::vector<FrameSetting> frames;
   if (options.has("sweep"))
     frames = sweepFrames(options.get("sweep"));
   else if (options.has("orbit"))
-    frames = orbitFrames(options.get("orbit"), scenePath, options);
+    frames = orbitFrames(options.get("orbit"), sceneText, options);
+  sceneText();
   const bool series = !frames.empty();
   if (!series)
     frames.push_back({ std::string(), [](vtkGeodesicSource*) {} });
@@ -381,7 +510,15 @@ int runTrace(const std::vector<std::string>& args)
 
   const std::string prefix = outputPath(options, scenePath, "");
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
-  tools::PvdCollection images, hitSeries, raySeries;
+  FrameOutput output;
+  output.formats = formats;
+  output.polylines = polylines;
+  output.store = options.has("store");
+  output.conninfo = conninfo;
+  output.label = options.get("store");
+  output.replace = options.has("replace");
+  output.distributed = distributed;
+  output.split = options.get("mpi-split", "interleaved");
   for (std::size_t k = 0; k < frames.size(); ++k)
   {
     frames[k].apply(source);
@@ -398,65 +535,12 @@ int runTrace(const std::vector<std::string>& args)
     if (!speaks)
       continue;
 
-    vtkImageData* image = source->GetImageOutput();
-    vtkPolyData* hits = source->GetHitsOutput();
-    std::vector<std::string> written;
-    if (formats.png)
-    {
-      tools::writePng(image, base + ".png");
-      written.push_back(base + ".png");
-    }
-    if (formats.vti)
-    {
-      tools::writeVti(image, base + ".vti");
-      images.add(static_cast<double>(k), base + ".vti");
-      written.push_back(base + ".vti");
-    }
-    if (formats.vtp)
-    {
-      tools::writeVtp(hits, base + "-hits.vtp");
-      hitSeries.add(static_cast<double>(k), base + "-hits.vtp");
-      written.push_back(base + "-hits.vtp");
-    }
-    if (polylines)
-    {
-      tools::writeVtp(source->GetPolylinesOutput(), base + "-rays.vtp");
-      raySeries.add(static_cast<double>(k), base + "-rays.vtp");
-      written.push_back(base + "-rays.vtp");
-    }
-    std::printf("%s%s%s: %gx%g, M = %g, a = %g, %s\n", name.c_str(), series ? " " : "",
-                frames[k].describe.c_str(), fieldValue(hits, "Resolution", 0),
-                fieldValue(hits, "Resolution", 1), fieldValue(hits, "Mass"),
-                fieldValue(hits, "Spin"), fieldString(hits, "IntegrationMethod").c_str());
-    for (const std::string& file : written)
-      std::printf("  wrote %s\n", file.c_str());
-    if (distributed)
-      printRankWork(distributed, options.get("mpi-split", "interleaved"));
-    if (options.has("store"))
-    {
-      const vtkIdType id =
-        distributed ? distributed->GetFrameId()
-                    : storeFrame(hits, conninfo, options.get("store"), options.has("replace"));
-      std::printf("  stored as frame %lld%s\n", static_cast<long long>(id),
-                  distributed ? " (one tile per block of rows)" : "");
-    }
-    std::fflush(stdout);
+    finishFrame(source, output, k, base, name + (series ? " " : "") + frames[k].describe);
   }
   if (series && speaks)
-  {
-    const std::pair<tools::PvdCollection*, std::string> collections[] = {
-      { &images, prefix + ".pvd" },
-      { &hitSeries, prefix + "-hits.pvd" },
-      { &raySeries, prefix + "-rays.pvd" }
-    };
-    for (const auto& [collection, path] : collections)
-      if (collection->size() > 0)
-      {
-        collection->write(path);
-        std::printf("  wrote %s (ParaView time series of %zu frames)\n", path.c_str(),
-                    collection->size());
-      }
-  }
+    writeCollections({ { &output.images, prefix + ".pvd" },
+                       { &output.hitSeries, prefix + "-hits.pvd" },
+                       { &output.raySeries, prefix + "-rays.pvd" } });
   return kOk;
 }
 }

@@ -8,13 +8,12 @@
 #include "vtkGeodesicSource.h"
 
 #include "CameraOrbit.h"
+#include "DataFiles.h"
 #include "MovieWriter.h"
 #include "PvdCollection.h"
 
 #include "vtkImageData.h"
 #include "vtkNew.h"
-#include "vtkPNGWriter.h"
-#include "vtkXMLImageDataWriter.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -52,16 +51,12 @@ int main(int argc, char* argv[])
 
       char name[64];
       std::snprintf(name, sizeof name, "/kerr-orbit-%03d", k);
-      vtkNew<vtkPNGWriter> png;
-      png->SetInputConnection(source->GetOutputPort(0));
-      png->SetFileName((out + name + ".png").c_str());
-      png->Write();
-      vtkNew<vtkXMLImageDataWriter> vti; // every per-pixel array, for ParaView
-      vti->SetInputConnection(source->GetOutputPort(0));
-      vti->SetFileName((out + name + ".vti").c_str());
-      vti->Write();
-      if (png->GetErrorCode() != 0 || vti->GetErrorCode() != 0)
-        return 1;
+      // VTK's PNG and XML writers, each frame's two files appearing together (a set of
+      // temporaries renamed into place); the .vti has every per-pixel array, for ParaView.
+      asrt::tools::AtomicFileSet files;
+      asrt::tools::writePng(source->GetImageOutput(), files.add(out + name + ".png"));
+      asrt::tools::writeVti(source->GetImageOutput(), files.add(out + name + ".vti"));
+      files.commit();
       series.add(degrees, out + name + ".vti"); // time = the camera's angle in degrees
       movie.addFrame(source->GetImageOutput());
       std::printf("%s.png (%g deg)\n", (out + name).c_str(), degrees);

@@ -10,13 +10,13 @@
 #include "vtkGeodesicFrameInterpolator.h"
 #include "vtkGeodesicSource.h"
 
+#include "DataFiles.h"
 #include "MovieWriter.h"
 
 #include "vtkDataArray.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
-#include "vtkPNGWriter.h"
 #include "vtkSmartPointer.h"
 
 #include <cstdio>
@@ -75,12 +75,7 @@ int main(int argc, char* argv[])
         return 1; // a source or the interpolator has said why on stderr
       char name[64];
       std::snprintf(name, sizeof name, "/mass-ramp-%03d.png", k);
-      vtkNew<vtkPNGWriter> png;
-      png->SetInputData(frame);
-      png->SetFileName((out + name).c_str());
-      png->Write();
-      if (png->GetErrorCode() != 0)
-        return 1;
+      asrt::tools::writePng(frame, out + name); // whole or not at all, never through a link
       movie.addFrame(frame);
       // Field data: the mass at t, and the shares of pixels matched, one-sided, holes, ...
       vtkFieldData* about = frame->GetFieldData();

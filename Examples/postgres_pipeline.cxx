@@ -9,24 +9,32 @@
 #include "vtkGeodesicPostgreSQLWriter.h"
 #include "vtkGeodesicSource.h"
 
+#include "DataFiles.h"
+
 #include "vtkImageData.h"
 #include "vtkNew.h"
-#include "vtkPNGWriter.h"
 
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 
 namespace
 {
-bool writePng(vtkAlgorithm* frame, const std::string& file)
+/// The reader's image as a PNG (VTK's PNG writer, into a new temporary renamed into place).
+bool writePng(vtkGeodesicPostgreSQLReader* frame, const std::string& file)
 {
-  vtkNew<vtkPNGWriter> png;
-  png->SetInputConnection(frame->GetOutputPort(0));
-  png->SetFileName(file.c_str());
-  png->Write();
+  try
+  {
+    asrt::tools::writePng(frame->GetImageOutput(), file);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "%s\n", e.what());
+    return false;
+  }
   std::printf("%s\n", file.c_str());
-  return png->GetErrorCode() == 0;
+  return true;
 }
 }
 

@@ -2,6 +2,8 @@
 
 #include "vtkGeodesicSource.h"
 
+#include <filesystem>
+
 namespace asrt
 {
 ImageLoader vtkImageFileLoader()
@@ -16,10 +18,24 @@ ImageLoader vtkImageFileLoader()
 
 SceneDescription loadScene(const char* text, const char* fileName, const char* textDirectory)
 {
+  const bool haveFile = fileName && *fileName;
+  if (text && *text && haveFile)
+  {
+    // The file's text, read by the caller its own way: textures beside the file, errors naming it.
+    const std::string dir = std::filesystem::path(fileName).parent_path().string();
+    try
+    {
+      return parseScene(text, dir.empty() ? "." : dir, vtkImageFileLoader());
+    }
+    catch (const InvalidParameter& e)
+    {
+      throw InvalidParameter(std::string(fileName) + ": " + e.what());
+    }
+  }
   if (text && *text)
     return parseScene(text, textDirectory && *textDirectory ? textDirectory : ".",
                       vtkImageFileLoader());
-  if (fileName && *fileName)
+  if (haveFile)
     return loadSceneFile(fileName, vtkImageFileLoader());
   throw InvalidParameter("no scene: set SceneFileName or SceneText");
 }

@@ -11,7 +11,8 @@ namespace asrt
 ImageLoader vtkImageFileLoader();
 /// The scene from JSON text if given (relative texture paths against `textDirectory`, the working
 /// directory if null or empty), else from the file; throws InvalidParameter if neither is set or
-/// the scene is invalid.
+/// the scene is invalid. Given both, the text is the file's content as the caller read it: its
+/// textures are found beside the file and errors name the file.
 SceneDescription loadScene(const char* text, const char* fileName,
                            const char* textDirectory = nullptr);
 }

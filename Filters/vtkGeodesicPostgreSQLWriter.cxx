@@ -49,15 +49,23 @@ void vtkGeodesicPostgreSQLWriter::WriteData()
     this->UpdateProgress(0.1);
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     store.migrate();
-    this->FrameId = static_cast<vtkIdType>(store.writeFrame(
-      frame, this->Label ? this->Label : "", records,
-      asrt::FrameWriteOptions().withPaths(std::move(paths)).replacing(this->ReplaceExisting)));
+    this->FrameId =
+      static_cast<vtkIdType>(store.writeFrame(frame, this->Label ? this->Label : "", records,
+                                              asrt::FrameWriteOptions()
+                                                .withPaths(std::move(paths))
+                                                .replacing(this->ReplaceExisting)
+                                                .cancelledWhen(this->CancelRequested)));
     this->UpdateProgress(1.0);
   }
   catch (const std::exception& e)
   {
     vtkErrorMacro(<< e.what());
   }
+}
+
+void vtkGeodesicPostgreSQLWriter::SetCancelRequested(std::function<bool()> cancelled)
+{
+  this->CancelRequested = std::move(cancelled);
 }
 
 void vtkGeodesicPostgreSQLWriter::PrintSelf(ostream& os, vtkIndent indent)

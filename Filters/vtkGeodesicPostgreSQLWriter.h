@@ -22,6 +22,8 @@
 #include "asrtFiltersModule.h" // for export macro
 #include "vtkWriter.h"
 
+#include <functional> // for the cancellation predicate
+
 class ASRTFILTERS_EXPORT vtkGeodesicPostgreSQLWriter : public vtkWriter
 {
 public:
@@ -51,6 +53,13 @@ public:
   /// Id of the frame the last successful Write() stored, −1 before.
   vtkGetMacro(FrameId, vtkIdType);
 
+#ifndef __VTK_WRAP__
+  /// Asked again and again, from another thread, while the frame is being stored: once it returns
+  /// true, the write is cancelled on the server (a wait for a lock included) and rolled back,
+  /// with an error and nothing stored (asrt::FrameWriteOptions::cancelled). Unset: never.
+  void SetCancelRequested(std::function<bool()> cancelled);
+#endif
+
 protected:
   vtkGeodesicPostgreSQLWriter();
   ~vtkGeodesicPostgreSQLWriter() override;
@@ -61,6 +70,7 @@ protected:
   char* Label = nullptr;
   bool ReplaceExisting = false;
   vtkIdType FrameId = -1;
+  std::function<bool()> CancelRequested;
 
 private:
   vtkGeodesicPostgreSQLWriter(const vtkGeodesicPostgreSQLWriter&) = delete;

@@ -44,7 +44,9 @@ public:
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   ///@{
-  /// The scene: a JSON file, or JSON text (the text wins when both are set).
+  /// The scene: a JSON file, or JSON text. Given both, the text is the file's content as the
+  /// caller read it (asrt reads files interruptibly): errors name the file, and its textures are
+  /// found beside it.
   vtkSetStringMacro(SceneFileName);
   vtkGetStringMacro(SceneFileName);
   vtkSetStringMacro(SceneText);

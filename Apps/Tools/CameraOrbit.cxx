@@ -18,7 +18,12 @@ CameraPose sceneCamera(const std::string& scenePath)
     throw InvalidParameter("cannot read scene file \"" + scenePath + "\"");
   std::ostringstream text;
   text << in.rdbuf();
-  const SceneDescription scene = parseSceneWithoutImages(text.str());
+  return sceneCameraOfText(text.str());
+}
+
+CameraPose sceneCameraOfText(const std::string& sceneText)
+{
+  const SceneDescription scene = parseSceneWithoutImages(sceneText);
   return { scene.camera.position, scene.camera.focalPoint, scene.camera.viewUp };
 }
 

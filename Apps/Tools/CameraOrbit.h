@@ -23,6 +23,8 @@ struct CameraPose
 /// The camera of a scene file (its images are not read). Throws InvalidParameter for a missing
 /// or invalid scene.
 CameraPose sceneCamera(const std::string& scenePath);
+/// The same from the scene's JSON text.
+CameraPose sceneCameraOfText(const std::string& sceneText);
 /// The pose turned by `degrees` about the z axis through the origin (counter-clockwise seen from
 /// +z): the eye keeps its distance and height, so the hole looks the same but the sky and the
 /// objects move.

@@ -3,13 +3,17 @@
 #include "AtomicFile.h"
 #include "VtkMessages.h"
 
+#include "vtkErrorCode.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkPNGWriter.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkXMLImageDataWriter.h"
 #include "vtkXMLPolyDataWriter.h"
+
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <stdexcept>
@@ -20,30 +24,84 @@ namespace tools
 {
 namespace
 {
-/// Runs a VTK writer into a temporary file and renames it into place.
-template<class Writer>
-void writeWith(Writer* writer, vtkDataObject* data, const std::string& path)
+/// `message` with the name the writer was given replaced by the file's own.
+std::string naming(std::string message, const std::string& given, const std::string& path)
 {
+  if (given.empty())
+    return message;
+  for (std::size_t at = message.find(given); at != std::string::npos;
+       at = message.find(given, at + path.size()))
+    message.replace(at, given.size(), path);
+  return message;
+}
+
+/// Throws for a writer that failed: its error code when it names the system's reason (VTK's
+/// writers keep errno to themselves otherwise: a full disk or the file-size limit is only a code),
+/// else its message.
+void checkWriter(unsigned long code, const VtkMessageCatcher& messages, const std::string& given,
+                 const std::string& path)
+{
+  const std::string failed = "cannot write \"" + path + "\": ";
+  if (code == vtkErrorCode::OutOfDiskSpaceError)
+    throw std::runtime_error(failed + "out of disk space (or over the file-size limit)");
+  if (code != vtkErrorCode::NoError && code < vtkErrorCode::FirstVTKErrorCode)
+    throw std::runtime_error(failed + vtkErrorCode::GetStringFromErrorCode(code));
+  if (messages.failed())
+    throw std::runtime_error(failed + naming(messages.firstError(), given, path));
+  if (code != vtkErrorCode::NoError)
+    throw std::runtime_error(failed + vtkErrorCode::GetStringFromErrorCode(code));
+}
+
+/// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
+/// its name) and checks that it wrote the whole file.
+template<class Writer>
+void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
+{
+  const std::string& path = file.path();
   if (!data)
     throw std::runtime_error("cannot write \"" + path + "\": no data");
   VtkMessageCatcher messages;
   messages.watchAlgorithm(writer);
   writer->SetInputData(data);
-  writeAtomically(path,
-                  [&](const std::string& tmp)
-                  {
-                    writer->SetFileName(tmp.c_str());
-                    writer->Write();
-                    if (messages.failed() || writer->GetErrorCode() != 0)
-                      throw std::runtime_error(
-                        "cannot write \"" + path + "\"" +
-                        (messages.failed() ? ": " + messages.firstError() : std::string()));
-                  });
+  const std::string name = file.openName();
+  writer->SetFileName(name.c_str());
+  writer->Write();
+  writer->SetFileName(nullptr);
+  checkWriter(writer->GetErrorCode(), messages, name, path);
+  struct stat st;
+  if (fstat(file.descriptor(), &st) != 0 || st.st_size == 0)
+    throw std::runtime_error("cannot write \"" + path + "\"");
+  file.finish();
+}
+
+/// One file written alone, atomically.
+template<class Write>
+void writeOne(const std::string& path, Write write)
+{
+  AtomicFileSet files;
+  write(files.add(path));
+  files.commit();
 }
 }
 
 void writePng(vtkImageData* image, const std::string& path)
 {
+  writeOne(path, [image](TemporaryFile& file) { writePng(image, file); });
+}
+
+void writeVti(vtkImageData* image, const std::string& path)
+{
+  writeOne(path, [image](TemporaryFile& file) { writeVti(image, file); });
+}
+
+void writeVtp(vtkPolyData* data, const std::string& path)
+{
+  writeOne(path, [data](TemporaryFile& file) { writeVtp(data, file); });
+}
+
+void writePng(vtkImageData* image, TemporaryFile& file)
+{
+  const std::string& path = file.path();
   vtkDataArray* colors = image ? image->GetPointData()->GetArray("Colors") : nullptr;
   if (!colors && image)
     colors = image->GetPointData()->GetScalars();
@@ -55,22 +113,34 @@ void writePng(vtkImageData* image, const std::string& path)
   vtkNew<vtkImageData> picture;
   picture->ShallowCopy(image);
   picture->GetPointData()->SetScalars(colors);
+  // Encoded in memory and written here: libpng would report a failed write on stderr itself.
   vtkNew<vtkPNGWriter> writer;
-  writeWith(writer.Get(), picture, path);
+  VtkMessageCatcher messages;
+  messages.watchAlgorithm(writer);
+  writer->WriteToMemoryOn();
+  writer->SetInputData(picture);
+  writer->Write();
+  checkWriter(writer->GetErrorCode(), messages, std::string(), path);
+  vtkUnsignedCharArray* bytes = writer->GetResult();
+  if (!bytes || bytes->GetNumberOfValues() == 0)
+    throw std::runtime_error("cannot write \"" + path + "\"");
+  file.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+             static_cast<std::size_t>(bytes->GetNumberOfValues()));
+  file.finish();
 }
 
-void writeVti(vtkImageData* image, const std::string& path)
+void writeVti(vtkImageData* image, TemporaryFile& file)
 {
   vtkNew<vtkXMLImageDataWriter> writer;
   writer->SetCompressorTypeToZLib();
-  writeWith(writer.Get(), image, path);
+  writeWith(writer.Get(), image, file);
 }
 
-void writeVtp(vtkPolyData* data, const std::string& path)
+void writeVtp(vtkPolyData* data, TemporaryFile& file)
 {
   vtkNew<vtkXMLPolyDataWriter> writer;
   writer->SetCompressorTypeToZLib();
-  writeWith(writer.Get(), data, path);
+  writeWith(writer.Get(), data, file);
 }
 
 std::string dataDirectory()

@@ -1,8 +1,12 @@
 // Writing frames and rays to files with VTK's writers: PNG for the picture, VTK XML (.vti, .vtp)
-// for ParaView. Every file appears whole or not at all; a failure throws std::runtime_error naming
-// the file and VTK's reason. And where the program's own data (the scene presets) lies.
+// for ParaView. Every file appears whole or not at all, alone (the path overloads) or as a member
+// of an AtomicFileSet (the TemporaryFile overloads: the file appears when the set is committed); a
+// failure throws std::runtime_error naming the file and VTK's or the system's reason. And where
+// the program's own data (the scene presets) lies.
 #ifndef asrt_tools_DataFiles_h
 #define asrt_tools_DataFiles_h
+
+#include "AtomicFile.h"
 
 #include <string>
 
@@ -20,6 +24,9 @@ void writePng(vtkImageData* image, const std::string& path);
 void writeVti(vtkImageData* image, const std::string& path);
 /// Polygonal data (hit points, ray polylines) as VTK XML poly data.
 void writeVtp(vtkPolyData* data, const std::string& path);
+void writePng(vtkImageData* image, TemporaryFile& file);
+void writeVti(vtkImageData* image, TemporaryFile& file);
+void writeVtp(vtkPolyData* data, TemporaryFile& file);
 
 /// The directory holding the example data (scenes/, textures/): <prefix>/share/asrt when the
 /// running program is an installed one (<prefix>/bin/asrt, in whatever prefix it was installed

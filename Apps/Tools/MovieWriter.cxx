@@ -11,6 +11,7 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -57,7 +58,9 @@ vtkSmartPointer<vtkImageData> rgbFrame(vtkImageData* frame)
 struct MovieWriter::Backend
 {
   std::string Path;
-  std::string Temporary;
+  /// The movie's temporary, created with the first frame.
+  std::unique_ptr<AtomicFileSet> Files;
+  TemporaryFile* File = nullptr;
   int Rate = 24;
   int Frames = 0;
   int Width = 0, Height = 0;
@@ -65,9 +68,19 @@ struct MovieWriter::Backend
 
   Backend(std::string path, int rate)
     : Path(std::move(path))
-    , Temporary(temporaryNameFor(Path))
     , Rate(rate)
   {
+  }
+  void create()
+  {
+    this->Files = std::make_unique<AtomicFileSet>();
+    this->File = &this->Files->add(this->Path);
+  }
+  /// Removes the temporary, if any.
+  void discard()
+  {
+    this->File = nullptr;
+    this->Files.reset();
   }
   virtual ~Backend() = default;
   virtual void start() = 0;
@@ -85,7 +98,6 @@ public:
   void start() override
   {
     this->Messages.watchAlgorithm(this->Writer);
-    this->Writer->SetFileName(this->Temporary.c_str());
     this->Writer->SetRate(this->Rate);
     this->Writer->SetQuality(2);
     this->Writer->SetSubsampling(1); // 4:2:0, what players expect
@@ -95,6 +107,7 @@ public:
     this->Writer->SetInputData(rgb);
     if (!this->Started)
     {
+      this->Writer->SetFileName(this->File->openName().c_str());
       this->Writer->Start();
       this->Started = true;
     }
@@ -111,7 +124,8 @@ public:
   {
     if (this->Started)
       this->Writer->End();
-    std::remove(this->Temporary.c_str());
+    this->Started = false;
+    this->discard();
   }
 
 private:
@@ -152,7 +166,7 @@ public:
   void abandon() override
   {
     this->stop();
-    std::remove(this->Temporary.c_str());
+    this->discard();
   }
 
 private:
@@ -169,7 +183,9 @@ private:
                                       // H.264 in yuv420p needs even sizes.
                                       "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264",
                                       "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4",
-                                      this->Temporary };
+                                      // The temporary created for it, as ffmpeg's descriptor 3
+                                      // (seekable, as +faststart needs; never opened by name).
+                                      "file:/proc/self/fd/3" };
     std::vector<char*> argv;
     for (std::string& a : args)
       argv.push_back(a.data());
@@ -178,10 +194,18 @@ private:
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, fds[0], STDIN_FILENO);
     posix_spawn_file_actions_addclose(&actions, fds[1]);
+    // dup2 onto itself would keep the close-on-exec flag: move a descriptor 3 out of the way.
+    int movie = this->File->descriptor();
+    const int spare = movie == 3 ? fcntl(movie, F_DUPFD_CLOEXEC, 4) : -1;
+    if (spare >= 0)
+      movie = spare;
+    posix_spawn_file_actions_adddup2(&actions, movie, 3);
     pid_t pid = -1;
     const int rc = posix_spawnp(&pid, "ffmpeg", &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     close(fds[0]);
+    if (spare >= 0)
+      close(spare);
     if (rc != 0)
     {
       close(fds[1]);
@@ -286,6 +310,8 @@ void MovieWriter::addFrame(vtkImageData* frame)
   rgb->GetDimensions(dims);
   if (this->Impl->Frames == 0)
   {
+    if (!this->Impl->File)
+      this->Impl->create();
     this->Impl->Width = dims[0];
     this->Impl->Height = dims[1];
   }
@@ -306,8 +332,7 @@ void MovieWriter::close()
   if (b.Frames == 0)
     throw std::runtime_error("movie \"" + b.Path + "\" has no frames");
   b.finish();
-  if (std::rename(b.Temporary.c_str(), b.Path.c_str()) != 0)
-    throw std::runtime_error("cannot write \"" + b.Path + "\": " + std::strerror(errno));
+  b.Files->commit();
   b.Closed = true;
 }
 

@@ -44,8 +44,13 @@ void installInterruptHandler()
   struct sigaction action = {};
   action.sa_handler = onInterrupt;
   sigemptyset(&action.sa_mask);
+  // No SA_RESTART: a blocking open or read (a FIFO, a slow device) returns EINTR, so that the
+  // reader can see the request.
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  // Over the file-size limit (ulimit -f), a write then fails with EFBIG, an error the writer
+  // reports and rolls back, instead of killing the process half-way through a set of files.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 bool interruptRequested()

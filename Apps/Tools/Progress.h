@@ -20,7 +20,8 @@ namespace asrt
 {
 namespace tools
 {
-/// Installs a SIGINT/SIGTERM handler that only records the request (the work polls it).
+/// Installs a SIGINT/SIGTERM handler that only records the request (the work polls it; blocking
+/// calls return EINTR), and ignores SIGXFSZ (a write over the file-size limit fails instead).
 void installInterruptHandler();
 /// Whether Ctrl-C (or SIGTERM) arrived since installInterruptHandler().
 bool interruptRequested();

@@ -51,6 +51,14 @@ void PvdCollection::add(double timestep, const std::string& file, int part)
 
 void PvdCollection::write(const std::string& pvdPath) const
 {
+  AtomicFileSet files;
+  this->write(files.add(pvdPath));
+  files.commit();
+}
+
+void PvdCollection::write(TemporaryFile& file) const
+{
+  const std::string& pvdPath = file.path();
   const std::string dir =
     vtksys::SystemTools::GetFilenamePath(vtksys::SystemTools::CollapseFullPath(pvdPath));
   std::ostringstream xml;
@@ -68,7 +76,8 @@ void PvdCollection::write(const std::string& pvdPath) const
         << xmlAttribute(inside ? relative : e.file) << "\"/>\n";
   }
   xml << "  </Collection>\n</VTKFile>\n";
-  writeFileAtomically(pvdPath, xml.str());
+  const std::string text = xml.str();
+  file.write(text.data(), text.size());
 }
 }
 }

@@ -11,6 +11,8 @@ namespace asrt
 {
 namespace tools
 {
+class TemporaryFile;
+
 class PvdCollection
 {
 public:
@@ -24,6 +26,8 @@ public:
   /// place). Files inside the .pvd's directory are listed relative to it, so the folder can be
   /// moved; others keep their path. Throws std::runtime_error if it cannot be written.
   void write(const std::string& pvdPath) const;
+  /// The same into a member of an AtomicFileSet (in place when the set is committed).
+  void write(TemporaryFile& file) const;
 
 private:
   struct Entry

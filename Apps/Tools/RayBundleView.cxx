@@ -311,6 +311,13 @@ void requireDisplay()
 
 void renderToPng(vtkRenderer* renderer, int width, int height, const std::string& path)
 {
+  AtomicFileSet files;
+  renderToPng(renderer, width, height, files.add(path));
+  files.commit();
+}
+
+void renderToPng(vtkRenderer* renderer, int width, int height, TemporaryFile& file)
+{
   requireDisplay();
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
@@ -323,7 +330,7 @@ void renderToPng(vtkRenderer* renderer, int width, int height, const std::string
   grab->SetInputBufferTypeToRGB();
   grab->ReadFrontBufferOff();
   grab->Update();
-  writePng(grab->GetOutput(), path);
+  writePng(grab->GetOutput(), file);
   window->RemoveRenderer(renderer);
 }
 

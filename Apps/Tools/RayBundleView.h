@@ -20,6 +20,8 @@ namespace asrt
 {
 namespace tools
 {
+class TemporaryFile;
+
 enum class RayColoring
 {
   Termination, ///< escaped, captured, hit, ... (categorical)
@@ -53,6 +55,8 @@ bool haveDisplay();
 /// Renders off screen into a `width` × `height` PNG. Throws std::runtime_error without a display
 /// or if the file cannot be written.
 void renderToPng(vtkRenderer* renderer, int width, int height, const std::string& path);
+/// The same into a member of an AtomicFileSet (in place when the set is committed).
+void renderToPng(vtkRenderer* renderer, int width, int height, TemporaryFile& file);
 /// Opens a window (mouse: rotate, zoom, pan) until the user closes it. Throws std::runtime_error
 /// without a display.
 void showInteractive(vtkRenderer* renderer, int width, int height, const std::string& windowName);

@@ -4,6 +4,7 @@
 #include "RayStore.h"
 
 #include "PgSession.h"
+#include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
 #include "StoreRecordCodec.h"
@@ -201,23 +202,28 @@ public:
   }
 
   /// The frame's transaction: its identity claimed, its row, its rays and paths, its completion.
+  /// The options' cancellation is watched until the commit; the watch ends (its thread joined)
+  /// before the transaction is rolled back, so that no cancel reaches the rollback.
   std::int64_t run(std::int64_t sceneId)
   {
     return pg::transaction(this->Conn, pg::WriteBegin,
                            [&]
                            {
-                             this->claimIdentity();
-                             const std::int64_t id = this->insertRow(sceneId);
-                             this->writeRays(id);
-                             storage::copyPaths(this->Conn, id, this->Frame.options.paths);
-                             for (int tile = 0; tile < this->Tiles; ++tile)
+                             std::vector<PGconn*> connections = this->Helpers;
+                             connections.push_back(this->Conn);
+                             storage::WriteCancellation cancel(this->Frame.options.cancelled,
+                                                               connections);
+                             this->Cancel = &cancel;
+                             try
                              {
-                               storage::recordTile(this->Conn, id, tile, this->tileCount(tile),
-                                                   "recording the frame's rays failed");
+                               return this->store(sceneId, cancel);
                              }
-                             this->complete(id);
-                             pg::exec(this->Conn, "COMMIT", "committing the frame failed");
-                             return id;
+                             catch (...)
+                             {
+                               this->Cancel = nullptr;
+                               cancel.check(); // the cancellation, not what it broke
+                               throw;
+                             }
                            });
   }
 
@@ -236,6 +242,36 @@ public:
   }
 
 private:
+  std::int64_t store(std::int64_t sceneId, storage::WriteCancellation& cancel)
+  {
+    this->claimIdentity();
+    const std::int64_t id = this->insertRow(sceneId);
+    this->writeRays(id);
+    cancel.check();
+    storage::copyPaths(this->Conn, id, this->Frame.options.paths);
+    for (int tile = 0; tile < this->Tiles; ++tile)
+    {
+      storage::recordTile(this->Conn, id, tile, this->tileCount(tile),
+                          "recording the frame's rays failed");
+    }
+    this->complete(id);
+    cancel.stop();
+    cancel.check();
+    this->Cancel = nullptr;
+    pg::exec(this->Conn, "COMMIT", "committing the frame failed");
+    return id;
+  }
+
+  /// The frame's records, stopping at a cancellation.
+  void produce(std::size_t k, RayRecord& r) const
+  {
+    if (this->Cancel)
+    {
+      this->Cancel->check();
+    }
+    this->Frame.next(k, r);
+  }
+
   std::int64_t tileCount(int tile) const
   {
     return std::int64_t(this->Bounds[std::size_t(tile) + 1] - this->Bounds[std::size_t(tile)]);
@@ -292,7 +328,8 @@ private:
   {
     if (this->Tiles == 1)
     {
-      storage::copyTile(this->Conn, id, 0, this->Frame.count, this->Frame.next);
+      storage::copyTile(this->Conn, id, 0, this->Frame.count,
+                        [this](std::size_t k, RayRecord& r) { this->produce(k, r); });
       return;
     }
     pg::Params().i64(id).exec(this->Conn, storage::writerLock("pg_advisory_xact_lock"),
@@ -321,7 +358,7 @@ private:
       {
         throw StoreError("writing the rays failed: another connection of the write failed");
       }
-      this->Frame.next(k, r);
+      this->produce(k, r);
     };
     fan.run(
       [&](PGconn* conn, std::size_t k)
@@ -357,6 +394,7 @@ private:
   int Tiles;
   bool Replaced = false;
   std::int64_t WritingId = -1; ///< the frame of a parallel write, once it has an id
+  const storage::WriteCancellation* Cancel = nullptr; ///< while the transaction's body runs
 };
 }
 

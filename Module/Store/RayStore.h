@@ -111,6 +111,12 @@ struct FrameWriteOptions
   /// For the streaming writeFrame(): `next` may be called from several threads at once (see
   /// there). The writeFrame() of records in memory always allows it.
   bool concurrentProducer = false;
+  /// Asked again and again (from a thread of its own) while the frame is written: once it returns
+  /// true, the statement under way is cancelled on the server (a wait for a lock or a slow server
+  /// included) and the write is rolled back, throwing StoreError "writing the frame was
+  /// cancelled" (SQLSTATE 57014). Once the commit has begun it is no longer asked: the frame is
+  /// then stored. Empty: never cancelled.
+  std::function<bool()> cancelled;
 
   FrameWriteOptions& replacing(bool r = true)
   {
@@ -130,6 +136,11 @@ struct FrameWriteOptions
   FrameWriteOptions& fromConcurrentProducer(bool c = true)
   {
     this->concurrentProducer = c;
+    return *this;
+  }
+  FrameWriteOptions& cancelledWhen(std::function<bool()> c)
+  {
+    this->cancelled = std::move(c);
     return *this;
   }
 };

@@ -33,6 +33,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -241,6 +243,186 @@ TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary)
   in >> content;
   EXPECT_EQ(content, "old");
   EXPECT_EQ(filesIn(dir).size(), 1u);
+}
+
+namespace
+{
+std::string contentOf(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void writeText(const std::string& path, const std::string& text)
+{
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+bool isSymlink(const std::string& path)
+{
+  struct stat st;
+  return lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode);
+}
+
+/// A process id that was in use and is no longer: a child that has exited and been reaped.
+pid_t deadPid()
+{
+  const pid_t child = fork();
+  if (child == 0)
+    _exit(0);
+  int status = 0;
+  waitpid(child, &status, 0);
+  return child;
+}
+}
+
+TEST(AtomicFile, TemporariesAreNewHiddenFilesNamedWithThePid)
+{
+  const std::string dir = scratch("atomic-names");
+  AtomicFileSet files;
+  TemporaryFile& file = files.add(dir + "/f.txt");
+  const std::string name = SystemTools::GetFilenameName(file.temporaryPath());
+  pid_t writer = 0;
+  EXPECT_TRUE(isTemporaryName(name, &writer)) << name;
+  EXPECT_EQ(writer, getpid());
+  EXPECT_EQ(name.rfind(".f.txt." + std::to_string(getpid()) + ".", 0), 0u) << name;
+  struct stat st;
+  ASSERT_EQ(lstat(file.temporaryPath().c_str(), &st), 0);
+  EXPECT_TRUE(S_ISREG(st.st_mode));
+  EXPECT_EQ(st.st_mode & 0022, 0u) << "group or others may write the new file";
+  // Two temporaries of one name differ: the name cannot be guessed from the pid alone.
+  AtomicFileSet others;
+  EXPECT_NE(others.add(dir + "/f.txt").temporaryPath(), file.temporaryPath());
+  EXPECT_FALSE(isTemporaryName("f.txt"));
+  EXPECT_FALSE(isTemporaryName(".f.txt.123.part")); // no random part
+  EXPECT_FALSE(isTemporaryName(".f.txt.12a.abcdef.part"));
+}
+
+TEST(AtomicFile, ALinkPlantedAtTheOldTemporaryNameIsNotWrittenThrough)
+{
+  const std::string dir = scratch("atomic-planted-temp");
+  const std::string victim = scratch("atomic-victim") + "/victim";
+  writeText(victim, "precious");
+  // The name the program used to write to: ".NAME.PID.part".
+  const std::string predictable = dir + "/.f.txt." + std::to_string(getpid()) + ".part";
+  ASSERT_EQ(symlink(victim.c_str(), predictable.c_str()), 0);
+  writeFileAtomically(dir + "/f.txt", "new");
+  EXPECT_EQ(contentOf(victim), "precious");
+  EXPECT_EQ(contentOf(dir + "/f.txt"), "new");
+  EXPECT_TRUE(isSymlink(predictable)) << "someone else's link was touched";
+}
+
+TEST(AtomicFile, ALinkAtTheFinalNameIsReplacedNotFollowed)
+{
+  const std::string dir = scratch("atomic-planted-final");
+  const std::string victim = scratch("atomic-victim-final") + "/victim";
+  writeText(victim, "precious");
+  ASSERT_EQ(symlink(victim.c_str(), (dir + "/f.txt").c_str()), 0);
+  writeFileAtomically(dir + "/f.txt", "new");
+  EXPECT_EQ(contentOf(victim), "precious");
+  EXPECT_FALSE(isSymlink(dir + "/f.txt"));
+  EXPECT_EQ(contentOf(dir + "/f.txt"), "new");
+}
+
+TEST(AtomicFile, TheTemporaryIsCreatedExclusively)
+{
+  // A writer handed the temporary's file name by a VTK writer reopens the file created, not the
+  // name: replacing the name by a link after creation changes nothing written.
+  const std::string dir = scratch("atomic-excl");
+  const std::string victim = scratch("atomic-victim-excl") + "/victim";
+  writeText(victim, "precious");
+  AtomicFileSet files;
+  TemporaryFile& file = files.add(dir + "/f.txt");
+  ASSERT_EQ(std::remove(file.temporaryPath().c_str()), 0);
+  ASSERT_EQ(symlink(victim.c_str(), file.temporaryPath().c_str()), 0);
+  std::ofstream(file.openName(), std::ios::binary) << "new";
+  EXPECT_EQ(contentOf(victim), "precious");
+  EXPECT_THROW(files.commit(), std::runtime_error) << "a replaced temporary was put in place";
+  EXPECT_EQ(contentOf(victim), "precious");
+  EXPECT_FALSE(SystemTools::FileExists(dir + "/f.txt"));
+}
+
+TEST(AtomicFile, ASetAppearsTogetherOrNotAtAll)
+{
+  const std::string dir = scratch("atomic-set");
+  writeText(dir + "/a", "old a");
+  writeText(dir + "/b", "old b");
+  {
+    AtomicFileSet files;
+    files.add(dir + "/a").write("new a", 5);
+    files.add(dir + "/b").write("new b", 5);
+    files.add(dir + "/c").write("new c", 5);
+    EXPECT_EQ(contentOf(dir + "/a"), "old a") << "a member appeared before the commit";
+    // Destroyed without commit: an error or an interrupt before the last step.
+  }
+  EXPECT_EQ(contentOf(dir + "/a"), "old a");
+  EXPECT_EQ(contentOf(dir + "/b"), "old b");
+  EXPECT_EQ(filesIn(dir).size(), 2u) << "a temporary or a new file was left";
+
+  AtomicFileSet files;
+  files.add(dir + "/a").write("new a", 5);
+  files.add(dir + "/c").write("new c", 5);
+  files.commit();
+  EXPECT_EQ(contentOf(dir + "/a"), "new a");
+  EXPECT_EQ(contentOf(dir + "/b"), "old b");
+  EXPECT_EQ(contentOf(dir + "/c"), "new c");
+  EXPECT_EQ(filesIn(dir).size(), 3u);
+}
+
+TEST(AtomicFile, AFailedRenameUndoesTheMembersAlreadyInPlace)
+{
+  const std::string dir = scratch("atomic-undo");
+  writeText(dir + "/a", "old a");
+  writeText(dir + "/b", "old b");
+  AtomicFileSet files;
+  files.add(dir + "/a").write("new a", 5);
+  files.add(dir + "/b").write("new b", 5);
+  files.add(dir + "/c").write("new c", 5);
+  // c becomes a directory that is not empty after its temporary was made: its rename fails
+  // after a and b were renamed.
+  ASSERT_TRUE(SystemTools::MakeDirectory(dir + "/c/inside"));
+  EXPECT_THROW(files.commit(), std::runtime_error);
+  EXPECT_EQ(contentOf(dir + "/a"), "old a");
+  EXPECT_EQ(contentOf(dir + "/b"), "old b");
+  EXPECT_TRUE(SystemTools::FileIsDirectory(dir + "/c"));
+  EXPECT_EQ(filesIn(dir).size(), 3u) << "a temporary or a backup was left";
+}
+
+TEST(AtomicFile, ADirectoryAtTheNameIsRefusedBeforeAnythingIsWritten)
+{
+  const std::string dir = scratch("atomic-dir");
+  ASSERT_TRUE(SystemTools::MakeDirectory(dir + "/f.txt"));
+  AtomicFileSet files;
+  EXPECT_THROW(files.add(dir + "/f.txt"), std::runtime_error);
+  EXPECT_THROW(files.add(dir + "/missing/f.txt"), std::runtime_error);
+  files.add(dir + "/g.txt");
+  EXPECT_THROW(files.add(dir + "/g.txt"), std::runtime_error) << "one name twice in a set";
+}
+
+TEST(AtomicFile, StaleTemporariesOfDeadWritersAreRemovedOthersKept)
+{
+  const std::string dir = scratch("atomic-stale");
+  const std::string dead = dir + "/.f.txt." + std::to_string(deadPid()) + ".AbC123.part";
+  // Process 1 is always alive; this process's own temporaries may be in use.
+  const std::string live = dir + "/.f.txt.1.AbC123.part";
+  const std::string mine = dir + "/.f.txt." + std::to_string(getpid()) + ".AbC123.part";
+  const std::string notOurs = dir + "/.f.txt.part";
+  for (const std::string& path : { dead, live, mine, notOurs })
+    writeText(path, "x");
+  EXPECT_EQ(removeStaleTemporaries(dir), 1);
+  EXPECT_FALSE(SystemTools::FileExists(dead));
+  EXPECT_TRUE(SystemTools::FileExists(live));
+  EXPECT_TRUE(SystemTools::FileExists(mine));
+  EXPECT_TRUE(SystemTools::FileExists(notOurs));
+
+  // Writing into a directory cleans it (once).
+  const std::string dir2 = scratch("atomic-stale-write");
+  const std::string dead2 = dir2 + "/.g.png." + std::to_string(deadPid()) + ".xYz789.part";
+  writeText(dead2, "x");
+  writeFileAtomically(dir2 + "/f.txt", "new");
+  EXPECT_FALSE(SystemTools::FileExists(dead2));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,207 @@
+#!/usr/bin/env bash
+# Output files and interrupts under hostile conditions: links planted in the output folder, a
+# file-size limit, a read-only folder, a directory where a file of the set goes, stale
+# temporaries, a scene that is a FIFO, and Ctrl-C while a frame is being stored (that case under
+# asrtWithThrowawayPostgres). Every case checks that the previous run's files are untouched and
+# that no new file or temporary (".NAME.PID.XXXXXX.part") remains.
+# Usage: hostile-files.sh CASE ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
+set -euo pipefail
+case_name="$1"; asrt="$2"; check="$3"; expect="$4"; scenes="$5"; work="$6/$1"
+rm -rf "$work"; mkdir -p "$work"; cd "$work"
+scene="$scenes/fig2-no-hole.json"
+name=fig2-no-hole
+step() { echo "== $*"; }
+fail() { echo "FAILED: $*" >&2; exit 1; }
+
+# Polls until "$@" succeeds; a bounded wait for a state the test brings about, never a timing.
+wait_until() {
+  for _ in $(seq 1 600); do
+    if "$@"; then return 0; fi
+    sleep 0.05
+  done
+  return 1
+}
+running() { kill -0 "$1" 2> /dev/null; }
+stopped() { ! running "$1"; }
+
+# The checksums and the names of the folder's files, hidden ones included.
+snapshot() {
+  (cd "$1" && ls -A | LC_ALL=C sort && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum)
+}
+previous_run() {
+  "$asrt" trace "$scene" -r 16x16 -q -o out/
+  snapshot out > before.txt
+}
+unchanged() {
+  snapshot out > after.txt
+  diff before.txt after.txt || fail "the previous run's files changed, or a file was left"
+}
+
+planted_links() {
+  step "links planted at the temporary names the program used to write to, and at the final names"
+  echo precious > victim
+  mkdir out
+  # A subshell that becomes asrt (exec keeps the process id): its temporaries' old names are known.
+  (
+    for file in $name.png $name.vti $name-hits.vtp; do
+      ln -s "$work/victim" "out/.$file.$BASHPID.part"
+      ln -s "$work/victim-$file" "out/$file"
+      echo "precious $file" > "victim-$file"
+    done
+    exec "$asrt" trace "$scene" -r 16x16 -q -o out/
+  )
+  test "$(cat victim)" = precious || fail "written through a link at a temporary name"
+  for file in $name.png $name.vti $name-hits.vtp; do
+    test "$(cat "victim-$file")" = "precious $file" || fail "written through the link out/$file"
+    test ! -L "out/$file" || fail "out/$file is still a link"
+  done
+  "$check" "out/$name.png=16x16" "out/$name.vti=16x16" "out/$name-hits.vtp=256"
+  test "$(ls -A out | grep -c '\.part$')" -eq 3 || fail "a temporary was left (or a planted link removed)"
+}
+
+file_size_limit() {
+  step "over the file-size limit (as a full disk): exit 1, the previous files untouched"
+  previous_run
+  # 8 kB: the new picture and image data fit, the hits do not. Without SIGXFSZ ignored, the limit kills.
+  (
+    ulimit -f 8
+    "$expect" 1 "cannot write \"out/$name-hits.vtp\": File too large" -- \
+      "$asrt" trace "$scene" -r 16x16 -q --mass 0.5 -o out/
+  )
+  unchanged
+}
+
+read_only_folder() {
+  step "a read-only output folder: exit 1 naming the file and the reason, nothing changed"
+  # Root writes into read-only folders: the run then drops to an ordinary user.
+  as_user=()
+  if [ "$(id -u)" -eq 0 ]; then
+    as_user=(setpriv --reuid=nobody --regid=nogroup --clear-groups --)
+    chmod a+rwx "$work"
+  fi
+  "${as_user[@]}" "$asrt" trace "$scene" -r 16x16 -q -o out/
+  snapshot out > before.txt
+  chmod a-w out
+  "${as_user[@]}" "$expect" 1 "cannot write \"out/$name.png\": Permission denied" -- \
+    "$asrt" trace "$scene" -r 16x16 -q --mass 0.5 -o out/
+  chmod u+w out
+  unchanged
+}
+
+directory_in_the_set() {
+  step "a directory where one file of the set goes: refused before any file of the set changes"
+  previous_run
+  rm out/$name-hits.vtp
+  mkdir -p out/$name-hits.vtp/inside
+  snapshot out > before.txt
+  "$expect" 1 "cannot write \"out/$name-hits.vtp\": Is a directory" -- \
+    "$asrt" trace "$scene" -r 16x16 -q --mass 0.5 -o out/
+  unchanged
+}
+
+stale_temporaries() {
+  step "temporaries left by a dead asrt are removed; a living one's and others' files are kept"
+  mkdir out
+  bash -c 'exit 0' &
+  dead=$!
+  wait "$dead"
+  touch "out/.$name.png.$dead.AbC123.part" "out/.$name.png.1.AbC123.part" out/.notes.part
+  "$expect" 0 "wrote out/$name.png" -- "$asrt" trace "$scene" -r 8x8 -q -o out/
+  test ! -e "out/.$name.png.$dead.AbC123.part" || fail "the dead writer's temporary is still there"
+  test -e "out/.$name.png.1.AbC123.part" || fail "a living process's temporary was removed"
+  test -e out/.notes.part || fail "a file that is not a temporary of asrt was removed"
+}
+
+# Sends SIGTERM to asrt once it holds `what` open, and expects exit code 130 (it must not stay
+# blocked).
+expect_130_on_sigterm() {
+  local what="$1"; shift
+  "$asrt" "$@" > out.txt 2>&1 3>&- &
+  local pid=$!
+  wait_until bash -c "ls -l /proc/$pid/fd 2> /dev/null | grep -qF -- '$what'" ||
+    fail "asrt never opened $what"
+  kill -TERM "$pid"
+  if ! wait_until stopped "$pid"; then
+    kill -KILL "$pid"
+    fail "asrt did not stop on SIGTERM while reading $what"
+  fi
+  local rc=0
+  wait "$pid" || rc=$?
+  cat out.txt
+  test "$rc" -eq 130 || fail "exit code $rc, expected 130"
+  grep -q interrupted out.txt || fail "no word of the interrupt"
+}
+
+scene_fifo() {
+  step "SIGTERM while the scene is read from a FIFO nobody writes to: exit 130"
+  mkfifo scene.json
+  # A writer holds the FIFO open and writes nothing: asrt's open returns, its read blocks.
+  exec 3<> scene.json
+  expect_130_on_sigterm scene.json trace scene.json -r 8x8 -q -o out/
+  exec 3>&-
+  test ! -e out || test -z "$(ls -A out)" || fail "files were written"
+
+  step "SIGTERM while opening a FIFO that no one has opened for writing: exit 130"
+  "$asrt" trace scene.json -r 8x8 -q -o out/ > out.txt 2>&1 &
+  pid=$!
+  # The handler is in place (SIGTERM caught) and the process waits in openat (syscall 257).
+  opening() {
+    local caught syscall
+    caught=$(sed -n 's/^SigCgt:[[:space:]]*//p' "/proc/$pid/status" 2> /dev/null) || return 1
+    syscall=$(cut -d' ' -f1 "/proc/$pid/syscall" 2> /dev/null) || return 1
+    test -n "$caught" && test $((0x$caught & 0x4000)) -ne 0 && test "$syscall" = 257
+  }
+  wait_until opening || fail "asrt never waited to open the FIFO"
+  kill -TERM "$pid"
+  if ! wait_until stopped "$pid"; then
+    kill -KILL "$pid"
+    fail "asrt did not stop on SIGTERM while opening the FIFO"
+  fi
+  rc=0
+  wait "$pid" || rc=$?
+  cat out.txt
+  test "$rc" -eq 130 || fail "exit code $rc, expected 130"
+
+  step "an endless scene file is cut at the limit"
+  "$expect" 4 "larger than 64 MB" -- "$asrt" trace /dev/zero -r 8x8 -q -o out/
+}
+
+# Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
+store_interrupt() {
+  step "a first frame stored (the schema and a frame to keep)"
+  "$expect" 0 "stored as frame 1" -- "$asrt" trace "$scene" -r 8x8 -q --store=first -o first
+  step "another session holds a lock on the frames table that makes the next insert wait"
+  mkfifo sql.fifo
+  psql -X -q -v ON_ERROR_STOP=1 < sql.fifo > psql.out 2>&1 &
+  psql_pid=$!
+  exec 4> sql.fifo
+  echo "BEGIN; LOCK TABLE frames IN SHARE MODE; SELECT 'lock ' || 'held';" >&4
+  wait_until grep -q "lock held" psql.out || fail "the lock was not taken: $(cat psql.out)"
+  "$asrt" trace "$scene" -r 8x8 -q --mass 0.5 --store=second -o out/ > out.txt 2>&1 &
+  pid=$!
+  waiting_for_lock() {
+    test "$(psql -X -A -t -c "SELECT count(*) FROM pg_stat_activity
+      WHERE application_name = 'asrt' AND wait_event_type = 'Lock'")" -eq 1
+  }
+  wait_until waiting_for_lock || fail "asrt never waited for the lock: $(cat out.txt)"
+  step "Ctrl-C while asrt waits: it stops with 130 and stores nothing"
+  kill -INT "$pid"
+  if ! wait_until stopped "$pid"; then
+    # Released, the store goes ahead: the exit code and the frame count below tell.
+    echo "asrt did not stop on Ctrl-C while storing; releasing the lock"
+  fi
+  echo "ROLLBACK;" >&4
+  exec 4>&-
+  wait "$psql_pid" || true
+  rc=0
+  wait "$pid" || rc=$?
+  cat out.txt
+  test "$rc" -eq 130 || fail "exit code $rc, expected 130"
+  grep -q interrupted out.txt || fail "no word of the interrupt"
+  if grep -q "stored as frame" out.txt; then fail "success printed for an interrupted store"; fi
+  test "$("$asrt" list | tail -n +2 | wc -l)" -eq 1 || fail "a frame was stored: $("$asrt" list)"
+  test ! -e out || test -z "$(ls -A out)" || fail "files of the interrupted frame: $(ls -A out)"
+}
+
+"$case_name"
+echo "hostile-files $case_name: passed"
