@@ -11,6 +11,7 @@
 #include <vector>
 
 class vtkGeodesicSource;
+class vtkImageData;
 class vtkMultiProcessController;
 
 namespace asrt
@@ -108,6 +109,16 @@ const std::vector<OptionSpec>& sceneOverrideSpecs();
 extern const char* const kSceneOverrideHelp;
 /// Applies the scene overrides given on the command line to the source.
 void applySceneOverrides(const Options& options, vtkGeodesicSource* source);
+
+/// The share of a frame's rays that may fail (numerically or on the step budget) before the
+/// frame is refused: --max-failed-share (one of sceneOverrideSpecs), a fraction in [0, 1], else
+/// kDefaultMaxFailedShare. Throws UsageError for any other value.
+constexpr double kDefaultMaxFailedShare = 0.05;
+double maxFailedShare(const Options& options);
+/// After a trace: prints on stdout how the frame's rays ended ("LABEL: N rays, F failed
+/// numerically, B out of steps"), then throws std::runtime_error (exit 1) if (F + B)/N exceeds
+/// `maxShare`: such a frame is no picture of its scene, and must not be written or stored as one.
+void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label);
 
 /// --db, --quiet
 const std::vector<OptionSpec>& databaseSpecs();

@@ -125,6 +125,7 @@ int runBundle(const std::vector<std::string>& args)
     source->SetPolylineStride(step);
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
   traceFrame(source, "bundle " + name, options.has("quiet"));
+  checkRayEnds(source->GetImageOutput(), maxFailedShare(options), name);
   const vtkIdType count = source->GetPolylinesOutput()->GetNumberOfCells();
 
   if (options.has("vtp"))

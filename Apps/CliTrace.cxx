@@ -196,6 +196,8 @@ Formats parseFormats(const std::string& list)
     else
       throw UsageError("--formats: unknown format '" + item + "' (png, vti, vtp)");
   }
+  if (!f.png && !f.vti && !f.vtp)
+    throw UsageError("--formats: the list is empty; name one or more of png, vti, vtp");
   return f;
 }
 
@@ -379,6 +381,7 @@ int runTrace(const std::vector<std::string>& args)
     RayStore(conninfo).migrate();
   }
 
+  const double maxShare = maxFailedShare(options);
   const std::string prefix = outputPath(options, scenePath, "");
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
   tools::PvdCollection images, hitSeries, raySeries;
@@ -397,6 +400,7 @@ int runTrace(const std::vector<std::string>& args)
       traceFrame(source, "trace " + label, quiet);
     if (!speaks)
       continue;
+    checkRayEnds(source->GetImageOutput(), maxShare, label);
 
     vtkImageData* image = source->GetImageOutput();
     vtkPolyData* hits = source->GetHitsOutput();
