@@ -21,7 +21,8 @@ namespace cli
 {
 const char* const kExitCodeHelp = R"(Exit codes:
   0    success
-  1    the work failed (a file could not be written, rendering failed, ...)
+  1    the work failed (a file could not be written, more rays failed than
+       --max-failed-share allows, rendering failed, ...)
   2    usage error (unknown option, missing or malformed value)
   3    database error (unreachable, refused, no such frame, frame already stored)
   4    bad input (scene file, texture, parameters: e.g. camera inside the horizon)

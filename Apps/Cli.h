@@ -22,7 +22,7 @@ namespace cli
 enum ExitCode : int
 {
   kOk = 0,
-  kFailure = 1,      ///< the work failed: a file could not be written, rendering failed, ...
+  kFailure = 1,      ///< the work failed: a file could not be written, too many rays failed, ...
   kUsage = 2,        ///< the command line is wrong: unknown option, missing or malformed value
   kDatabase = 3,     ///< the database: unreachable, refused, no such frame, duplicate frame
   kBadInput = 4,     ///< the scene or parameters: bad scene file, missing texture, camera inside
