@@ -7,6 +7,7 @@
 #include "StoreConnection.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicSource.h"
+#include "vtkImageData.h"
 
 #include <vtksys/SystemTools.hxx>
 
@@ -21,7 +22,8 @@ namespace cli
 {
 const char* const kExitCodeHelp = R"(Exit codes:
   0    success
-  1    the work failed (a file could not be written, rendering failed, ...)
+  1    the work failed (a file could not be written, more rays failed than
+       --max-failed-share allows, rendering failed, ...)
   2    usage error (unknown option, missing or malformed value)
   3    database error (unreachable, refused, no such frame, frame already stored)
   4    bad input (scene file, texture, parameters: e.g. camera inside the horizon)
@@ -41,6 +43,9 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
                         1e-10; measured in bench/REPORT.md)
   --method NAME         an integrator ("asrt bench" and bench/REPORT.md compare them)
   --step H              the integrator's step
+  --max-failed-share F  refuse the frame (exit 1, nothing written or stored) when more than
+                        this fraction of its rays failed numerically or ran out of steps
+                        (default 0.05; 1 accepts any frame)
 )";
 
 const char* const kDatabaseHelp = R"(Database:
@@ -225,7 +230,7 @@ const std::vector<OptionSpec>& sceneOverrideSpecs()
     { "focal", OptionSpec::Value },      { "view-up", OptionSpec::Value },
     { "view-angle", OptionSpec::Value }, { "resolution", OptionSpec::Value, 'r' },
     { "preset", OptionSpec::Value },     { "method", OptionSpec::Value },
-    { "step", OptionSpec::Value }
+    { "step", OptionSpec::Value },       { "max-failed-share", OptionSpec::Value }
   };
   return specs;
 }
@@ -283,6 +288,48 @@ void applySceneOverrides(const Options& options, vtkGeodesicSource* source)
       throw UsageError("--step: must be positive");
     source->SetIntegrationStep(*h);
   }
+  maxFailedShare(options); // a malformed value is refused before anything is traced
+}
+
+double maxFailedShare(const Options& options)
+{
+  const std::optional<double> share = options.number("max-failed-share");
+  if (share && !(*share >= 0.0 && *share <= 1.0))
+    throw UsageError("--max-failed-share: must be a fraction in [0, 1], got '" +
+                     options.get("max-failed-share") + "'");
+  return share.value_or(kDefaultMaxFailedShare);
+}
+
+namespace
+{
+std::string percent(double fraction)
+{
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g %%", 100.0 * fraction);
+  return text;
+}
+}
+
+void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label)
+{
+  vtkIdType counts[3];
+  if (!vtkGeodesicSource::CountRayEnds(frame, counts))
+    throw std::runtime_error(label + ": the traced frame has no Termination array to check");
+  const long long traced = counts[0], failed = counts[1], outOfSteps = counts[2];
+  const double share = traced > 0 ? static_cast<double>(failed + outOfSteps) / traced : 0.0;
+  std::printf("%s: %lld rays, %lld failed numerically, %lld out of steps (%s; at most %s "
+              "allowed)\n",
+              label.c_str(), traced, failed, outOfSteps, percent(share).c_str(),
+              percent(maxShare).c_str());
+  std::fflush(stdout);
+  if (share > maxShare)
+    throw std::runtime_error(
+      label + ": the failed share is " + percent(share) + " (" + std::to_string(failed) + " of " +
+      std::to_string(traced) + " rays failed numerically, " + std::to_string(outOfSteps) +
+      " ran out of steps), above the " + percent(maxShare) +
+      " --max-failed-share allows: the frame is refused, nothing of it written or stored. A "
+      "smaller --step, another --method or a larger tracing.maxSteps may help; "
+      "--max-failed-share 1 accepts the frame as it is");
 }
 
 const std::vector<OptionSpec>& databaseSpecs()

@@ -11,6 +11,7 @@
 #include <vector>
 
 class vtkGeodesicSource;
+class vtkImageData;
 class vtkMultiProcessController;
 
 namespace asrt
@@ -21,7 +22,7 @@ namespace cli
 enum ExitCode : int
 {
   kOk = 0,
-  kFailure = 1,      ///< the work failed: a file could not be written, rendering failed, ...
+  kFailure = 1,      ///< the work failed: a file could not be written, too many rays failed, ...
   kUsage = 2,        ///< the command line is wrong: unknown option, missing or malformed value
   kDatabase = 3,     ///< the database: unreachable, refused, no such frame, duplicate frame
   kBadInput = 4,     ///< the scene or parameters: bad scene file, missing texture, camera inside
@@ -108,6 +109,16 @@ const std::vector<OptionSpec>& sceneOverrideSpecs();
 extern const char* const kSceneOverrideHelp;
 /// Applies the scene overrides given on the command line to the source.
 void applySceneOverrides(const Options& options, vtkGeodesicSource* source);
+
+/// The share of a frame's rays that may fail (numerically or on the step budget) before the
+/// frame is refused: --max-failed-share (one of sceneOverrideSpecs), a fraction in [0, 1], else
+/// kDefaultMaxFailedShare. Throws UsageError for any other value.
+constexpr double kDefaultMaxFailedShare = 0.05;
+double maxFailedShare(const Options& options);
+/// After a trace: prints on stdout how the frame's rays ended ("LABEL: N rays, F failed
+/// numerically, B out of steps"), then throws std::runtime_error (exit 1) if (F + B)/N exceeds
+/// `maxShare`: such a frame is no picture of its scene, and must not be written or stored as one.
+void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label);
 
 /// --db, --quiet
 const std::vector<OptionSpec>& databaseSpecs();

@@ -126,6 +126,7 @@ int runBundle(const std::vector<std::string>& args)
     source->SetPolylineStride(step);
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
   traceFrame(source, "bundle " + name, options.has("quiet"));
+  checkRayEnds(source->GetImageOutput(), maxFailedShare(options), name);
   const vtkIdType count = source->GetPolylinesOutput()->GetNumberOfCells();
 
   // The rays' file and the picture appear together.

@@ -70,6 +70,8 @@ Options:
 Without the store:
   --scenes              the two arguments are scene files, traced first (nothing is stored)
   -r, --resolution WxH  with --scenes: the size of both frames (default: the scenes' own)
+  --max-failed-share F  with --scenes: refuse a traced frame when more than this fraction of
+                        its rays failed numerically or ran out of steps (default 0.05)
 )";
 
 const char* const kExamples = R"(
@@ -112,7 +114,8 @@ int runInterpolate(const std::vector<std::string>& args)
                                                  { "textures", OptionSpec::Value },
                                                  { "quiet", OptionSpec::Flag, 'q' },
                                                  { "scenes", OptionSpec::Flag },
-                                                 { "resolution", OptionSpec::Value, 'r' } } +
+                                                 { "resolution", OptionSpec::Value, 'r' },
+                                                 { "max-failed-share", OptionSpec::Value } } +
                           databaseSpecs(),
                         args);
   if (options.help())
@@ -162,6 +165,7 @@ int runInterpolate(const std::vector<std::string>& args)
       if (const auto size = options.size("resolution"))
         source->SetResolution(size->first, size->second);
       traceFrame(source, "trace " + names[k], quiet);
+      checkRayEnds(source->GetImageOutput(), maxFailedShare(options), names[k]);
       ends[k] = source;
       continue;
     }

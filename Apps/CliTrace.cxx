@@ -198,6 +198,8 @@ Formats parseFormats(const std::string& list)
     else
       throw UsageError("--formats: unknown format '" + item + "' (png, vti, vtp)");
   }
+  if (!f.png && !f.vti && !f.vtp)
+    throw UsageError("--formats: the list is empty; name one or more of png, vti, vtp");
   return f;
 }
 
@@ -508,6 +510,7 @@ int runTrace(const std::vector<std::string>& args)
     RayStore(conninfo).migrate();
   }
 
+  const double maxShare = maxFailedShare(options);
   const std::string prefix = outputPath(options, scenePath, "");
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
   FrameOutput output;
@@ -534,6 +537,7 @@ int runTrace(const std::vector<std::string>& args)
       traceFrame(source, "trace " + label, quiet);
     if (!speaks)
       continue;
+    checkRayEnds(source->GetImageOutput(), maxShare, label);
 
     finishFrame(source, output, k, base, name + (series ? " " : "") + frames[k].describe);
   }

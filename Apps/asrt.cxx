@@ -6,6 +6,7 @@
 #include "AsrtTypes.h"
 #include "Progress.h"
 #include "RayStore.h"
+#include "VtkMessages.h"
 
 #include "vtkObject.h"
 
@@ -101,8 +102,9 @@ int main(int argc, char* argv[])
     return kUsage;
   }
   // Errors reach the user as one line each, through the exceptions below; anything VTK would
-  // print on its own is caught by observers where it arises.
+  // print on its own is caught by observers where it arises, or routed as a stray (VtkMessages.h).
   asrt::tools::installInterruptHandler();
+  asrt::tools::routeVtkMessages();
   const std::vector<std::string> args(argv + 2, argv + argc);
   try
   {

@@ -187,21 +187,27 @@ struct vtkGeodesicSource::Internals
       d.camera.height = self->Resolution[1];
     }
     if (self->IntegrationPreset && *self->IntegrationPreset)
-      d.integrator = asrt::integratorPreset(self->IntegrationPreset);
+    {
+      try
+      {
+        d.integrator = asrt::integratorPreset(self->IntegrationPreset);
+      }
+      catch (const asrt::InvalidParameter& e)
+      {
+        throw asrt::InvalidParameter(std::string("integrator.preset: ") + e.what());
+      }
+    }
     if (self->IntegrationMethod && *self->IntegrationMethod)
       d.integrator.method = self->IntegrationMethod;
     if (isSet(self->IntegrationStep))
       d.integrator.step = self->IntegrationStep;
+    // The overridden values pass the scene file's own checks: a frame the file could not describe
+    // is refused (a camera outside its celestial sphere, a mass whose horizon overflows, ...).
+    asrt::validateScene(d);
     // The frame records the method actually used, so that stored frames stay identified by what
     // traced them even if the default changes.
     if (d.integrator.method == "auto")
       d.integrator.method = asrt::defaultMethod(*asrt::makeSpacetime(d.spacetime));
-    if (d.camera.width <= 0 || d.camera.height <= 0)
-    {
-      std::ostringstream os;
-      os << "resolution must be positive, got " << d.camera.width << " x " << d.camera.height;
-      throw asrt::InvalidParameter(os.str());
-    }
     // A frame of only some pixels is a frame of its own (see SetPixelSubset).
     d.subset = asrt::PixelSubsetId();
     if (self->PixelSubset)
@@ -230,6 +236,26 @@ std::string vtkGeodesicSource::GetFrameSceneText()
     vtkErrorMacro(<< e.what());
     return std::string();
   }
+}
+
+bool vtkGeodesicSource::CountRayEnds(vtkImageData* frame, vtkIdType counts[3])
+{
+  counts[0] = counts[1] = counts[2] = 0;
+  vtkDataArray* ends = frame ? frame->GetPointData()->GetArray("Termination") : nullptr;
+  if (!ends || ends->GetNumberOfComponents() != 1)
+    return false;
+  for (vtkIdType k = 0; k < ends->GetNumberOfTuples(); ++k)
+  {
+    const auto end = static_cast<asrt::Termination>(static_cast<int>(ends->GetComponent(k, 0)));
+    if (end == asrt::Termination::Running)
+      continue; // not traced
+    ++counts[0];
+    if (end == asrt::Termination::NumericalFailure)
+      ++counts[1];
+    else if (end == asrt::Termination::StepBudget)
+      ++counts[2];
+  }
+  return true;
 }
 
 int vtkGeodesicSource::RequestInformation(vtkInformation*, vtkInformationVector**,

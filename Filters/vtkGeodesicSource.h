@@ -62,7 +62,9 @@ public:
   ///@}
 
   ///@{
-  /// Per-frame overrides of the scene. NaN (the default) keeps the scene's value.
+  /// Per-frame overrides of the scene. NaN (the default) keeps the scene's value. The scene with
+  /// its overrides passes the scene file's checks (asrt::validateScene): a value the file could
+  /// not hold is refused with vtkErrorMacro, naming the field ("camera.position: ...").
   vtkSetMacro(Mass, double);
   vtkGetMacro(Mass, double);
   vtkSetMacro(Spin, double);
@@ -115,6 +117,14 @@ public:
   /// (overrides and subset applied): the frame's identity in the store, as the "SceneJSON" field
   /// data will hold it. Nothing is traced. Empty, with an error, if the scene is invalid.
   std::string GetFrameSceneText();
+
+  /// How the traced rays of a frame ended, counted from its image's "Termination" array (port 0
+  /// of this source, or the frame vtkGeodesicDistributedSource assembles): counts[0] the rays
+  /// traced (pixels left untraced, outside a PixelSubset, are not), counts[1] those ended by a
+  /// numerical failure, counts[2] those that used up their step budget. A frame where these two
+  /// are more than a few per cent is not a picture of the scene. Returns false, counts zero, if
+  /// the image has no Termination array.
+  static bool CountRayEnds(vtkImageData* frame, vtkIdType counts[3]);
 
   ///@{
   /// Output the rays as polylines (port 2), for every PolylineStride-th pixel in i and j, or for

@@ -200,7 +200,7 @@ double wrapAngle(double d)
 
 KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double step)
   : St(st)
-  , Step(step)
+  , Step(step / st.mass())
 {
   if (st.kind() != SpacetimeKind::Kerr && st.kind() != SpacetimeKind::Schwarzschild)
   {
@@ -218,6 +218,14 @@ KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double st
   {
     std::ostringstream os;
     os << "KerrMino Mino-time step must be positive and finite, got " << step;
+    throw InvalidParameter(os.str());
+  }
+  // The step in σ is h/M (see the class comment); it must stay a finite positive number.
+  if (!(st.mass() > 0.0) || !(this->Step > 0.0) || !std::isfinite(this->Step))
+  {
+    std::ostringstream os;
+    os << "KerrMino needs a mass for which the step h/M is finite and positive, got M = "
+       << st.mass() << " with h = " << step;
     throw InvalidParameter(os.str());
   }
   // Kick-drift-kick Strang steps composed with the weights c_k, neighbouring kicks merged (kicks
@@ -404,10 +412,10 @@ bool KerrMinoPropagator::advance(Segment& seg)
     return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
   }();
 
-  // Step fraction. Within kFixedStepRadius the step is the fixed h in σ (symplectic). Beyond it a
-  // Mino step would move the point by ~h r relative, without bound as r grows (dλ = Σ dσ), so the
-  // step shrinks as 1/r: the relative move stays ~h·kFixedStepRadius, like a step of K = r·H, the
-  // accuracy there still follows h, and w = 0 is never reached. kMaxRelativeMove caps huge h.
+  // Step fraction. Within kFixedStepRadius the step is the fixed h/M in σ (symplectic). Beyond it
+  // a Mino step would move the point by ~h r/M relative, without bound as r grows (dλ = Σ dσ), so
+  // the step shrinks as 1/r: the relative move stays ~h·kFixedStepRadius, like a step of K = r·H,
+  // the accuracy there still follows h, and w = 0 is never reached. kMaxRelativeMove caps huge h.
   double theta = std::min(1.0, kFixedStepRadius * this->Ray.M * this->S.w);
   const double speed = rate0.tail<3>().norm(), dist = this->Current.x.tail<3>().norm();
   if (theta * speed * this->Step > kMaxRelativeMove * dist)

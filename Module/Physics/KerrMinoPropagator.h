@@ -45,15 +45,18 @@ struct KerrMinoState
 ///
 /// Every reported (x, p) is an exact null covector with the ray's E, L and Q: the velocities are
 /// projected onto v_w² = R_w, v_u² = U at the integrated position (which only differs from the
-/// truth by the method's error). The step is h in σ within r = 10 M; beyond, where Mino time runs
-/// fast (dλ = Σ dσ), it shrinks as 1/r so that the point moves by ~10 M h of its distance per
-/// step (never more than a quarter): segments stay interpolable, accuracy still follows h, and
+/// truth by the method's error). σ has the dimension of 1/length (λ is a length, Σ a length²), so
+/// the step is h/M in σ within r = 10 M: the step is h in units of M, and a hole of any mass is
+/// traced as the hole of mass 1 scaled by M. Beyond r = 10 M, where Mino time runs fast
+/// (dλ = Σ dσ), it shrinks as 1/r so that the point moves by ~10 h of its distance per step
+/// (never more than a quarter): segments stay interpolable, accuracy still follows h, and
 /// infinity (w = 0) is never reached. A step that would end inside the capture radius ends just
 /// inside it instead.
 class ASRTPHYSICS_EXPORT KerrMinoPropagator final : public Propagator
 {
 public:
-  /// `st` must be Kerr (or Schwarzschild, a = 0); throws InvalidParameter otherwise.
+  /// `st` must be Kerr (or Schwarzschild, a = 0) with M > 0; throws InvalidParameter otherwise.
+  /// `step` is h, in units of M.
   KerrMinoPropagator(const Spacetime& st, int order, double step);
   void start(const PhasePoint& z) override;
   bool advance(Segment& seg) override;
@@ -72,7 +75,7 @@ private:
   void output(const detail::KerrMinoState& s, PhasePoint& z, Vec4& dxds) const;
 
   const Spacetime& St;
-  double Step;
+  double Step;                       ///< in σ: the given h divided by M
   std::vector<double> Kicks, Drifts; ///< fractions of h of the kick-drift-kick stages
   detail::KerrMinoRay Ray;
   detail::KerrMinoState S;

@@ -419,19 +419,12 @@ private:
   void spacetime(const json& j, SceneDescription& d)
   {
     Fields f(j, "spacetime", { "mass", "spin", "charge" });
-    d.spacetime.mass = nonNegative(f.require("mass"), f.sub("mass"));
+    d.spacetime.mass = number(f.require("mass"), f.sub("mass"));
     if (const json* v = f.get("spin"))
       d.spacetime.spin = number(*v, f.sub("spin"));
     if (const json* v = f.get("charge"))
       d.spacetime.charge = number(*v, f.sub("charge"));
-    try
-    {
-      makeSpacetime(d.spacetime);
-    }
-    catch (const InvalidParameter& e)
-    {
-      fail("spacetime", e.what());
-    }
+    validateSpacetime(d.spacetime); // the rules overrides of the values follow too
   }
 
   void camera(const json& j, SceneDescription& d, const Spacetime& st)
@@ -444,11 +437,7 @@ private:
     if (const json* v = f.get("viewUp"))
       c.viewUp = direction(*v, f.sub("viewUp"));
     if (const json* v = f.get("viewAngle"))
-    {
       c.viewAngle = number(*v, f.sub("viewAngle"));
-      if (!(c.viewAngle > 0.0 && c.viewAngle < 180.0))
-        fail(f.sub("viewAngle"), "must lie in (0, 180) degrees, got " + show(*v));
-    }
     if (const json* v = f.get("resolution"))
     {
       const std::string p = f.sub("resolution");
@@ -471,28 +460,7 @@ private:
         fail(f.sub("observer"), "must be \"static\" or \"zamo\", got " + show(*v));
     }
 
-    const Vec3 view = c.focalPoint - c.position;
-    if (!(view.norm() > 0.0))
-      fail(f.sub("focalPoint"), "coincides with camera.position");
-    if (view.normalized().cross(c.viewUp.normalized()).norm() < 1e-9)
-      fail(f.sub("viewUp"), "is parallel to the direction of view");
-    // The camera's own checks, repeated here to name the field: an eye inside the horizon sees
-    // nothing from outside, and a static observer cannot exist where ∂_t is not timelike.
-    const Vec4 x(0.0, c.position.x(), c.position.y(), c.position.z());
-    const double r = st.radius(x), rPlus = st.outerHorizon();
-    if (rPlus > 0.0 && !(r > rPlus))
-    {
-      std::ostringstream os;
-      os << "is inside the horizon (r = " << r << " M, r+ = " << rPlus << " M)";
-      fail(f.sub("position"), os.str());
-    }
-    if (c.observer == ObserverMotion::Static && !st.isFlat() && !(st.metric(x)(0, 0) < 0.0))
-    {
-      std::ostringstream os;
-      os << "a static observer cannot exist at r = " << r
-         << " M (inside the ergosphere, g_tt >= 0); use \"zamo\"";
-      fail(f.sub("observer"), os.str());
-    }
+    validateCamera(c, st);
   }
 
   void integrator(const json& j, SceneDescription& d, const Spacetime& st)
@@ -538,15 +506,7 @@ private:
       c.relativeTolerance = positive(*v, f.sub("relativeTolerance"));
     if (const json* v = f.get("absoluteTolerance"))
       c.absoluteTolerance = positive(*v, f.sub("absoluteTolerance"));
-    // Whether the method can model this spacetime (a Schwarzschild splitting cannot trace Kerr).
-    try
-    {
-      makePropagator(st, c);
-    }
-    catch (const InvalidParameter& e)
-    {
-      fail(f.sub("method"), e.what());
-    }
+    validateIntegrator(c, st);
   }
 
   void tracing(const json& j, SceneDescription& d)
@@ -562,6 +522,7 @@ private:
       t.horizonEpsilon = positive(*v, f.sub("horizonEpsilon"));
     if (const json* v = f.get("maxHamiltonianError"))
       t.maxHamiltonianError = positive(*v, f.sub("maxHamiltonianError"));
+    validateTracing(t);
   }
 
   std::shared_ptr<const Texture> texture(const json& j, const std::string& path)
@@ -699,15 +660,7 @@ private:
       if (type == "celestialSphere")
       {
         const double R = num("radius", positive);
-        const double eye = d.camera.position.norm();
-        if (!(eye < R))
-        {
-          std::ostringstream os;
-          os
-            << "the celestial sphere is seen from inside: it must enclose the camera (|position| = "
-            << eye << "), got " << R;
-          fail(f.sub("radius"), os.str());
-        }
+        validateCelestialSphere(R, d.camera.position, f.sub("radius"));
         return std::make_unique<CelestialSphere>(id, name, tex, R);
       }
       if (type == "plane" || type == "rectangle")

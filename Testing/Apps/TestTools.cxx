@@ -42,6 +42,8 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <stdexcept>
+#include <vector>
 
 using namespace asrt::tools;
 using vtksys::SystemTools;
@@ -544,6 +546,61 @@ TEST(VtkMessages, PlainMessageOfEachFraming)
                             "(0x2)\n  Debug: Off\n"),
             "Algorithm vtkFoo(0x1) returned failure for request: vtkInformation (0x2)");
   EXPECT_EQ(plainVtkMessage("plain text"), "plain text");
+  EXPECT_EQ(plainVtkMessage("Generic Warning: In /x/g.cxx, line 3\nno object here\n\n"),
+            "no object here");
+}
+
+namespace
+{
+/// A warning of an object nobody observes, as VTK's readers emit them while a factory tries them.
+void warnUnobserved(const char* text)
+{
+  vtkNew<vtkPolyData> nobodyWatchesThis;
+  vtkWarningWithObjectMacro(nobodyWatchesThis.GetPointer(), << text);
+}
+}
+
+TEST(VtkMessages, AStrayWarningGoesToTheLiveCatcherThenOnePlainLine)
+{
+  routeVtkMessages();
+  ::testing::internal::CaptureStderr();
+  {
+    VtkMessageCatcher messages;
+    warnUnobserved("a reader had doubts");
+    const std::vector<StrayVtkMessage> strays = messages.strays();
+    ASSERT_EQ(strays.size(), 1u);
+    EXPECT_FALSE(strays[0].error);
+    EXPECT_EQ(strays[0].text, "a reader had doubts");
+    EXPECT_FALSE(messages.failed()) << "a stray is no error of the work watched";
+  }
+  // Printed when the catcher ends without a failure: plain, one line, no colour.
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "asrt: VTK warning: a reader had doubts\n");
+}
+
+TEST(VtkMessages, StraysAreDroppedWhenTheWorkFails)
+{
+  routeVtkMessages();
+  ::testing::internal::CaptureStderr();
+  try
+  {
+    VtkMessageCatcher messages;
+    warnUnobserved("TGA reader: not a TGA file");
+    throw std::runtime_error("the texture cannot be read");
+  }
+  catch (const std::runtime_error&)
+  {
+  }
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "") << "only the error's own line belongs";
+}
+
+TEST(VtkMessages, WithNoCatcherAliveAStrayIsOnePlainLine)
+{
+  routeVtkMessages();
+  ::testing::internal::CaptureStderr();
+  warnUnobserved("nobody is listening");
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err, "asrt: VTK warning: nobody is listening\n");
+  EXPECT_EQ(err.find('\x1b'), std::string::npos);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -910,7 +910,7 @@ TEST(GeodesicSourceErrors, CameraPositionOnlyPartlyGiven)
 TEST(GeodesicSourceErrors, NegativeViewAngle)
 {
   expectCleanError([](vtkGeodesicSource* s) { s->SetViewAngle(-5); },
-                   [](vtkGeodesicSource* s) { s->SetViewAngle(kNaN); }, { "view angle", "-5" });
+                   [](vtkGeodesicSource* s) { s->SetViewAngle(kNaN); }, { "viewAngle", "-5" });
 }
 
 TEST(GeodesicSourceErrors, MassGivenAsAString)
