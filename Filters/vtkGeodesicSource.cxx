@@ -46,6 +46,10 @@ bool isSet(double v)
 /// Bytes a traced pixel needs at most: its record, the image arrays and the hit arrays.
 constexpr double kBytesPerPixel = sizeof(asrt::RayRecord) + 32.0 + 320.0;
 
+/// Rays a frame may draw as polylines: each keeps a point a step, hundreds of times a pixel's
+/// record, so their count is bounded apart from the frame's memory.
+constexpr long long kMaxPolylines = 100000;
+
 double physicalMemory()
 {
   const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
@@ -387,6 +391,18 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       os << "a " << W << " x " << H << " frame needs about " << pixels * kBytesPerPixel / 1e9
          << " GB, more than the " << limit / 1e9 << " GB allowed";
       throw asrt::InvalidParameter(os.str());
+    }
+    if (this->GeneratePolylines)
+    {
+      // Every s-th column, and the rows of this band that are multiples of s.
+      const long long s = this->PolylineStride;
+      const long long rays = this->PolylinePixels
+                               ? this->PolylinePixels->GetNumberOfTuples()
+                               : (W + s - 1) / s * ((rowEnd + s - 1) / s - (rowBegin + s - 1) / s);
+      if (rays > kMaxPolylines)
+        throw asrt::InvalidParameter(
+          std::to_string(rays) + " rays asked for as polylines; at most " +
+          std::to_string(kMaxPolylines) + " are drawn (choose a larger stride or fewer pixels)");
     }
 
     auto progress = [this](double f)

@@ -118,3 +118,9 @@ asrt_hostile_input_test(Resolution.BundlePictureSide 2 "--size: at most 8192 pix
 asrt_hostile_input_test(Resolution.BundlePictureCap 2
   "--size: 100000x100000 is more than the 268435456 pixels"
   bundle "${scenes}/fig1-cylinders.json" -r 9x9 --size 100000x100000 -o out.png)
+# Polylines keep every step's point: their count is bounded (stride 1 on 400 x 400 is 160000 rays).
+asrt_hostile_input_test(Polylines.TraceCap 4
+  "160000 rays asked for as polylines; at most 100000 are drawn \\(choose a larger stride"
+  trace "${scenes}/fig2-no-hole.json" -r 400x400 --polylines=1 -o out)
+asrt_hostile_input_test(Polylines.BundleGridCap 4 "at most 100000 are drawn"
+  bundle "${scenes}/fig2-no-hole.json" -r 400x400 --rays grid --step 1 -o out.png)
