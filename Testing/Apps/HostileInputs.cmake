@@ -118,6 +118,9 @@ asrt_hostile_input_test(Resolution.BundlePictureSide 2 "--size: at most 8192 pix
 asrt_hostile_input_test(Resolution.BundlePictureCap 2
   "--size: 100000x100000 is more than the 268435456 pixels"
   bundle "${scenes}/fig1-cylinders.json" -r 9x9 --size 100000x100000 -o out.png)
+asrt_hostile_input_test(Resolution.BenchCap 2
+  "--resolution: at most 4194304 pixels \\(2048x2048\\) for a benchmark, got 4096x4096"
+  bench -r 4096x4096 -q)
 # Polylines keep every step's point: their count is bounded (stride 1 on 400 x 400 is 160000 rays).
 asrt_hostile_input_test(Polylines.TraceCap 4
   "160000 rays asked for as polylines; at most 100000 are drawn \\(choose a larger stride"
