@@ -4,6 +4,7 @@
 #include "InterruptibleRead.h"
 #include "Progress.h"
 #include "Propagator.h"
+#include "SceneFile.h"
 #include "StoreConnection.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicSource.h"
@@ -190,8 +191,13 @@ std::pair<int, int> parseSize(const std::string& option, const std::string& text
   const std::size_t x = text.find_first_of("xX");
   if (x == std::string::npos)
     throw UsageError(option + ": expected WIDTHxHEIGHT, e.g. 200x200, got '" + text + "'");
-  return { parsePositiveInteger(option, text.substr(0, x)),
-           parsePositiveInteger(option, text.substr(x + 1)) };
+  const int w = parsePositiveInteger(option, text.substr(0, x));
+  const int h = parsePositiveInteger(option, text.substr(x + 1));
+  // The pixel budget of a scene file's frames, for every size given here.
+  if (static_cast<long long>(w) * h > kMaxFramePixels)
+    throw UsageError(option + ": " + text + " is more than the " + std::to_string(kMaxFramePixels) +
+                     " pixels (2^28) allowed");
+  return { w, h };
 }
 
 std::optional<double> Options::number(const std::string& name) const

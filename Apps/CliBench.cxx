@@ -36,7 +36,7 @@ Times vary with the load of the machine; compare presets within one run. The ful
 regenerates bench/REPORT.md.
 
 Options:
-  -r, --resolution WxH  frame size (default 64x64)
+  -r, --resolution WxH  frame size (default 64x64, at most 2048x2048)
   --repeat N            time the best of N traces (default 3)
   -q, --quiet           no progress on stderr
 )";
@@ -95,6 +95,11 @@ int runBench(const std::vector<std::string>& args)
                                   ? scenesDirectory() + "/fig1-cylinders.json"
                                   : options.positional()[0];
   const auto size = options.size("resolution").value_or(std::make_pair(64, 64));
+  // Two frames' records are held at once (the reference and a run), with no memory check.
+  constexpr long long kMaxBenchPixels = 1LL << 22;
+  if (static_cast<long long>(size.first) * size.second > kMaxBenchPixels)
+    throw UsageError("--resolution: at most " + std::to_string(kMaxBenchPixels) +
+                     " pixels (2048x2048) for a benchmark, got " + options.get("resolution"));
   const int repeat = options.positiveInteger("repeat").value_or(3);
   const bool quiet = options.has("quiet");
 

@@ -36,7 +36,7 @@ display: on a machine without one, run it under xvfb-run -a.
 Options:
   -o, --output FILE     the PNG (default: SCENE-bundle.png in the current directory; a
                         directory gets that name)
-  --size WxH            picture size (default 800x600)
+  --size WxH            picture size (default 800x600, at most 8192x8192)
   --rays cross|grid     which pixels' rays: the middle row and column of the image (cross,
                         default) or every STEP-th pixel of the image in both directions
   --step N              pixels between rays (default 2 for cross, 8 for grid)
@@ -79,6 +79,11 @@ int runBundle(const std::vector<std::string>& args)
   options.expectPositional(1, 1, "the scene file (asrt bundle SCENE.json)");
   const std::string scenePath = options.positional()[0];
   const auto size = options.size("size").value_or(std::make_pair(800, 600));
+  // A window or offscreen buffer beyond this fails in X or OpenGL, not with a message.
+  constexpr int kMaxPictureSide = 8192;
+  if (size.first > kMaxPictureSide || size.second > kMaxPictureSide)
+    throw UsageError("--size: at most " + std::to_string(kMaxPictureSide) + " pixels a side, got " +
+                     options.get("size"));
   const std::string rays = options.get("rays", "cross");
   if (rays != "cross" && rays != "grid")
     throw UsageError("--rays: 'cross' or 'grid', got '" + rays + "'");

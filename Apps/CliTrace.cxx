@@ -56,7 +56,7 @@ Output:
                         directions (default 10)
   -q, --quiet           no progress on stderr
 
-A series (one of):
+A series (one of, at most 10000 frames):
   --sweep P=FROM:TO:N   N frames with P (mass, spin or charge) going from FROM to TO
   --orbit N[:DEGREES]   N frames with the camera (eye, focal point and up) turned about the
                         hole's axis (z) through DEGREES (default 360: a closed orbit, whose
@@ -90,6 +90,19 @@ Examples:
   OMP_NUM_THREADS=1 mpirun -np 4 asrt trace Data/scenes/kerr-disk.json -r 1920x1080 --mpi --store
 )";
 
+/// Frames a series may have (the settings of all of them are made before the first is traced).
+constexpr int kMaxSeriesFrames = 10000;
+
+/// The frame count N of a --sweep or --orbit; UsageError beyond kMaxSeriesFrames.
+int seriesCount(const std::string& option, const std::string& text)
+{
+  const int n = parsePositiveInteger(option, text);
+  if (n > kMaxSeriesFrames)
+    throw UsageError(option + ": at most " + std::to_string(kMaxSeriesFrames) +
+                     " frames in a series, got " + text);
+  return n;
+}
+
 /// One frame of a series: what differs from the scene.
 struct FrameSetting
 {
@@ -117,7 +130,7 @@ std::vector<FrameSetting> sweepFrames(const std::string& spec)
     throw UsageError("--sweep: expected " + parameter + "=FROM:TO:N, got '" + spec + "'");
   const double from = parseNumber("--sweep", range.substr(0, c1));
   const double to = parseNumber("--sweep", range.substr(c1 + 1, c2 - c1 - 1));
-  const int n = parsePositiveInteger("--sweep", range.substr(c2 + 1));
+  const int n = seriesCount("--sweep", range.substr(c2 + 1));
   std::vector<FrameSetting> frames;
   for (int k = 0; k < n; ++k)
   {
@@ -140,7 +153,7 @@ std::vector<FrameSetting> orbitFrames(const std::string& spec,
                                       const Options& options)
 {
   const std::size_t colon = spec.find(':');
-  const int n = parsePositiveInteger("--orbit", spec.substr(0, colon));
+  const int n = seriesCount("--orbit", spec.substr(0, colon));
   const double degrees =
     colon == std::string::npos ? 360.0 : parseNumber("--orbit", spec.substr(colon + 1));
   // The camera to turn: the scene's, with the command line's overrides.

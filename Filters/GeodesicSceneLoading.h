@@ -1,4 +1,4 @@
-// Loading a scene in the VTK layer: textures through VTK's image readers.
+// Loading a scene in the VTK layer: textures through vtkGeodesicSource::LoadImagePixels.
 #ifndef asrt_GeodesicSceneLoading_h
 #define asrt_GeodesicSceneLoading_h
 
@@ -6,7 +6,8 @@
 
 namespace asrt
 {
-/// An ImageLoader on vtkImageReader2Factory; throws InvalidParameter for missing or unreadable
+/// An ImageLoader on vtkGeodesicSource::LoadImagePixels (libpng for PNG, VTK's readers for other
+/// formats, sizes checked before decoding); throws InvalidParameter for missing or unreadable
 /// files.
 ImageLoader vtkImageFileLoader();
 /// The scene from JSON text if given (relative texture paths against `textDirectory`, the working

@@ -3,7 +3,10 @@
 #include "FrameTracer.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
+#include "TextureFiles.h"
 
+#include "vtkCommand.h"
+#include "vtkExecutive.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
 #include "vtkImageReader2.h"
@@ -11,6 +14,7 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
@@ -23,7 +27,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <tuple>
@@ -41,6 +44,10 @@ bool isSet(double v)
 
 /// Bytes a traced pixel needs at most: its record, the image arrays and the hit arrays.
 constexpr double kBytesPerPixel = sizeof(asrt::RayRecord) + 32.0 + 320.0;
+
+/// Rays a frame may draw as polylines: each keeps a point a step, hundreds of times a pixel's
+/// record, so their count is bounded apart from the frame's memory.
+constexpr long long kMaxPolylines = 100000;
 
 double physicalMemory()
 {
@@ -106,36 +113,87 @@ int vtkGeodesicSource::FillOutputPortInformation(int port, vtkInformation* info)
   return 1;
 }
 
-void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int& height,
-                                        std::vector<unsigned char>& rgb)
+namespace
 {
-  if (!std::ifstream(path).good())
-    throw asrt::InvalidParameter("cannot open image file \"" + path + "\"");
+/// The first error a VTK reader (or its executive) reports, kept for the exception instead of
+/// reaching the output window; warnings are silenced alike.
+class ReaderMessages : public vtkCommand
+{
+public:
+  static ReaderMessages* New() { return new ReaderMessages; }
+  vtkTypeMacro(ReaderMessages, vtkCommand);
+  void Execute(vtkObject*, unsigned long event, void* data) override
+  {
+    if (event != vtkCommand::ErrorEvent || !this->First.empty() || !data)
+      return;
+    // "ERROR: In FILE, line N\nClass (address): message\n": the message only.
+    std::string text = static_cast<const char*>(data);
+    const std::size_t at = text.find("): ");
+    if (at != std::string::npos)
+      text = text.substr(at + 3);
+    this->First = text.substr(0, text.find('\n'));
+    if (this->First.empty())
+      this->First = "unknown error";
+  }
+  void Watch(vtkAlgorithm* algorithm)
+  {
+    for (vtkObject* o :
+         { static_cast<vtkObject*>(algorithm), static_cast<vtkObject*>(algorithm->GetExecutive()) })
+    {
+      o->AddObserver(vtkCommand::ErrorEvent, this);
+      o->AddObserver(vtkCommand::WarningEvent, this);
+    }
+  }
+  std::string First;
+};
+
+/// An image through the VTK reader that recognises it; its declared size is checked (the reader's
+/// information pass) before any pixel is read. Messages start with a verb, without the path.
+asrt::ImagePixels readWithVtk(const std::string& path, const std::string& ext)
+{
   vtkSmartPointer<vtkImageReader2> reader;
   reader.TakeReference(vtkImageReader2Factory::CreateImageReader2(path.c_str()));
   if (!reader)
-    throw asrt::InvalidParameter("no VTK reader recognises the image file \"" + path + "\"");
+    throw asrt::InvalidParameter("is not an image file any VTK reader recognises");
   // The factory also accepts readers that merely tolerate a file (HDR takes any "#" text), so the
   // file's extension must be one the chosen reader declares.
-  const std::string ext =
-    path.find('.') == std::string::npos
-      ? std::string()
-      : vtksys::SystemTools::LowerCase(vtksys::SystemTools::GetFilenameLastExtension(path));
   const std::string declared = reader->GetFileExtensions() ? reader->GetFileExtensions() : "";
   if (ext.empty() || (" " + declared + " ").find(" " + ext + " ") == std::string::npos)
-    throw asrt::InvalidParameter("\"" + path +
-                                 "\" is not an image file VTK can read (extension \"" + ext +
-                                 "\", " + reader->GetClassName() + " reads \"" + declared + "\")");
+    throw asrt::InvalidParameter("is not an image file VTK can read (extension \"" + ext + "\", " +
+                                 reader->GetClassName() + " reads \"" + declared + "\")");
+  vtkNew<ReaderMessages> messages;
+  messages->Watch(reader);
   reader->SetFileName(path.c_str());
+  auto requireNoError = [&]()
+  {
+    if (!messages->First.empty() || reader->GetErrorCode() != 0)
+      throw asrt::InvalidParameter("cannot be read" + (messages->First.empty()
+                                                         ? std::string()
+                                                         : " (" + messages->First + ")"));
+  };
+  reader->UpdateInformation();
+  requireNoError();
+  int extent[6];
+  reader->GetOutputInformation(0)->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
+  const long long w = extent[1] - extent[0] + 1LL, h = extent[3] - extent[2] + 1LL,
+                  slices = extent[5] - extent[4] + 1LL;
+  if (slices != 1)
+    throw asrt::InvalidParameter("declares " + std::to_string(slices) +
+                                 " slices; an image texture is a single 2D image");
+  // Peak: the reader's image and the RGB bytes made from it.
+  const double bytesPerPixel = reader->GetNumberOfScalarComponents() *
+                                 vtkDataArray::GetDataTypeSize(reader->GetDataScalarType()) +
+                               3.0;
+  asrt::checkTextureSize(w, h, bytesPerPixel);
   reader->Update();
-  if (reader->GetErrorCode() != 0)
-    throw asrt::InvalidParameter("cannot read image file \"" + path + "\"");
+  requireNoError();
+
   vtkImageData* img = reader->GetOutput();
   int dims[3];
   img->GetDimensions(dims);
   vtkDataArray* scalars = img->GetPointData()->GetScalars();
-  if (!scalars || dims[0] < 1 || dims[1] < 1)
-    throw asrt::InvalidParameter("image file \"" + path + "\" holds no pixels");
+  if (!scalars || dims[0] != w || dims[1] != h)
+    throw asrt::InvalidParameter("holds no pixels of its declared size");
   const int nc = scalars->GetNumberOfComponents();
   // 8-bit images pass through; wider integers are scaled from their type's range; floating-point
   // (HDR) images are taken as linear [0, 1] and clamped.
@@ -144,18 +202,44 @@ void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int
                        : (type == VTK_FLOAT || type == VTK_DOUBLE)
                          ? 255.0
                          : 255.0 / scalars->GetDataTypeMax();
-  width = dims[0];
-  height = dims[1];
-  rgb.resize(static_cast<size_t>(width) * height * 3);
-  for (vtkIdType k = 0; k < static_cast<vtkIdType>(width) * height; ++k)
+  asrt::ImagePixels px;
+  px.width = dims[0];
+  px.height = dims[1];
+  px.rgb.resize(static_cast<size_t>(px.width) * px.height * 3);
+  for (vtkIdType k = 0; k < static_cast<vtkIdType>(px.width) * px.height; ++k)
   {
     for (int c = 0; c < 3; ++c)
     {
       const int src = nc >= 3 ? c : 0; // grey (and grey + alpha) to RGB
       const double value = scalars->GetComponent(k, src) * scale;
-      rgb[3 * k + c] = static_cast<unsigned char>(std::lround(std::clamp(value, 0.0, 255.0)));
+      px.rgb[3 * k + c] = static_cast<unsigned char>(std::lround(std::clamp(value, 0.0, 255.0)));
     }
   }
+  return px;
+}
+}
+
+void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int& height,
+                                        std::vector<unsigned char>& rgb)
+{
+  const std::string ext =
+    path.find('.') == std::string::npos
+      ? std::string()
+      : vtksys::SystemTools::LowerCase(vtksys::SystemTools::GetFilenameLastExtension(path));
+  asrt::ImagePixels px;
+  try
+  {
+    asrt::requireTextureFile(path);
+    // PNG through libpng, never vtkPNGReader (which crashes on a truncated file).
+    px = ext == ".png" ? asrt::readPngTexture(path) : readWithVtk(path, ext);
+  }
+  catch (const asrt::InvalidParameter& e)
+  {
+    throw asrt::InvalidParameter("image file \"" + path + "\" " + e.what());
+  }
+  width = px.width;
+  height = px.height;
+  rgb = std::move(px.rgb);
 }
 
 struct vtkGeodesicSource::Internals
@@ -332,6 +416,18 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       os << "a " << W << " x " << H << " frame needs about " << pixels * kBytesPerPixel / 1e9
          << " GB, more than the " << limit / 1e9 << " GB allowed";
       throw asrt::InvalidParameter(os.str());
+    }
+    if (this->GeneratePolylines)
+    {
+      // Every s-th column, and the rows of this band that are multiples of s.
+      const long long s = this->PolylineStride;
+      const long long rays = this->PolylinePixels
+                               ? this->PolylinePixels->GetNumberOfTuples()
+                               : (W + s - 1) / s * ((rowEnd + s - 1) / s - (rowBegin + s - 1) / s);
+      if (rays > kMaxPolylines)
+        throw asrt::InvalidParameter(
+          std::to_string(rays) + " rays asked for as polylines; at most " +
+          std::to_string(kMaxPolylines) + " are drawn (choose a larger stride or fewer pixels)");
     }
 
     auto progress = [this](double f)

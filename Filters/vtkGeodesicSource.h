@@ -149,8 +149,10 @@ public:
   vtkPolyData* GetHitsOutput();
   vtkPolyData* GetPolylinesOutput();
 
-  /// Reads an image file with VTK's readers into RGB bytes (the scene's texture loader).
-  /// Throws asrt::InvalidParameter if it cannot.
+  /// Reads an image file into RGB bytes, bottom row first (the scene's texture loader): PNG with
+  /// libpng (asrt::readPngTexture), other formats with VTK's readers. The declared size is checked
+  /// against asrt::TextureLimits before decoding. Throws asrt::InvalidParameter naming the file
+  /// if it cannot.
   static void LoadImagePixels(const std::string& path, int& width, int& height,
                               std::vector<unsigned char>& rgb);
 

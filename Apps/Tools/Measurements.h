@@ -25,7 +25,8 @@ struct Deflection
 /// or below the critical impact parameter.
 Deflection schwarzschildDeflection(const IntegratorConfig& cfg, double b);
 
-/// Reads scene textures with VTK's image readers (vtkGeodesicSource::LoadImagePixels).
+/// Reads scene textures as the filters do (vtkGeodesicSource::LoadImagePixels: libpng for PNG,
+/// VTK's readers for other formats).
 ImageLoader vtkImageLoader();
 }
 }

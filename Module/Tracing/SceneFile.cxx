@@ -19,22 +19,63 @@ namespace
 {
 using json = nlohmann::json;
 
-/// Frames larger than this many pixels are refused: at ~200 bytes a ray record, 2²⁸ pixels is
-/// already ~50 GB.
-constexpr long long maxPixels = 1LL << 28;
+/// Characters of a value or name quoted in a message.
+constexpr std::size_t kShownLength = 60;
 
 [[noreturn]] void fail(const std::string& path, const std::string& msg)
 {
   throw InvalidParameter((path.empty() ? std::string("(document)") : path) + ": " + msg);
 }
 
+/// Text for a message: `s` itself if short, else its first characters and "...".
+std::string clipped(const std::string& s, std::size_t length = kShownLength)
+{
+  return s.size() <= length ? s : s.substr(0, length - 3) + "...";
+}
+
+/// Appends `v` as dump() writes it until `out` holds more than `budget` characters. Neither a long
+/// value nor a deep one is written whole: each level adds a character, so the recursion ends
+/// within `budget` levels.
+void appendBounded(const json& v, std::string& out, std::size_t budget)
+{
+  if (out.size() > budget)
+    return;
+  if (v.is_string())
+  {
+    // Cut before quoting; a cut through a multi-byte character is replaced, not an error.
+    const std::string& text = v.get_ref<const std::string&>();
+    out += json(text.substr(0, budget + 1 - out.size()))
+             .dump(-1, ' ', false, json::error_handler_t::replace);
+    return;
+  }
+  if (!v.is_structured())
+  {
+    out += v.dump();
+    return;
+  }
+  out += v.is_array() ? '[' : '{';
+  bool first = true;
+  for (auto it = v.begin(); it != v.end() && out.size() <= budget; ++it)
+  {
+    if (!first)
+      out += ',';
+    first = false;
+    if (v.is_object())
+    {
+      appendBounded(json(it.key()), out, budget);
+      out += ':';
+    }
+    appendBounded(*it, out, budget);
+  }
+  out += v.is_array() ? ']' : '}';
+}
+
 /// A JSON value as written, shortened for messages.
 std::string show(const json& v)
 {
-  std::string s = v.dump();
-  if (s.size() > 60)
-    s = s.substr(0, 57) + "...";
-  return s;
+  std::string s;
+  appendBounded(v, s, kShownLength);
+  return clipped(s);
 }
 
 std::string typeName(const json& v)
@@ -132,7 +173,7 @@ private:
       if (!hint.empty())
         msg += " (did you mean \"" + hint + "\"?)";
       msg += "; known fields: " + joined(this->Known);
-      fail(this->sub(key), msg);
+      fail(this->sub(clipped(key)), msg);
     }
   }
 
@@ -271,27 +312,32 @@ Color color(const json& v, const std::string& path)
 }
 
 // ---- the sections ---------------------------------------------------------------------------
-/// Rejects duplicate keys, which nlohmann would otherwise resolve silently (the last one wins).
-/// Tracks the path of the value being parsed to name the duplicate.
-class DuplicateKeyCheck
+/// Checks the document while nlohmann parses it: rejects duplicate keys, which nlohmann would
+/// otherwise resolve silently (the last one wins), and nesting deeper than kMaxSceneNesting,
+/// before the deep value exists. Tracks the path of the value being parsed to name the culprit.
+class StructureCheck
 {
 public:
-  bool operator()(int, json::parse_event_t event, json& parsed)
+  bool operator()(int depth, json::parse_event_t event, json& parsed)
   {
     switch (event)
     {
       case json::parse_event_t::object_start:
-        this->Frames.push_back({ false, 0, {}, {} });
-        break;
       case json::parse_event_t::array_start:
-        this->Frames.push_back({ true, 0, {}, {} });
+        // `depth` counts the containers around this one.
+        if (depth >= kMaxSceneNesting)
+          fail(clipped(this->path()), "arrays and objects nested more than " +
+                                        std::to_string(kMaxSceneNesting) +
+                                        " levels deep (a scene needs 6)");
+        this->Frames.push_back({ event == json::parse_event_t::array_start, 0, {}, {} });
         break;
       case json::parse_event_t::key:
       {
         Frame& top = this->Frames.back();
         top.key = parsed.get<std::string>();
         if (!top.keys.insert(top.key).second)
-          fail(this->path(), "duplicate field (given twice in one object)");
+          fail(clipped(this->path(), 4 * kShownLength),
+               "duplicate field (given twice in one object)");
         break;
       }
       case json::parse_event_t::object_end:
@@ -315,7 +361,7 @@ public:
       if (f.isArray)
         p += "[" + std::to_string(f.index) + "]";
       else
-        p += (p.empty() ? "" : ".") + f.key;
+        p += (p.empty() ? "" : ".") + clipped(f.key);
     }
     return p;
   }
@@ -356,22 +402,27 @@ public:
 
   SceneDescription parse(const std::string& text)
   {
+    if (text.size() > kMaxSceneBytes)
+      fail("(document)", "the scene's " + std::to_string(text.size()) + " bytes exceed the " +
+                           std::to_string(kMaxSceneBytes >> 20) + " MiB a scene may have");
     json doc;
-    DuplicateKeyCheck check;
+    StructureCheck check;
     try
     {
       doc = json::parse(text, std::ref(check));
     }
     catch (const json::parse_error& e)
     {
-      // nlohmann's message carries the line and column.
-      fail("(document)", std::string("malformed JSON: ") + e.what());
+      // nlohmann's message carries the line and column first, then the token last read (cut: it
+      // may be an unterminated string of the whole file).
+      fail("(document)", "malformed JSON: " + clipped(e.what(), 4 * kShownLength));
     }
     catch (const json::exception& e)
     {
       // A number too large for a double (JSON has no NaN or infinity, but 1e400 overflows).
-      fail(check.path(),
-           std::string("must be finite, got a number that overflows a double (") + e.what() + ")");
+      fail(clipped(check.path(), 4 * kShownLength),
+           "must be finite, got a number that overflows a double (" +
+             clipped(e.what(), 2 * kShownLength) + ")");
     }
     SceneDescription d;
     Fields root(doc, "",
@@ -405,7 +456,7 @@ private:
   {
     Fields f(j, "subset", { "pixels", "digest" });
     PixelSubsetId s;
-    s.count = integer(f.require("pixels"), f.sub("pixels"), 1, maxPixels);
+    s.count = integer(f.require("pixels"), f.sub("pixels"), 1, kMaxFramePixels);
     s.digest = str(f.require("digest"), f.sub("digest"));
     const bool hex =
       s.digest.size() == 16 &&
@@ -445,9 +496,10 @@ private:
       const int maxInt = std::numeric_limits<int>::max();
       c.width = static_cast<int>(integer((*v)[0], index(p, 0), 1, maxInt));
       c.height = static_cast<int>(integer((*v)[1], index(p, 1), 1, maxInt));
-      if (static_cast<long long>(c.width) * c.height > maxPixels)
+      if (static_cast<long long>(c.width) * c.height > kMaxFramePixels)
         fail(p, std::to_string(c.width) + " x " + std::to_string(c.height) +
-                  " pixels exceed the budget of " + std::to_string(maxPixels) + " pixels a frame");
+                  " pixels exceed the budget of " + std::to_string(kMaxFramePixels) +
+                  " pixels a frame");
     }
     if (const json* v = f.get("observer"))
     {
@@ -474,7 +526,8 @@ private:
     {
       try
       {
-        c = integratorPreset(str(*v, f.sub("preset"), true));
+        // A name longer than any preset's is passed cut, so that the message quoting it is short.
+        c = integratorPreset(clipped(str(*v, f.sub("preset"), true)));
       }
       catch (const InvalidParameter& e)
       {
@@ -488,7 +541,7 @@ private:
       {
         try
         {
-          findMethod(c.method);
+          findMethod(clipped(c.method));
         }
         catch (const InvalidParameter& e)
         {
@@ -568,8 +621,9 @@ private:
     if (cached != this->Images.end())
       return cached->second;
     const std::string what =
-      "cannot read \"" + file + "\"" +
-      (resolved != file ? " (resolved to \"" + resolved + "\")" : std::string());
+      "cannot read \"" + clipped(file, 2 * kShownLength) + "\"" +
+      (resolved != file ? " (resolved to \"" + clipped(resolved, 2 * kShownLength) + "\")"
+                        : std::string());
     if (!this->Loader)
       fail(path, what + ": no image loader was given");
     ImagePixels px;
@@ -579,7 +633,7 @@ private:
     }
     catch (const std::exception& e)
     {
-      fail(path, what + ": " + e.what());
+      fail(path, what + ": " + clipped(e.what(), 6 * kShownLength));
     }
     std::shared_ptr<const Texture> t;
     try
@@ -612,7 +666,7 @@ private:
       const auto spec = Parser::specificFields(type);
       if (!spec)
         fail(p + ".type",
-             "unknown object type \"" + type +
+             "unknown object type \"" + clipped(type) +
                "\" (known: celestialSphere, plane, rectangle, cylinder, sphere, disk)");
       known.insert(known.end(), spec->begin(), spec->end());
       Fields f(o, p, known);
@@ -721,19 +775,32 @@ SceneDescription parseScene(const std::string& jsonText, const std::string& base
   return Parser(baseDir, loader).parse(jsonText);
 }
 
-SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader)
+SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader,
+                               const std::function<bool()>& cancelled)
 {
   std::ifstream in(path, std::ios::binary);
-  if (!in)
+  if (!in || std::filesystem::is_directory(path))
     throw InvalidParameter("cannot read scene file \"" + path + "\"");
-  std::ostringstream text;
-  text << in.rdbuf();
+  // In chunks, up to one byte past the bound: /dev/zero or an endless pipe stops there.
+  std::string text;
+  std::vector<char> chunk(1 << 20);
+  while (in)
+  {
+    if (cancelled && cancelled())
+      throw SceneReadCancelled();
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxSceneBytes)
+      throw InvalidParameter("scene file \"" + path + "\" is larger than " +
+                             std::to_string(kMaxSceneBytes >> 20) + " MiB (" +
+                             std::to_string(kMaxSceneBytes) + " bytes), the most a scene may hold");
+  }
   if (in.bad())
     throw InvalidParameter("cannot read scene file \"" + path + "\"");
   const std::string dir = std::filesystem::path(path).parent_path().string();
   try
   {
-    return parseScene(text.str(), dir, loader);
+    return parseScene(text, dir, loader);
   }
   catch (const InvalidParameter& e)
   {

@@ -16,11 +16,31 @@
 
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace asrt
 {
+/// The largest scene a scene file or text may hold, in bytes (64 MiB): a scene is a few kB, and a
+/// file read without bound (/dev/zero, an endless pipe) would take all memory.
+constexpr std::size_t kMaxSceneBytes = std::size_t(64) << 20;
+/// The deepest nesting of arrays and objects a scene's JSON may have (a scene needs 6). Deeper
+/// documents are refused while parsing, before the nested value is built: printing or copying
+/// nlohmann's values recurses once a level.
+constexpr int kMaxSceneNesting = 64;
+/// The most pixels a frame may have: at ~200 bytes a ray record, 2²⁸ pixels is already ~50 GB.
+constexpr long long kMaxFramePixels = 1LL << 28;
+
+/// Thrown by loadSceneFile when its `cancelled` callback asks it to stop reading.
+struct SceneReadCancelled : std::runtime_error
+{
+  SceneReadCancelled()
+    : std::runtime_error("reading the scene file was cancelled")
+  {
+  }
+};
+
 /// Pixels of an image file: RGB, 8 bits a channel, row-major, row 0 at the bottom (VTK's order).
 struct ImagePixels
 {
@@ -36,10 +56,12 @@ using ImageLoader = std::function<ImagePixels(const std::string& path)>;
 /// Parses a scene from JSON text. Relative texture paths are resolved against `baseDir`; each
 /// distinct image is read once through `loader` (which may be empty if no object uses an image).
 /// Throws InvalidParameter with the offending field's path for any invalid, unknown or duplicate
-/// field, unknown object type, unreadable texture or malformed JSON. Checks beyond single fields:
+/// field, unknown object type, unreadable texture, malformed JSON, text longer than
+/// kMaxSceneBytes or nested deeper than kMaxSceneNesting; values and names quoted in its messages
+/// are cut to a few dozen characters. Checks beyond single fields:
 /// the spacetime (asrt::makeSpacetime's), the integration method against it (makePropagator's),
 /// the camera outside the horizon and, for a static observer, outside any ergosphere, celestial
-/// spheres enclosing the camera, frames of at most 2²⁸ pixels.
+/// spheres enclosing the camera, frames of at most kMaxFramePixels pixels.
 ASRTTRACING_EXPORT SceneDescription parseScene(const std::string& jsonText,
                                                const std::string& baseDir,
                                                const ImageLoader& loader);
@@ -54,9 +76,12 @@ ASRTTRACING_EXPORT std::string effectiveSceneText(const SceneDescription& d);
 ASRTTRACING_EXPORT SceneDescription parseSceneWithoutImages(const std::string& jsonText);
 
 /// Reads and parses a scene file; its directory is the base for relative texture paths. Error
-/// messages are prefixed with the file's path.
-ASRTTRACING_EXPORT SceneDescription loadSceneFile(const std::string& path,
-                                                  const ImageLoader& loader);
+/// messages are prefixed with the file's path. The file is read in chunks and refused once it
+/// exceeds kMaxSceneBytes, so that an endless file or pipe ends at that bound; `cancelled`, if
+/// given, is asked between chunks and throws SceneReadCancelled when it returns true.
+ASRTTRACING_EXPORT SceneDescription
+loadSceneFile(const std::string& path, const ImageLoader& loader,
+              const std::function<bool()>& cancelled = std::function<bool()>());
 }
 
 #endif

@@ -1,0 +1,238 @@
+// The bounds of scene parsing: JSON nested deeper than kMaxSceneNesting is refused while parsing
+// (however deep, wherever it sits), scene text and files beyond kMaxSceneBytes are refused (and
+// endless files are read only up to the bound), reading can be cancelled between chunks, and the
+// values, keys and names quoted in messages are cut short.
+#include "AddressSpaceLimit.h"
+#include "SceneFile.h"
+
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <new>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+using namespace asrt;
+
+namespace
+{
+/// A valid scene with `spacetimeExtra` (e.g. ", \"spin\": X") added to its spacetime section,
+/// the given objects and `sections` (e.g. ", \"integrator\": {...}") added at the top level.
+std::string sceneWith(const std::string& spacetimeExtra, const std::string& objects = "[]",
+                      const std::string& sections = std::string())
+{
+  return R"({"spacetime": {"mass": 1)" + spacetimeExtra + R"(},
+    "camera": {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "resolution": [8, 8]},
+    "objects": )" +
+         objects + sections + "}";
+}
+
+std::string errorOf(const std::string& text)
+{
+  try
+  {
+    parseScene(text, "", nullptr);
+  }
+  catch (const InvalidParameter& e)
+  {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+std::string nested(std::size_t depth)
+{
+  return std::string(depth, '[') + std::string(depth, ']');
+}
+
+const std::string kTooDeep = "arrays and objects nested more than 64 levels deep";
+
+/// A message quoting a few dozen characters of the value beside its fixed text (the longest, an
+/// unknown method's, lists every known method).
+constexpr std::size_t kShortMessage = 400;
+}
+
+TEST(SceneNesting, SixtyFourLevelsAreParsedSixtyFiveAreNot)
+{
+  // The document itself: 64 levels reach the object check, 65 stop at the parser.
+  EXPECT_EQ(errorOf(nested(64)).find("(document): must be an object, got array"), 0u)
+    << errorOf(nested(64));
+  EXPECT_EQ(errorOf(nested(65)), "[0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0]...: " +
+                                   kTooDeep + " (a scene needs 6)");
+  // Inside the scene: the spacetime object is level 2, so its field may nest 62 more.
+  EXPECT_EQ(
+    errorOf(sceneWith(", \"spin\": " + nested(62))).find("spacetime.spin: must be a number"), 0u);
+  EXPECT_NE(errorOf(sceneWith(", \"spin\": " + nested(63))).find(kTooDeep), std::string::npos);
+}
+
+TEST(SceneNesting, HundredThousandLevelsAreRefusedWithoutCrashing)
+{
+  const std::size_t deep = 100000;
+  EXPECT_NE(errorOf(nested(deep)).find(kTooDeep), std::string::npos);
+  const std::string inField = errorOf(sceneWith(", \"spin\": " + nested(deep)));
+  EXPECT_EQ(inField.find("spacetime.spin[0][0]"), 0u) << inField;
+  EXPECT_NE(inField.find(kTooDeep), std::string::npos);
+  std::string objects;
+  for (std::size_t k = 0; k < deep; ++k)
+    objects += "{\"a\": ";
+  objects += "1" + std::string(deep, '}');
+  const std::string inObjects = errorOf(sceneWith("", objects));
+  EXPECT_EQ(inObjects.find("objects.a.a.a"), 0u) << inObjects.substr(0, 200);
+  EXPECT_NE(inObjects.find(kTooDeep), std::string::npos);
+  EXPECT_LT(inObjects.size(), kShortMessage);
+  // Where every scene loader goes: a scene without images takes the same path.
+  EXPECT_THROW(parseSceneWithoutImages(nested(deep)), InvalidParameter);
+}
+
+TEST(SceneMessages, LongValuesKeysAndNamesAreCut)
+{
+  const std::string longText(100000, 'x');
+  const std::string quoted = "\"" + longText + "\"";
+  std::string manyOnes;
+  for (int k = 0; k < 100000; ++k)
+    manyOnes += "1,";
+  struct Case
+  {
+    std::string text, start;
+  };
+  const Case cases[] = {
+    { sceneWith(", \"spin\": " + quoted), "spacetime.spin: must be a number, got string \"xxx" },
+    { sceneWith(", \"" + longText + "\": 1"), "spacetime.xxxxxxxxxx" },
+    { sceneWith(", \"spin\": [" + manyOnes + "1]"),
+      "spacetime.spin: must be a number, got array [1,1," },
+    { sceneWith(", \"spin\": 1" + std::string(100000, '0')),
+      "spacetime.spin: must be finite, got a number that overflows a double ([json.exception" },
+    { sceneWith(", \"spin\": " + nested(60)), "spacetime.spin: must be a number, got array [[[[" },
+    { sceneWith("", "[{\"type\": " + quoted + "}]"), "objects[0].type: unknown object type \"xxx" },
+    { sceneWith("", R"([{"type": "sphere", "id": 1, "center": [0, 5, 0], "radius": 1,
+                        "texture": {"image": )" +
+                      quoted + "}}]"),
+      "objects[0].texture.image: cannot read \"xxx" },
+    { sceneWith("", "[]", ", \"integrator\": {\"preset\": " + quoted + "}"),
+      "integrator.preset: unknown preset \"xxx" },
+    { sceneWith("", "[]", ", \"integrator\": {\"method\": " + quoted + "}"),
+      "integrator.method: unknown integration method 'xxx" },
+    { "{\"" + longText + "\": 1, \"" + longText + "\": 2}", "xxxxxxxxx" },
+    { "[\"" + longText, "(document): malformed JSON" },
+  };
+  for (const Case& c : cases)
+  {
+    const std::string message = errorOf(c.text);
+    EXPECT_EQ(message.find(c.start), 0u) << message.substr(0, 300);
+    EXPECT_LT(message.size(), kShortMessage) << message.substr(0, 300);
+  }
+  // The cut value ends in "...", and whole values below the cut are shown whole.
+  EXPECT_NE(errorOf(sceneWith(", \"spin\": " + quoted)).find("xxx..."), std::string::npos);
+  EXPECT_NE(
+    errorOf(sceneWith(", \"spin\": [1,[2,{\"k\":\"v\"}]]")).find("got array [1,[2,{\"k\":\"v\"}]]"),
+    std::string::npos);
+}
+
+TEST(SceneSize, TextBeyondTheCapIsRefused)
+{
+  // Padding with whitespace keeps the scene valid: at the cap it parses, one byte more it does not.
+  const std::string scene = sceneWith("");
+  std::string text = scene + std::string(kMaxSceneBytes - scene.size(), ' ');
+  EXPECT_NO_THROW(parseScene(text, "", nullptr));
+  text += ' ';
+  EXPECT_EQ(errorOf(text), "(document): the scene's 67108865 bytes exceed the 64 MiB a scene "
+                           "may have");
+}
+
+TEST(SceneSize, EndlessFilesAreReadOnlyUpToTheCap)
+{
+  // Reading /dev/zero whole would exhaust memory: the bound fails the test instead.
+  const asrt::testing::AddressSpaceLimit bound(2e9);
+  try
+  {
+    loadSceneFile("/dev/zero", nullptr);
+    ADD_FAILURE() << "/dev/zero parsed as a scene";
+  }
+  catch (const InvalidParameter& e)
+  {
+    EXPECT_STREQ(e.what(), "scene file \"/dev/zero\" is larger than 64 MiB (67108864 bytes), the "
+                           "most a scene may hold");
+  }
+}
+
+TEST(SceneSize, EndlessPipesAreReadOnlyUpToTheCap)
+{
+  const std::string fifo = ::testing::TempDir() + "asrt-endless-scene";
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  // The writer writes until the reader closes its end.
+  const auto previous = std::signal(SIGPIPE, SIG_IGN);
+  std::atomic<long long> sent{ 0 };
+  std::thread writer(
+    [&]()
+    {
+      const int fd = open(fifo.c_str(), O_WRONLY);
+      const std::vector<char> block(1 << 16, '[');
+      ssize_t n;
+      while (fd >= 0 && (n = write(fd, block.data(), block.size())) > 0)
+        sent += n;
+      if (fd >= 0)
+        close(fd);
+    });
+  std::string message;
+  {
+    const asrt::testing::AddressSpaceLimit bound(2e9);
+    try
+    {
+      loadSceneFile(fifo, nullptr);
+    }
+    catch (const InvalidParameter& e)
+    {
+      message = e.what();
+    }
+  }
+  writer.join();
+  std::signal(SIGPIPE, previous);
+  std::remove(fifo.c_str());
+  EXPECT_NE(message.find("is larger than 64 MiB"), std::string::npos) << message;
+  EXPECT_GT(sent.load(), static_cast<long long>(kMaxSceneBytes));
+}
+
+TEST(SceneSize, ReadingCanBeCancelledBetweenChunks)
+{
+  int asked = 0;
+  EXPECT_THROW(loadSceneFile("/dev/zero", nullptr, [&]() { return ++asked == 3; }),
+               SceneReadCancelled);
+  EXPECT_EQ(asked, 3);
+  // A small file is read in one chunk, asked about once before it.
+  const std::string path = ::testing::TempDir() + "asrt-small-scene.json";
+  std::ofstream(path) << sceneWith("");
+  asked = 0;
+  EXPECT_NO_THROW(loadSceneFile(path, nullptr, [&]() { return ++asked > 5; }));
+  EXPECT_GE(asked, 1);
+  std::remove(path.c_str());
+}
+
+TEST(SceneSize, DirectoryIsNotAScene)
+{
+  const std::string dir = ::testing::TempDir();
+  try
+  {
+    loadSceneFile(dir, nullptr);
+    ADD_FAILURE() << "a directory parsed as a scene";
+  }
+  catch (const InvalidParameter& e)
+  {
+    EXPECT_EQ(std::string(e.what()), "cannot read scene file \"" + dir + "\"");
+  }
+}
+
+TEST(AddressSpaceLimit, StopsAnAllocationBeyondIt)
+{
+  // The guard the endless-input tests rely on.
+  const asrt::testing::AddressSpaceLimit bound(1e9);
+  EXPECT_THROW(std::vector<char>(std::size_t(4) << 30, 'x'), std::bad_alloc);
+}
