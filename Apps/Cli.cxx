@@ -397,7 +397,7 @@ std::string readSceneFile(const std::string& path)
 {
   try
   {
-    std::string text = tools::readWholeFile(path, kMaxSceneFileBytes, "scene file");
+    std::string text = tools::readWholeFile(path, kMaxSceneBytes, "scene file");
     // The source holds the text as a C string: a NUL would cut it short unseen.
     if (text.find('\0') != std::string::npos)
       throw InputError("cannot read scene file \"" + path + "\": it holds a NUL byte (not JSON)");

@@ -138,8 +138,7 @@ std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<O
 std::string outputPath(const Options& options, const std::string& scenePath,
                        const std::string& suffix);
 
-/// Scene files are read whole by the program itself, at most this many bytes.
-constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
+/// Scene files are read whole by the program itself, at most kMaxSceneBytes (SceneFile.h).
 /// The scene file's text, read so that Ctrl-C or SIGTERM stops even a read that blocks (a FIFO).
 /// Throws InputError if it cannot be read (missing, too large, not text), Interrupted on an
 /// interrupt.

@@ -79,9 +79,11 @@ std::string readWholeFile(const std::string& path, std::size_t limit, const std:
     throw failure(std::strerror(errno));
   if (S_ISDIR(st.st_mode))
     throw failure(std::strerror(EISDIR));
-  const std::string tooLarge = "larger than " + std::to_string(limit >> 20) + " MB";
+  const std::runtime_error tooLarge(what + " \"" + path + "\" is larger than " +
+                                    std::to_string(limit >> 20) + " MiB (" + std::to_string(limit) +
+                                    " bytes), the most it may hold");
   if (S_ISREG(st.st_mode) && static_cast<unsigned long long>(st.st_size) > limit)
-    throw failure(tooLarge);
+    throw tooLarge;
   std::string text;
   char chunk[1 << 16];
   while (true)
@@ -96,7 +98,7 @@ std::string readWholeFile(const std::string& path, std::size_t limit, const std:
     if (n == 0)
       return text;
     if (text.size() + static_cast<std::size_t>(n) > limit)
-      throw failure(tooLarge);
+      throw tooLarge;
     text.append(chunk, static_cast<std::size_t>(n));
   }
 }

@@ -22,9 +22,10 @@ struct ReadInterrupted : std::runtime_error
   }
 };
 
-/// The content of `path`, at most `limit` bytes. Throws std::runtime_error "cannot read <what>
-/// \"<path>\": <reason>" (no such file, a directory, larger than the limit, ...), ReadInterrupted
-/// when interruptRequested() is or becomes true before the end.
+/// The content of `path`, at most `limit` bytes. Throws std::runtime_error: "cannot read <what>
+/// \"<path>\": <reason>" (no such file, a directory, ...), or "<what> \"<path>\" is larger than
+/// N MiB ..." past the limit; ReadInterrupted when interruptRequested() is or becomes true before
+/// the end.
 std::string readWholeFile(const std::string& path, std::size_t limit, const std::string& what);
 }
 }

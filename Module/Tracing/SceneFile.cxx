@@ -496,10 +496,6 @@ private:
       const int maxInt = std::numeric_limits<int>::max();
       c.width = static_cast<int>(integer((*v)[0], index(p, 0), 1, maxInt));
       c.height = static_cast<int>(integer((*v)[1], index(p, 1), 1, maxInt));
-      if (static_cast<long long>(c.width) * c.height > kMaxFramePixels)
-        fail(p, std::to_string(c.width) + " x " + std::to_string(c.height) +
-                  " pixels exceed the budget of " + std::to_string(kMaxFramePixels) +
-                  " pixels a frame");
     }
     if (const json* v = f.get("observer"))
     {

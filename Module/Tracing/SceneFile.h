@@ -29,8 +29,6 @@ constexpr std::size_t kMaxSceneBytes = std::size_t(64) << 20;
 /// documents are refused while parsing, before the nested value is built: printing or copying
 /// nlohmann's values recurses once a level.
 constexpr int kMaxSceneNesting = 64;
-/// The most pixels a frame may have: at ~200 bytes a ray record, 2²⁸ pixels is already ~50 GB.
-constexpr long long kMaxFramePixels = 1LL << 28;
 
 /// Thrown by loadSceneFile when its `cancelled` callback asks it to stop reading.
 struct SceneReadCancelled : std::runtime_error

@@ -163,7 +163,7 @@ scene_fifo() {
   test "$rc" -eq 130 || fail "exit code $rc, expected 130"
 
   step "an endless scene file is cut at the limit"
-  "$expect" 4 "larger than 64 MB" -- "$asrt" trace /dev/zero -r 8x8 -q -o out/
+  "$expect" 4 "larger than 64 MiB" -- "$asrt" trace /dev/zero -r 8x8 -q -o out/
 }
 
 # Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
