@@ -325,12 +325,18 @@ void migrateSchema(PGconn* conn, int targetVersion, bool createSchema)
       {
         runMigration(conn, m);
       }
-      if (targetVersion >= 4 && predicateRoleProblem(conn))
+      // What something undid since (a restore without roles, a dropped function) is set up
+      // again; a role granted more than the views is the administrator's to put right, and
+      // until then readFrame() refuses predicates while everything else goes on.
+      const std::optional<RoleProblem> problem =
+        targetVersion >= 4 ? findRoleProblem(conn) : std::nullopt;
+      if (problem && problem->fixable)
       {
-        setUpPredicateRole(conn, "setting up the role that evaluates predicates failed");
-        if (const std::optional<std::string> problem = predicateRoleProblem(conn))
+        const std::string what = "setting up the role that evaluates predicates failed";
+        setUpPredicateRole(conn, what);
+        if (const std::optional<std::string> still = predicateRoleProblem(conn))
         {
-          throw StoreError("setting up the role that evaluates predicates failed: " + *problem);
+          throw StoreError(what + ": " + *still);
         }
       }
       if (v != targetVersion)

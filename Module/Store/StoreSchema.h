@@ -39,7 +39,8 @@ void requireCurrentSchema(PGconn* conn);
 /// transaction, serialised against concurrent migrators; refuses a newer database and never
 /// goes back. Without `createSchema`, a database with no ASRT schema is refused (StoreError)
 /// and left untouched. At version 4 and later it also sets up again the role that evaluates
-/// predicates if something undid it (see predicateRoleProblem).
+/// predicates, or its function, if something undid them (see predicateRoleProblem); a role
+/// granted more than the views is left to the administrator.
 void migrateSchema(PGconn* conn, int targetVersion, bool createSchema = true);
 
 /// What keeps predicates from being evaluated with the rights of the role asrt_predicate alone
