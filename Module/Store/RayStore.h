@@ -186,7 +186,9 @@ public:
   /// same scene with the same parameters again is a duplicate (see FrameWriteOptions::replace).
   /// Labels and names must be valid UTF-8 without NUL bytes (anything else is refused before
   /// touching the database); they are bound as parameters, never spliced into SQL. Returns the
-  /// frame's id.
+  /// frame's id. Of two writers of one frame at the same time, the one that commits first stands;
+  /// the other throws StoreError: "duplicate frame" without `replace`, "frame not stored: another
+  /// writer stored this scene ..." with it.
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
                           const std::vector<RayRecord>& records,
                           const FrameWriteOptions& options = FrameWriteOptions());
