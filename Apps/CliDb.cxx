@@ -1,8 +1,10 @@
-// asrt db: the private PostgreSQL server the tools use when given no connection.
+// asrt db: the private PostgreSQL server the tools use when given no connection, and the ASRT
+// schema of a database.
 #include "Cli.h"
 
 #include "AsrtTypes.h"
 #include "EmbeddedPostgres.h"
+#include "RayStore.h"
 
 #include <cstdio>
 
@@ -13,6 +15,7 @@ namespace cli
 namespace
 {
 const char* const kHelp = R"(Usage: asrt db [--dir PATH] start|status|stop|destroy
+       asrt db init [--db CONNINFO | --dir PATH]
 
 The private PostgreSQL 15 server of the ASRT tools: a cluster of your own, reachable through a
 unix socket only, that "asrt trace --store", "list" and "show" use when no --db, $ASRT_DB or PG*
@@ -24,36 +27,68 @@ Commands:
   status   print whether the server runs (exit code 0 if it does, 3 if not)
   stop     stop the server (the data stay)
   destroy  stop the server and delete the cluster with all its data
+  init     create the ASRT schema in a database, or migrate it to this version (the
+           database of --db, $ASRT_DB or the PG* variables, else the private server's).
+           Commands that only read (list, show, interpolate) create none; storing a
+           frame (trace --store) creates it too. The schema includes the role
+           asrt_predicate, shared by the server's ASRT databases, that evaluates --where
+           predicates: creating it needs a superuser or a role with CREATEROLE
 
 Options:
-  --dir PATH  the cluster directory (default: $ASRT_DB_DIR, else
-              $XDG_DATA_HOME/asrt/postgres or ~/.local/share/asrt/postgres, or
-              /var/lib/asrt/postgres for root)
+  --dir PATH     the cluster directory (default: $ASRT_DB_DIR, else
+                 $XDG_DATA_HOME/asrt/postgres or ~/.local/share/asrt/postgres, or
+                 /var/lib/asrt/postgres for root)
+  --db CONNINFO  for init: the database (a libpq connection string or URI)
 
 As root, the server runs as the 'postgres' system user. ASRT_PG_BINDIR overrides where initdb
 and pg_ctl are found (default /usr/lib/postgresql/15/bin).
 )";
+
+/// asrt db init: the schema created or migrated in the database the options name.
+int initSchema(const Options& options, const std::string& dir)
+{
+  const std::string conninfo =
+    options.has("dir") ? EmbeddedPostgres(dir).ensureRunning() : databaseConnection(options);
+  RayStore store(conninfo);
+  const int before = store.schemaVersion();
+  store.migrate();
+  const std::string done = before == 0 ? "created"
+                           : before == RayStore::kSchemaVersion
+                             ? "already in place"
+                             : "migrated from version " + std::to_string(before);
+  std::printf("ASRT schema version %d %s; predicates run as the role %s\n",
+              RayStore::kSchemaVersion, done.c_str(), RayStore::kPredicateRole);
+  return kOk;
+}
 }
 
 int runDb(const std::vector<std::string>& args)
 {
-  const Options options(std::vector<OptionSpec>{ { "dir", OptionSpec::Value } }, args);
+  const Options options(std::vector<OptionSpec>{ { "dir", OptionSpec::Value } } + databaseSpecs(),
+                        args);
   if (options.help())
   {
     std::printf("%s\n%s", kHelp, kExitCodeHelp);
     return kOk;
   }
-  options.expectPositional(1, 1, "the command: start, status, stop or destroy");
+  options.expectPositional(1, 1, "the command: start, status, stop, destroy or init");
   const std::string command = options.positional()[0];
-  if (command != "start" && command != "status" && command != "stop" && command != "destroy")
-    throw UsageError("unknown command '" + command + "' (start, status, stop or destroy)");
+  if (command != "start" && command != "status" && command != "stop" && command != "destroy" &&
+      command != "init")
+    throw UsageError("unknown command '" + command + "' (start, status, stop, destroy or init)");
   if (options.has("dir") && options.get("dir").empty())
     throw UsageError("--dir needs a non-empty path");
+  if (options.has("db") && command != "init")
+    throw UsageError("--db goes with init only (the other commands are about the private server)");
+  if (options.has("db") && options.has("dir"))
+    throw UsageError("--db and --dir name two servers: give one");
   const std::string dir =
     options.has("dir") ? options.get("dir") : EmbeddedPostgres::defaultDataDirectory();
   EmbeddedPostgres db(dir);
   try
   {
+    if (command == "init")
+      return initSchema(options, dir);
     if (command == "start")
       std::printf("%s\n", db.ensureRunning().c_str());
     else if (command == "status")

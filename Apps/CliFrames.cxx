@@ -4,6 +4,7 @@
 #include "DataFiles.h"
 #include "Progress.h"
 #include "RayStore.h"
+#include "StoreConnection.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicPostgreSQLReader.h"
 
@@ -38,7 +39,9 @@ database through vtkGeodesicPostgreSQLReader and writes it:
   --vtp FILE       the hit points with every ray's record
   --where SQL      read only the rays matching an SQL condition over the columns of the
                    view rays_v, e.g. "object_id = 2 AND image_order = 1" (the other pixels
-                   stay black); the condition runs in a read-only transaction
+                   stay black); the condition runs in a read-only transaction, with the
+                   rights of the role asrt_predicate alone: it may read the views rays_v
+                   and path_points_v, and nothing else (no table, file or other session)
   --scene          print the frame's scene as JSON (what re-traces it exactly)
 )";
 
@@ -78,14 +81,18 @@ std::string clipped(const std::string& text, std::size_t width)
   return p.substr(0, cut) + "...";
 }
 
-/// Opens the store and the schema; every failure is a database error.
+/// Opens the store and upgrades an older schema; list and show only read, so they create none,
+/// except in the private server's own database. Every failure is a database error.
 template<class F>
-auto withStore(const std::string& conninfo, F&& f)
+auto withStore(const Options& options, const std::string& conninfo, F&& f)
 {
   try
   {
     RayStore store(conninfo);
-    store.migrate();
+    if (storeConnectionIsPrivate(databaseGiven(options).c_str()))
+      store.migrate();
+    else
+      store.upgrade();
     return f(store);
   }
   catch (const StoreError& e)
@@ -104,8 +111,8 @@ int runList(const std::vector<std::string>& args)
     return kOk;
   }
   options.expectPositional(0, 0, "");
-  const std::vector<FrameInfo> frames =
-    withStore(databaseConnection(options), [](RayStore& store) { return store.listFrames(); });
+  const std::vector<FrameInfo> frames = withStore(
+    options, databaseConnection(options), [](RayStore& store) { return store.listFrames(); });
   if (frames.empty())
   {
     std::printf("no frames stored yet (asrt trace SCENE --store stores one)\n");
@@ -145,7 +152,8 @@ int runShow(const std::vector<std::string>& args)
   const std::int64_t id = parseFrameId(options.positional()[0]);
   const std::string conninfo = databaseConnection(options);
   auto [info, sceneText] =
-    withStore(conninfo, [id](RayStore& store)
+    withStore(options, conninfo,
+              [id](RayStore& store)
               { return std::make_pair(store.frameInfo(id), store.frameSceneText(id)); });
   const FrameKey& k = info.key;
   std::printf("frame %lld\n", static_cast<long long>(info.id));

@@ -7,6 +7,7 @@
 #include "Progress.h"
 #include "PvdCollection.h"
 #include "RayStore.h"
+#include "SceneFile.h"
 #include "VtkMessages.h"
 #include "vtkGeodesicDistributedSource.h"
 #include "vtkGeodesicPostgreSQLWriter.h"
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <sstream>
 
 namespace asrt
@@ -216,13 +218,33 @@ Formats parseFormats(const std::string& list)
   return f;
 }
 
-/// The store's advice names its API; say what the command line offers instead.
+/// The store's advice names its API; say what the command line offers instead (and nothing
+/// where the store gives no such advice: a frame being written in tiles, a concurrent writer).
 std::string withCommandLineAdvice(std::string why)
 {
   const std::size_t api = why.find("; pass replace = true");
-  if (why.find("duplicate frame") != std::string::npos)
+  if (api != std::string::npos)
     why = why.substr(0, api) + " (add --replace to store it again)";
   return why;
+}
+
+/// Refuses, before the trace, a frame that storing would refuse (already stored, without
+/// --replace): the store's own identity check, on the scene the source is about to trace.
+void refuseStoredFrame(RayStore& store, vtkGeodesicSource* source, bool replace)
+{
+  tools::VtkMessageCatcher messages;
+  messages.watch(source);
+  const std::string frameText = source->GetFrameSceneText();
+  if (messages.failed())
+    throw InputError(messages.firstError());
+  try
+  {
+    store.checkFrameIdentity(parseSceneWithoutImages(frameText), replace);
+  }
+  catch (const StoreError& e)
+  {
+    throw DatabaseError(withCommandLineAdvice(e.what()));
+  }
 }
 
 vtkIdType storeFrame(vtkPolyData* hits, const std::string& conninfo, const std::string& label,
@@ -510,6 +532,7 @@ int runTrace(const std::vector<std::string>& args)
   // Connect before tracing: an unreachable database should not cost a trace first (the
   // distributed source does this itself, process 0 resolving the connection for all).
   std::string conninfo;
+  std::unique_ptr<RayStore> store; // for the duplicate check before each trace
   if (options.has("store") && distributed)
   {
     distributed->SetStoreFrame(true);
@@ -520,7 +543,8 @@ int runTrace(const std::vector<std::string>& args)
   else if (options.has("store"))
   {
     conninfo = databaseConnection(options);
-    RayStore(conninfo).migrate();
+    store = std::make_unique<RayStore>(conninfo);
+    store->migrate();
   }
 
   const double maxShare = maxFailedShare(options);
@@ -547,7 +571,11 @@ int runTrace(const std::vector<std::string>& args)
     if (distributed)
       traceSharedFrame(distributed, "trace " + label, quiet || !speaks);
     else
+    {
+      if (store)
+        refuseStoredFrame(*store, source, options.has("replace"));
       traceFrame(source, "trace " + label, quiet);
+    }
     if (!speaks)
       continue;
     checkRayEnds(source->GetImageOutput(), maxShare, label);

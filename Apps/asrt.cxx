@@ -36,7 +36,7 @@ const Command kCommands[] = {
     runInterpolate },
   { "bundle", "render a 3D view of rays around the hole (PNG, or a window)", runBundle },
   { "bench", "measure time and accuracy of the integrator presets on a small frame", runBench },
-  { "db", "start, inspect, stop or delete the private PostgreSQL server", runDb },
+  { "db", "start, inspect, stop or delete the private PostgreSQL server; init a schema", runDb },
 };
 
 void usage(std::FILE* out)

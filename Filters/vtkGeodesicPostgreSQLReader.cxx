@@ -61,7 +61,8 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
-    store.migrate();
+    // A reader upgrades an older ASRT schema but creates none in a database that has none.
+    store.upgrade();
     const std::vector<asrt::FrameInfo> frames = store.listFrames();
     for (const asrt::FrameInfo& f : frames)
     {

@@ -8,8 +8,11 @@
  * field, bit-exact for doubles, and the frame's scene as field data, port 2 the polylines stored
  * with the frame (empty if none), bit-exact. An optional SQL Predicate over the columns of the
  * view rays_v (e.g. "object_id = 2 AND image_order = 1") selects a subset of rays, evaluated by
- * the server in a read-only transaction; port 2 then holds the polylines of the selected rays'
- * pixels only. Connection as for vtkGeodesicPostgreSQLWriter.
+ * the server in a read-only transaction with the rights of the role asrt_predicate alone (it
+ * reads the rays views and nothing else: asrt::RayStore::readFrame); port 2 then holds the
+ * polylines of the selected rays' pixels only. Connection as for vtkGeodesicPostgreSQLWriter; a
+ * database without an ASRT schema is an error (the reader creates none), an older schema is
+ * upgraded.
  */
 #ifndef vtkGeodesicPostgreSQLReader_h
 #define vtkGeodesicPostgreSQLReader_h

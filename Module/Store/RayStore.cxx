@@ -71,38 +71,65 @@ std::string exportSnapshot(PGconn* conn)
   return snapshot;
 }
 
+/// A predicate's failure as the user reads it: the first line of the server's message (its
+/// CONTEXT would repeat the predicate inside the function's SQL), at most PredicateErrorBytes
+/// long, cut at a character boundary.
+constexpr std::size_t PredicateErrorBytes = 240;
+StoreError predicateFailure(const StoreError& e)
+{
+  std::string line = e.what();
+  line = line.substr(0, line.find('\n'));
+  if (line.size() > PredicateErrorBytes)
+  {
+    std::size_t cut = PredicateErrorBytes;
+    while (cut > 0 && (static_cast<unsigned char>(line[cut]) & 0xC0) == 0x80)
+    {
+      --cut;
+    }
+    line = line.substr(0, cut) + "...";
+  }
+  return StoreError(line, e.sqlState());
+}
+
 /// The rays of complete frame `id` that satisfy `predicate`, in ray order (see readFrame).
 std::vector<RayRecord> readSelectedRays(PGconn* conn, std::int64_t id, std::int64_t rayCount,
                                         const std::string& predicate,
                                         std::chrono::milliseconds timeout)
 {
+  if (const std::optional<std::string> problem = storage::predicateRoleProblem(conn))
+  {
+    throw StoreError("the ray predicate was not evaluated: " + *problem);
+  }
   pg::Params()
     .text(std::to_string(timeout.count()) + "ms")
     .exec(conn, "SELECT set_config('statement_timeout', $1, true)",
           "setting the predicate's time limit failed");
-  // The predicate is the one deliberate splice (see the header). The frame restriction is
-  // inside the sub-select, so text that closes the parentheses still sees only this frame;
-  // the extended protocol refuses a second statement; READ ONLY refuses writes. The server
-  // evaluates it and sends the selected records only, in any order.
+  // The predicate is bound as a parameter here; asrt_selected_rays makes it SQL, evaluated with
+  // the rights of the predicate role alone (StoreSchemaHistory.h, SchemaV4). The server sends
+  // the selected records only, in any order.
   std::vector<std::pair<std::int64_t, RayRecord>> selected;
-  pg::Params().i64(id).stream(
-    conn,
-    "SELECT r.ray, r.record_bytes FROM (SELECT * FROM rays_v WHERE frame_id = $1) r "
-    "WHERE (" +
-      predicate + "\n)",
-    "the ray predicate failed",
-    [&](const PGresult* row)
-    {
-      const std::int64_t ray = pg::getI64(row, 0, 0);
-      if (PQgetisnull(row, 0, 0) || ray < 0 || ray >= rayCount ||
-          PQgetlength(row, 0, 1) != RayStore::kRecordBytes)
+  try
+  {
+    pg::Params().i64(id).text(predicate).stream(
+      conn, "SELECT ray, record_bytes FROM asrt_selected_rays($1, $2)", "the ray predicate failed",
+      [&](const PGresult* row)
       {
-        throw StoreError("the ray predicate failed: its query gave a row that is no ray of frame " +
-                         std::to_string(id));
-      }
-      selected.emplace_back(ray, RayRecord());
-      storage::decodeRecords(PQgetvalue(row, 0, 1), 1, &selected.back().second);
-    });
+        const std::int64_t ray = pg::getI64(row, 0, 0);
+        if (PQgetisnull(row, 0, 0) || ray < 0 || ray >= rayCount ||
+            PQgetlength(row, 0, 1) != RayStore::kRecordBytes)
+        {
+          throw StoreError("the ray predicate failed: its query gave a row that is no ray of "
+                           "frame " +
+                           std::to_string(id));
+        }
+        selected.emplace_back(ray, RayRecord());
+        storage::decodeRecords(PQgetvalue(row, 0, 1), 1, &selected.back().second);
+      });
+  }
+  catch (const StoreError& e)
+  {
+    throw predicateFailure(e);
+  }
   std::sort(selected.begin(), selected.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<RayRecord> records;
@@ -277,24 +304,18 @@ private:
     return std::int64_t(this->Bounds[std::size_t(tile) + 1] - this->Bounds[std::size_t(tile)]);
   }
 
-  /// A complete frame of the same identity is a duplicate, or is replaced.
+  /// A complete frame of the same identity is a duplicate, or is replaced (checkFrameIdentity()
+  /// makes the same check without the lock).
   void claimIdentity()
   {
     const std::optional<storage::FrameOfIdentity> old =
-      storage::lockFrameOfIdentity(this->Conn, this->Frame.texts);
+      storage::findFrameOfIdentity(this->Conn, this->Frame.texts, true);
     if (!old)
     {
       return;
     }
-    if (old->status != "complete")
-    {
-      // Replacing it would pull the frame from under the ranks writing its tiles.
-      throw StoreError("duplicate frame: this scene with these parameters is being "
-                       "written as tiled frame " +
-                       std::to_string(old->id) + " (label \"" + old->label +
-                       "\"); delete it first if its writers are gone");
-    }
-    storage::deleteReplaced(this->Conn, *old, this->Frame.options.replace);
+    storage::refuseIdentityClash(*old, this->Frame.options.replace);
+    storage::deleteFrameRow(this->Conn, old->id, "deleting the frame to be replaced failed");
     this->Replaced = true;
   }
 
@@ -315,10 +336,16 @@ private:
     {
       if (e.sqlState() == "23505")
       {
-        // Another writer stored the same frame between our check and our insert.
-        throw StoreError("duplicate frame: this scene with these parameters was just "
-                         "stored by another writer; pass replace = true to replace it",
-                         e.sqlState());
+        // Another writer stored the same frame between our check and our insert: that writer
+        // committed first, so its frame stands, replace or not.
+        throw StoreError(
+          this->Frame.options.replace
+            ? "frame not stored: another writer stored this scene with these parameters at the "
+              "same time, after this write had looked for a frame to replace; that writer's "
+              "frame stands (store again to replace it)"
+            : "duplicate frame: this scene with these parameters was just stored by another "
+              "writer; pass replace = true to replace it",
+          e.sqlState());
       }
       throw;
     }
@@ -524,6 +551,33 @@ void RayStore::migrate(int targetVersion)
   }
 }
 
+void RayStore::upgrade()
+{
+  this->P->ensureConnected();
+  this->P->SchemaChecked = false;
+  storage::migrateSchema(this->P->conn(), kSchemaVersion, false);
+  storage::dropOrphanBlocks(this->P->conn());
+  storage::dropUnusedScenes(this->P->conn(), -1);
+}
+
+void RayStore::checkFrameIdentity(const SceneDescription& scene, bool replace)
+{
+  pg::requireText(scene.name, "the scene name");
+  const storage::SceneTexts texts = storage::sceneTexts(scene);
+  this->P->requireSchema();
+  PGconn* conn = this->P->conn();
+  pg::transaction(conn, pg::ReadBegin,
+                  [&]
+                  {
+                    if (const std::optional<storage::FrameOfIdentity> old =
+                          storage::findFrameOfIdentity(conn, texts, false))
+                    {
+                      storage::refuseIdentityClash(*old, replace);
+                    }
+                    pg::exec(conn, "ROLLBACK", "ending the read failed");
+                  });
+}
+
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
                                   const std::vector<RayRecord>& records,
                                   const FrameWriteOptions& options)
@@ -579,7 +633,7 @@ TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId,
       if (!start.id)
       {
         const std::optional<storage::FrameOfIdentity> old =
-          storage::lockFrameOfIdentity(conn, texts);
+          storage::findFrameOfIdentity(conn, texts, true);
         if (!old)
         {
           pg::exec(conn, "ROLLBACK", "ending the transaction failed");
@@ -848,10 +902,31 @@ void RayStore::deleteFrame(std::int64_t id)
   storage::dropUnusedScenes(conn, sceneId);
 }
 
+namespace
+{
+/// Releases, once a predicate's read is over, the session-level advisory locks that the predicate
+/// may have taken (pg_advisory_lock outlives the transaction): left held, they would block other
+/// sessions for as long as this connection lives. The store takes transaction-level ones only.
+struct PredicateLocksRelease
+{
+  PGconn* Conn;
+  bool Active;
+  ~PredicateLocksRelease()
+  {
+    if (this->Active && PQstatus(this->Conn) == CONNECTION_OK &&
+        PQtransactionStatus(this->Conn) == PQTRANS_IDLE)
+    {
+      PQclear(PQexec(this->Conn, "SELECT pg_advisory_unlock_all()"));
+    }
+  }
+};
+}
+
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
 {
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
+  const PredicateLocksRelease release{ conn, !predicate.empty() };
   // REPEATABLE READ: the frame row, its tiles and its rays come from one snapshot. Always rolled
   // back, so that nothing a predicate might have done (set_config, ...) outlives the read.
   return pg::transaction(

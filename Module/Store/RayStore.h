@@ -15,6 +15,15 @@
 // view rays_v, which decodes the words; a predicate given to readFrame is evaluated there, on the
 // server, and only the selected rays travel.
 //
+// Predicates (schema version 4): they are evaluated with the rights of the role asrt_predicate
+// (kPredicateRole) alone, whatever the rights of the role that connected: it may read the views
+// rays_v and path_points_v, and nothing else (no other table, no file, no signal to another
+// backend). The migration creates it (which needs a superuser or CREATEROLE) and gives it a
+// SECURITY DEFINER function, asrt_selected_rays, that evaluates the predicate as dynamic SQL:
+// inside such a function PostgreSQL refuses to change "role" or "session_authorization", so a
+// predicate cannot take back the caller's rights. Roles belong to the whole server: every ASRT
+// database of a server shares this one.
+//
 // Tiled frames: several processes (ranks) write the tiles of one frame concurrently,
 // each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
 // on, with status 'writing'; the transaction of the tile that brings the count of written tiles
@@ -149,7 +158,9 @@ class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 3;
+  static constexpr int kSchemaVersion = 4;
+  /// The role that evaluates readFrame()'s predicates (see the top of this file).
+  static constexpr const char* kPredicateRole = "asrt_predicate";
   /// Bytes of one packed ray record (the fields of rays_v, big-endian).
   static constexpr int kRecordBytes = 260;
   /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page.
@@ -175,6 +186,10 @@ public:
   /// tables of rays left behind by frames deleted with plain SQL. `targetVersion` below
   /// kSchemaVersion stops at that version (to test migrations); it never downgrades.
   void migrate(int targetVersion = kSchemaVersion);
+  /// migrate() for readers: brings an existing ASRT schema to the current version, but creates
+  /// none. A database with no ASRT schema (version 0) is refused (StoreError "the database holds
+  /// no ASRT schema ...") and left as it was.
+  void upgrade();
   /// The database's schema version; 0 if it has none yet.
   int schemaVersion();
 
@@ -182,7 +197,9 @@ public:
   /// same scene with the same parameters again is a duplicate (see FrameWriteOptions::replace).
   /// Labels and names must be valid UTF-8 without NUL bytes (anything else is refused before
   /// touching the database); they are bound as parameters, never spliced into SQL. Returns the
-  /// frame's id.
+  /// frame's id. Of two writers of one frame at the same time, the one that commits first stands;
+  /// the other throws StoreError: "duplicate frame" without `replace`, "frame not stored: another
+  /// writer stored this scene ..." with it.
   std::int64_t writeFrame(const SceneDescription& scene, const std::string& label,
                           const std::vector<RayRecord>& records,
                           const FrameWriteOptions& options = FrameWriteOptions());
@@ -203,6 +220,14 @@ public:
                           std::size_t count,
                           const std::function<void(std::size_t, RayRecord&)>& next,
                           const FrameWriteOptions& options = FrameWriteOptions());
+
+  /// Throws the StoreError that writeFrame() of `scene` with `replace` would throw, as the
+  /// database stands, for the frame's identity: a complete frame of it stored and no `replace`, or
+  /// a tiled frame of it being written. Writes nothing: a caller checks before computing the
+  /// frame. The check is writeFrame()'s own (the same identity, the same refusals and messages);
+  /// writeFrame() still makes it again in its transaction, since another writer may store the
+  /// frame in between.
+  void checkFrameIdentity(const SceneDescription& scene, bool replace);
 
   /// Connections a parallel write uses at most (see writeFrame); default kDefaultWriteConnections.
   /// 1 writes every frame over this store's own connection. The others are opened when first
@@ -240,10 +265,14 @@ public:
   /// The records of frame `id` in the order written (a tiled frame's tiles in tile order),
   /// bit-exact. `predicate`, if not empty, is an
   /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
-  /// image_order = 1"). It is the one piece of caller text spliced into SQL, deliberately: it is
-  /// evaluated on the server in a READ ONLY transaction that is rolled back, with
-  /// predicateTimeout as statement_timeout, restricted to the frame's rays, so it can select but
-  /// not write; only the selected records are sent back.
+  /// image_order = 1"). It is the one piece of caller text that becomes SQL, deliberately: it is
+  /// evaluated on the server as the role kPredicateRole (which reads the rays views and nothing
+  /// else), in a READ ONLY transaction that is rolled back, with predicateTimeout as
+  /// statement_timeout, restricted to the frame's rays, so it can select but not write; only the
+  /// selected records are sent back. A predicate that fails (a syntax error, a refused function)
+  /// throws StoreError "the ray predicate failed: " with the first line of the server's message,
+  /// cut short. Refused (StoreError, before the predicate runs) when the role is not set up
+  /// safely: missing, or granted more than the views (migrate() sets up again what it can).
   std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
   /// The paths stored with frame `id`, in the order written, bit-exact (empty if none).
   std::vector<RayPath> readPaths(std::int64_t id);

@@ -198,14 +198,15 @@ std::optional<std::int64_t> insertFrame(PGconn* conn, std::int64_t sceneId, cons
   }
 }
 
-std::optional<FrameOfIdentity> lockFrameOfIdentity(PGconn* conn, const SceneTexts& texts)
+std::optional<FrameOfIdentity> findFrameOfIdentity(PGconn* conn, const SceneTexts& texts, bool lock)
 {
   pg::Result r =
     pg::Params()
       .bytes(texts.frame)
       .exec(conn,
-            "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = sha256($1) FOR "
-            "UPDATE",
+            std::string(
+              "SELECT id, status, tile_count, label FROM frames WHERE frame_hash = sha256($1)") +
+              (lock ? " FOR UPDATE" : ""),
             "looking for an existing frame failed");
   if (PQntuples(r.get()) == 0)
   {
@@ -215,14 +216,37 @@ std::optional<FrameOfIdentity> lockFrameOfIdentity(PGconn* conn, const SceneText
                           pg::getI32(r.get(), 0, 2), pg::getText(r.get(), 0, 3) };
 }
 
+namespace
+{
+[[noreturn]] void refuseDuplicate(const FrameOfIdentity& old)
+{
+  throw StoreError("duplicate frame: this scene with these parameters is already stored as "
+                   "frame " +
+                   std::to_string(old.id) + " (label \"" + old.label +
+                   "\"); pass replace = true to replace it");
+}
+}
+
+void refuseIdentityClash(const FrameOfIdentity& old, bool replace)
+{
+  if (old.status != "complete")
+  {
+    throw StoreError("duplicate frame: this scene with these parameters is being "
+                     "written as tiled frame " +
+                     std::to_string(old.id) + " (label \"" + old.label +
+                     "\"); delete it first if its writers are gone");
+  }
+  if (!replace)
+  {
+    refuseDuplicate(old);
+  }
+}
+
 void deleteReplaced(PGconn* conn, const FrameOfIdentity& old, bool replace)
 {
   if (!replace)
   {
-    throw StoreError("duplicate frame: this scene with these parameters is already stored as "
-                     "frame " +
-                     std::to_string(old.id) + " (label \"" + old.label +
-                     "\"); pass replace = true to replace it");
+    refuseDuplicate(old);
   }
   deleteFrameRow(conn, old.id, "deleting the frame to be replaced failed");
 }

@@ -55,7 +55,8 @@ std::optional<std::int64_t> insertFrame(PGconn* conn, std::int64_t sceneId, cons
                                         const SceneDescription& scene, const std::string& label,
                                         int tileCount, bool ifAbsent);
 
-/// The frame of a scene text's identity, locked (FOR UPDATE) in the caller's transaction.
+/// The frame of a scene text's identity, whatever its status; with `lock`, locked (FOR UPDATE)
+/// in the caller's transaction.
 struct FrameOfIdentity
 {
   std::int64_t id;
@@ -63,7 +64,13 @@ struct FrameOfIdentity
   int tileCount;
   std::string label;
 };
-std::optional<FrameOfIdentity> lockFrameOfIdentity(PGconn* conn, const SceneTexts& texts);
+std::optional<FrameOfIdentity> findFrameOfIdentity(PGconn* conn, const SceneTexts& texts,
+                                                   bool lock);
+/// The frame being written has the identity of `old`: throws StoreError unless it may replace it
+/// (a complete frame, and `replace`). A frame being written in tiles is never replaced: that
+/// would pull it from under the ranks writing them. writeFrame() and checkFrameIdentity() both
+/// decide with this.
+void refuseIdentityClash(const FrameOfIdentity& old, bool replace);
 
 /// The complete frame `old` has the identity of the one being written: a duplicate, refused
 /// unless `replace`, which deletes its row (its paths and tiles go with it). Its tables of rays

@@ -4,6 +4,9 @@
 #include "RayStore.h"
 #include "StoreSchemaHistory.h"
 
+#include <utility>
+#include <vector>
+
 namespace asrt
 {
 namespace storage
@@ -18,6 +21,10 @@ void replaceAll(std::string& s, const std::string& token, const std::string& val
     at += value.size();
   }
 }
+
+const char* const NoSchemaMessage =
+  "the database holds no ASRT schema, and reading creates none: make one with migrate() (with "
+  "the asrt tools: asrt db init, or asrt trace --store)";
 
 std::string mismatch(int found)
 {
@@ -43,6 +50,169 @@ void migrateToVersion3(PGconn* conn, const std::string& what)
   pg::execScript(conn, SchemaV3Finish, what);
 }
 
+/// `text` with each of `values`' tokens replaced, in one pass: a value that happens to contain a
+/// token is not read again.
+std::string filled(const std::string& text,
+                   const std::vector<std::pair<std::string, std::string>>& values)
+{
+  std::string out;
+  for (std::size_t at = 0; at < text.size();)
+  {
+    bool replaced = false;
+    for (const auto& [token, value] : values)
+    {
+      if (text.compare(at, token.size(), token) == 0)
+      {
+        out += value;
+        at += token.size();
+        replaced = true;
+        break;
+      }
+    }
+    if (!replaced)
+    {
+      out += text[at++];
+    }
+  }
+  return out;
+}
+
+/// What predicateRoleProblem() reports, and whether setUpPredicateRole() can put it right (a
+/// role that may do more than read the rays is the administrator's to change).
+struct RoleProblem
+{
+  std::string text;
+  bool fixable;
+};
+
+std::optional<RoleProblem> findRoleProblem(PGconn* conn)
+{
+  pg::Result r = pg::exec(
+    conn,
+    "SELECT r.oid IS NOT NULL, concat_ws(', ', CASE WHEN r.rolsuper THEN 'SUPERUSER' END, "
+    "CASE WHEN r.rolcreaterole THEN 'CREATEROLE' END, CASE WHEN r.rolcreatedb THEN 'CREATEDB' "
+    "END, CASE WHEN r.rolreplication THEN 'REPLICATION' END, CASE WHEN r.rolbypassrls THEN "
+    "'BYPASSRLS' END), coalesce((SELECT string_agg(m.roleid::regrole::text, ', ' ORDER BY "
+    "m.roleid::regrole::text) FROM pg_auth_members m WHERE m.member = r.oid), ''), p.oid IS NOT "
+    "NULL, coalesce(o.rolname::text, ''), coalesce(p.prosecdef, false) FROM (SELECT "
+    "to_regprocedure('asrt_selected_rays(bigint,text)') AS f) x LEFT JOIN pg_proc p ON p.oid = "
+    "x.f LEFT JOIN pg_roles o ON o.oid = p.proowner LEFT JOIN pg_roles r ON r.rolname = "
+    "'asrt_predicate'",
+    "checking the role that evaluates predicates failed");
+  const std::string role =
+    std::string("the role ") + PredicateRoleV4 + ", which evaluates ray predicates,";
+  const std::string redo = " (migrating the database sets it up again: asrt db init)";
+  if (!pg::getBool(r.get(), 0, 0))
+  {
+    return RoleProblem{ role + " does not exist" + redo, true };
+  }
+  const std::string attributes = pg::getText(r.get(), 0, 1);
+  const std::string memberships = pg::getText(r.get(), 0, 2);
+  if (!attributes.empty() || !memberships.empty())
+  {
+    return RoleProblem{
+      role + " may do more than read the rays: " +
+        (attributes.empty() ? "" : "it has " + attributes + (memberships.empty() ? "" : "; ")) +
+        (memberships.empty() ? "" : "it is a member of " + memberships) +
+        ". Take that away (ALTER ROLE, REVOKE ... FROM " + PredicateRoleV4 +
+        ") and migrate again (asrt db init)",
+      false
+    };
+  }
+  const std::string function = "the function asrt_selected_rays, which evaluates ray predicates,";
+  if (!pg::getBool(r.get(), 0, 3))
+  {
+    return RoleProblem{ function + " is missing" + redo, true };
+  }
+  const std::string owner = pg::getText(r.get(), 0, 4);
+  if (owner != PredicateRoleV4 || !pg::getBool(r.get(), 0, 5))
+  {
+    return RoleProblem{ function + " would run as " + owner + ", not as " + PredicateRoleV4 + redo,
+                        true };
+  }
+  return std::nullopt;
+}
+
+/// Runs one statement that a concurrent migrator of another database may be running too (roles
+/// belong to the cluster, and advisory locks do not reach across databases): losing that race
+/// (SQLSTATE 42710 "already exists", or 23505 on the catalog's unique index) is success. A
+/// refusal for want of rights (42501) becomes `refused`'s message.
+void runRoleStatement(PGconn* conn, const std::string& sql, const std::string& what,
+                      const std::string& refused)
+{
+  pg::exec(conn, "SAVEPOINT asrt_role", what);
+  try
+  {
+    pg::exec(conn, sql, what);
+  }
+  catch (const StoreError& e)
+  {
+    if (e.sqlState() == "42501")
+    {
+      throw StoreError(what + ": " + refused, e.sqlState());
+    }
+    if (e.sqlState() != "42710" && e.sqlState() != "23505")
+    {
+      throw;
+    }
+    pg::exec(conn, "ROLLBACK TO SAVEPOINT asrt_role", what);
+  }
+  pg::exec(conn, "RELEASE SAVEPOINT asrt_role", what);
+}
+
+/// Creates the role that evaluates predicates if it is missing, lets the migrating role act as it,
+/// refuses a role that may do more than read the rays, then gives it the views and the function
+/// (SchemaV4). Idempotent: migration 4, and the repair of what something undid since.
+void setUpPredicateRole(PGconn* conn, const std::string& what)
+{
+  pg::Result me = pg::exec(conn,
+                           "SELECT current_user::text, coalesce(current_schema()::text, ''), "
+                           "(SELECT rolsuper FROM pg_roles WHERE rolname = current_user), "
+                           "EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'asrt_predicate')",
+                           what);
+  const std::string user = pg::getText(me.get(), 0, 0);
+  const std::string schema = pg::getText(me.get(), 0, 1);
+  if (schema.empty())
+  {
+    throw StoreError(what + ": the search_path names no existing schema to hold the store");
+  }
+  const std::string quotedUser = pg::quoteIdentifier(conn, user, what);
+  const bool roleExists = pg::getBool(me.get(), 0, 3);
+  const std::string refused =
+    std::string("setting up the role ") + PredicateRoleV4 +
+    ", which evaluates ray predicates with no rights beyond reading the rays, needs a superuser "
+    "or a role with CREATEROLE, and " +
+    quotedUser +
+    " is neither: migrate the database once as such a role (asrt db init --db \"... "
+    "user=ADMIN\"), or have an administrator run " +
+    (roleExists ? "" : std::string("CREATE ROLE ") + PredicateRoleV4 + " NOLOGIN; ") + "GRANT " +
+    PredicateRoleV4 + " TO " + quotedUser + ";";
+  if (!roleExists)
+  {
+    runRoleStatement(conn, CreatePredicateRoleV4, what, refused);
+  }
+  const bool superuser = pg::getBool(me.get(), 0, 2);
+  pg::Result member =
+    pg::exec(conn, "SELECT pg_has_role(current_user, 'asrt_predicate', 'MEMBER')", what);
+  if (!superuser && !pg::getBool(member.get(), 0, 0))
+  {
+    // Owning what it owns is acting as it: the ALTER ... OWNER of SchemaV4 needs the membership.
+    runRoleStatement(conn, std::string("GRANT ") + PredicateRoleV4 + " TO " + quotedUser, what,
+                     refused);
+  }
+  if (const std::optional<RoleProblem> problem = findRoleProblem(conn))
+  {
+    if (!problem->fixable)
+    {
+      throw StoreError(what + ": " + problem->text);
+    }
+  }
+  pg::execScript(conn,
+                 filled(SchemaV4, { { "{schema}", pg::quoteIdentifier(conn, schema, what) },
+                                    { "{user}", quotedUser } }),
+                 what);
+}
+
 /// Migration `version` takes version − 1 to `version`, inside migrateSchema()'s transaction.
 void runMigration(PGconn* conn, int version)
 {
@@ -55,9 +225,13 @@ void runMigration(PGconn* conn, int version)
   {
     pg::execScript(conn, SchemaV2, what);
   }
-  else
+  else if (version == 3)
   {
     migrateToVersion3(conn, what);
+  }
+  else
+  {
+    setUpPredicateRole(conn, what);
   }
 }
 }
@@ -116,7 +290,13 @@ void requireCurrentSchema(PGconn* conn)
   }
 }
 
-void migrateSchema(PGconn* conn, int targetVersion)
+std::optional<std::string> predicateRoleProblem(PGconn* conn)
+{
+  const std::optional<RoleProblem> problem = findRoleProblem(conn);
+  return problem ? std::optional<std::string>(problem->text) : std::nullopt;
+}
+
+void migrateSchema(PGconn* conn, int targetVersion, bool createSchema)
 {
   pg::transaction(
     conn, pg::WriteBegin,
@@ -127,6 +307,10 @@ void migrateSchema(PGconn* conn, int targetVersion)
         .i64(SchemaLockKey)
         .exec(conn, "SELECT pg_advisory_xact_lock($1)", "locking the schema failed");
       const int v = readSchemaVersion(conn);
+      if (v == 0 && !createSchema)
+      {
+        throw StoreError(NoSchemaMessage);
+      }
       if (v > RayStore::kSchemaVersion)
       {
         throw StoreError(mismatch(v) + "; refusing to touch a database written by a newer ASRT");
@@ -140,6 +324,20 @@ void migrateSchema(PGconn* conn, int targetVersion)
       for (int m = v + 1; m <= targetVersion; ++m)
       {
         runMigration(conn, m);
+      }
+      // What something undid since (a restore without roles, a dropped function) is set up
+      // again; a role granted more than the views is the administrator's to put right, and
+      // until then readFrame() refuses predicates while everything else goes on.
+      const std::optional<RoleProblem> problem =
+        targetVersion >= 4 ? findRoleProblem(conn) : std::nullopt;
+      if (problem && problem->fixable)
+      {
+        const std::string what = "setting up the role that evaluates predicates failed";
+        setUpPredicateRole(conn, what);
+        if (const std::optional<std::string> still = predicateRoleProblem(conn))
+        {
+          throw StoreError(what + ": " + *still);
+        }
       }
       if (v != targetVersion)
       {

@@ -7,6 +7,7 @@
 #include <libpq-fe.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace asrt
@@ -36,8 +37,18 @@ int readSchemaVersion(PGconn* conn);
 void requireCurrentSchema(PGconn* conn);
 /// Brings the database from its version to `targetVersion` (1 to kSchemaVersion) in one
 /// transaction, serialised against concurrent migrators; refuses a newer database and never
-/// goes back.
-void migrateSchema(PGconn* conn, int targetVersion);
+/// goes back. Without `createSchema`, a database with no ASRT schema is refused (StoreError)
+/// and left untouched. At version 4 and later it also sets up again the role that evaluates
+/// predicates, or its function, if something undid them (see predicateRoleProblem); a role
+/// granted more than the views is left to the administrator.
+void migrateSchema(PGconn* conn, int targetVersion, bool createSchema = true);
+
+/// What keeps predicates from being evaluated with the rights of the role asrt_predicate alone
+/// (schema version 4 and later): the role or the function asrt_selected_rays missing, the
+/// function running as another role, or the role holding more than its grants on the views (an
+/// attribute such as SUPERUSER, or membership in any role). Empty when all is well. One catalog
+/// query, cheap enough to run before every predicate.
+std::optional<std::string> predicateRoleProblem(PGconn* conn);
 }
 }
 

@@ -323,5 +323,40 @@ const char* const TileTableV3 =
 // A tile's table attached to the partitioned table {parent} (version 3). A tile statement.
 const char* const AttachTileV3 =
   R"SQL(ALTER TABLE {parent} ATTACH PARTITION ray_blocks_{frame}_{tile} FOR VALUES FROM ({frame}, {tile}) TO ({frame}, {next_tile}))SQL";
+
+// Version 4: predicates are evaluated by the role asrt_predicate, which may read the views rays_v
+// and path_points_v and nothing else. Roles belong to the whole cluster, so every ASRT database
+// of a server shares this one (each grants it its own views); NOLOGIN, since it only ever owns
+// the function below.
+const char* const PredicateRoleV4 = "asrt_predicate";
+const char* const CreatePredicateRoleV4 =
+  R"SQL(CREATE ROLE asrt_predicate NOLOGIN NOSUPERUSER NOCREATEDB NOCREATEROLE NOINHERIT NOREPLICATION NOBYPASSRLS)SQL";
+
+// Version 4's objects, {schema} being the store's schema and {user} the migrating role (both
+// quoted identifiers). asrt_selected_rays runs the predicate as dynamic SQL inside a SECURITY
+// DEFINER function owned by asrt_predicate: PostgreSQL refuses to change "role" or
+// "session_authorization" inside such a function, so a predicate cannot switch back to the
+// caller's rights with set_config(), and RETURN QUERY EXECUTE runs exactly one SELECT. The frame
+// restriction is in the sub-select, so text that closes the parentheses still sees only this
+// frame; the newline ends a trailing "--" comment. Only the migrating role may call it (anyone
+// else could read the rays through it). The function is created by the migrating role and then
+// given to asrt_predicate, which for a moment needs CREATE on the schema to own something in it.
+const char* const SchemaV4 = R"SQL(
+GRANT USAGE ON SCHEMA {schema} TO asrt_predicate;
+GRANT SELECT ON rays_v, path_points_v TO asrt_predicate;
+CREATE OR REPLACE FUNCTION asrt_selected_rays(frame bigint, predicate text)
+  RETURNS TABLE (ray bigint, record_bytes bytea)
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = {schema}, pg_temp
+AS $function$
+BEGIN
+  RETURN QUERY EXECUTE 'SELECT r.ray::bigint, r.record_bytes FROM (SELECT * FROM rays_v WHERE frame_id = $1) r WHERE (' || predicate || E'\n)' USING frame;
+END
+$function$;
+REVOKE ALL ON FUNCTION asrt_selected_rays(bigint, text) FROM PUBLIC;
+GRANT CREATE ON SCHEMA {schema} TO asrt_predicate;
+ALTER FUNCTION asrt_selected_rays(bigint, text) OWNER TO asrt_predicate;
+REVOKE CREATE ON SCHEMA {schema} FROM asrt_predicate;
+GRANT EXECUTE ON FUNCTION asrt_selected_rays(bigint, text) TO {user};
+)SQL";
 }
 }

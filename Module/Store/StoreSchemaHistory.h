@@ -27,6 +27,12 @@ extern const char* const SchemaV3Finish;
 extern const char* const TileTableV3;
 /// Version 3's attachment of a tile's table to a partitioned parent. A tile statement.
 extern const char* const AttachTileV3;
+/// Version 4: the role that evaluates predicates, and the statement that creates it.
+extern const char* const PredicateRoleV4;
+extern const char* const CreatePredicateRoleV4;
+/// Migration 4 (version 3 to 4), once the role exists and the migrating role may act as it: its
+/// grants and the function that evaluates predicates as it. A script with {schema} and {user}.
+extern const char* const SchemaV4;
 }
 }
 

@@ -7,6 +7,9 @@ asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 step() { echo "== $*"; }
 
+step "a database the user names gets no schema from a reading command; asrt db init makes it"
+"$expect" 3 "holds no ASRT schema.*asrt db init" -- "$asrt" list
+"$expect" 0 "schema version [0-9]+ created" -- "$asrt" db init
 step "an empty store lists nothing"
 "$expect" 0 "no frames stored yet" -- "$asrt" list
 

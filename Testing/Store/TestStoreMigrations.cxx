@@ -267,5 +267,37 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
     insertLegacyFrame(db.Conn, 2, scene(2), { knownRecords(90000, 25), knownRecords(90025, 15) });
 
   store.migrate(3);
+  EXPECT_EQ(store.schemaVersion(), 3);
+  store.migrate(4);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
+}
+
+TEST(StoreMigrations, VersionThreeGetsTheRoleThatEvaluatesPredicates)
+{
+  ThrowawayPostgres pg;
+  const std::string ci = pg.conninfo();
+  RayStore store(ci);
+  store.migrate(2);
+  Db db(ci);
+  const std::vector<RayRecord> rays = knownRecords(300, 100);
+  const std::int64_t id = insertLegacyFrame(db.Conn, 2, scene(1), { rays });
+  store.migrate(3);
+  EXPECT_EQ(db.value("SELECT to_regprocedure('asrt_selected_rays(bigint,text)') IS NULL"), "t");
+  EXPECT_EQ(db.value("SELECT count(*) FROM pg_roles WHERE rolname = 'asrt_predicate'"), "0");
+
+  store.migrate();
+  EXPECT_EQ(store.schemaVersion(), 4);
+  EXPECT_EQ(db.value("SELECT proowner::regrole::text FROM pg_proc WHERE oid = "
+                     "'asrt_selected_rays(bigint,text)'::regprocedure"),
+            "asrt_predicate");
+  EXPECT_EQ(db.value("SELECT has_table_privilege('asrt_predicate', 'rays_v', 'SELECT')::text || "
+                     "has_table_privilege('asrt_predicate', 'frames', 'SELECT')::text"),
+            "truefalse");
+  EXPECT_EQ(firstDifference(store.readFrame(id, "ray < 10"),
+                            std::vector<RayRecord>(rays.begin(), rays.begin() + 10)),
+            -1);
+  EXPECT_NE(errorOf([&] { store.readFrame(id, "pg_read_file('/etc/passwd') IS NOT NULL"); })
+              .find("permission denied for function pg_read_file"),
+            std::string::npos);
+  expectFramesIntact(store, db, { { id, rays } }, { 1 });
 }

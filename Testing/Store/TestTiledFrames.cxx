@@ -430,7 +430,7 @@ TEST(TiledFramesSchema, VersionOneDatabaseMigratesKeepingItsFrames)
   const auto t0 = Clock::now();
   store.migrate();
   const double migrateSeconds = secondsSince(t0);
-  EXPECT_EQ(store.schemaVersion(), 3);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   EXPECT_EQ(db.value("SELECT count(*) FROM schema_version"), "1");
   ASSERT_EQ(store.listFrames().size(), 2u);
   EXPECT_EQ(store.frameInfo(id).tileCount, 1);
@@ -461,11 +461,16 @@ TEST(TiledFramesSchema, VersionOneDatabaseMigratesKeepingItsFrames)
 
   // Migrations never go back, and a newer schema is refused.
   EXPECT_NE(errorOf([&] { store.migrate(2); }).find("never go back"), std::string::npos);
-  EXPECT_NE(errorOf([&] { store.migrate(4); }).find("knows versions 1 to 3"), std::string::npos);
-  db.value("UPDATE schema_version SET version = 4");
-  RayStore later(ci);
-  EXPECT_NE(errorOf([&] { later.migrate(); }).find("found 4, this build knows 3"),
+  const std::string current = std::to_string(RayStore::kSchemaVersion);
+  const std::string next = std::to_string(RayStore::kSchemaVersion + 1);
+  EXPECT_NE(errorOf([&] { store.migrate(RayStore::kSchemaVersion + 1); })
+              .find("knows versions 1 to " + current),
             std::string::npos);
+  db.value("UPDATE schema_version SET version = " + next);
+  RayStore later(ci);
+  EXPECT_NE(
+    errorOf([&] { later.migrate(); }).find("found " + next + ", this build knows " + current),
+    std::string::npos);
   std::printf("[ tiles ] migrating a version 1 database with %zu rays took %.3f s\n", count,
               migrateSeconds);
 }
@@ -489,7 +494,7 @@ TEST(TiledFramesSchema, VersionTwoTiledFramesMigrateWhetherCompleteOrNot)
   db.value("UPDATE frames SET tile_count = 2 WHERE id = " + std::to_string(half));
 
   store.migrate();
-  EXPECT_EQ(store.schemaVersion(), 3);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   ASSERT_EQ(store.listFrames().size(), 1u);
   EXPECT_EQ(firstDifference(store.readFrame(whole), 31, 0, 9200), -1);
   EXPECT_EQ(db.value("SELECT min(ray) || '-' || max(ray) || ':' || count(*) FROM rays_v WHERE "
