@@ -2,8 +2,8 @@
 // (upgrade()), checkFrameIdentity() refuses exactly what writeFrame() refuses, and the loser of
 // two concurrent replacements of one frame is told what happened.
 #include "RayStore.h"
+#include "SharedServer.h"
 #include "StoreTestSupport.h"
-#include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
 #include <libpq-fe.h>
@@ -23,34 +23,9 @@ using namespace asrt::testing;
 
 namespace
 {
-// One server for the whole program (ctest runs each test in a process of its own).
-std::unique_ptr<ThrowawayPostgres>& serverSlot()
-{
-  static std::unique_ptr<ThrowawayPostgres> server;
-  return server;
-}
-ThrowawayPostgres& server()
-{
-  auto& s = serverSlot();
-  if (!s)
-    s = std::make_unique<ThrowawayPostgres>();
-  return *s;
-}
-class StopServer : public ::testing::Environment
-{
-public:
-  void TearDown() override { serverSlot().reset(); }
-};
-const ::testing::Environment* const stopServer =
-  ::testing::AddGlobalTestEnvironment(new StopServer);
-
 std::string freshDatabase()
 {
-  const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string("fc_") + t->name();
-  for (char& c : name)
-    c = char(std::tolower(static_cast<unsigned char>(c)));
-  return server().conninfo(name.substr(0, 63));
+  return databaseNamed("fc_" + currentTestName());
 }
 
 asrt::SceneDescription scene(double mass)

@@ -6,8 +6,8 @@
 // Also: the role's own rights, a role or function that something made unsafe, a connecting role
 // without CREATEROLE, several databases of one server, and the predicate's error text.
 #include "RayStore.h"
+#include "SharedServer.h"
 #include "StoreTestSupport.h"
-#include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
 #include <libpq-fe.h>
@@ -30,35 +30,10 @@ using namespace asrt::testing;
 
 namespace
 {
-// One server for the whole program (ctest runs each test in a process of its own).
-std::unique_ptr<ThrowawayPostgres>& serverSlot()
-{
-  static std::unique_ptr<ThrowawayPostgres> server;
-  return server;
-}
-ThrowawayPostgres& server()
-{
-  auto& s = serverSlot();
-  if (!s)
-    s = std::make_unique<ThrowawayPostgres>();
-  return *s;
-}
-class StopServer : public ::testing::Environment
-{
-public:
-  void TearDown() override { serverSlot().reset(); }
-};
-const ::testing::Environment* const stopServer =
-  ::testing::AddGlobalTestEnvironment(new StopServer);
-
 /// A database of its own for each test (and `suffix`).
 std::string freshDatabase(const std::string& suffix = "")
 {
-  const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string("pr_") + t->name() + suffix;
-  for (char& c : name)
-    c = char(std::tolower(static_cast<unsigned char>(c)));
-  return server().conninfo(name.substr(0, 63));
+  return databaseNamed("pr_" + currentTestName() + suffix);
 }
 
 constexpr int Width = 8, Height = 4;

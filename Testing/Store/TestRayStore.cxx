@@ -3,8 +3,8 @@
 // and what deleted, replaced and failed frames leave behind (nothing). The measurement behind the
 // storage layout is a benchmark: bench/bench_store.cxx.
 #include "RayStore.h"
+#include "SharedServer.h"
 #include "StoreTestSupport.h"
-#include "ThrowawayPostgres.h"
 
 #include <gtest/gtest.h>
 #include <libpq-fe.h>
@@ -33,39 +33,10 @@ using namespace asrt::testing;
 
 namespace
 {
-// One server for the whole program, started by the first test that needs it.
-std::unique_ptr<asrt::testing::ThrowawayPostgres>& serverSlot()
-{
-  static std::unique_ptr<asrt::testing::ThrowawayPostgres> server;
-  return server;
-}
-asrt::testing::ThrowawayPostgres& server()
-{
-  auto& s = serverSlot();
-  if (!s)
-  {
-    s = std::make_unique<asrt::testing::ThrowawayPostgres>();
-  }
-  return *s;
-}
-class StopServer : public ::testing::Environment
-{
-public:
-  void TearDown() override { serverSlot().reset(); }
-};
-const ::testing::Environment* const stopServer =
-  ::testing::AddGlobalTestEnvironment(new StopServer);
-
 /// A database of its own for each test, so that tests do not see each other's frames.
 std::string freshDatabase()
 {
-  const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string("rs_") + t->test_suite_name() + "_" + t->name();
-  for (char& c : name)
-  {
-    c = char(std::tolower(static_cast<unsigned char>(c)));
-  }
-  return server().conninfo(name);
+  return databaseNamed("rs_" + currentTestSuiteName() + "_" + currentTestName());
 }
 
 asrt::SceneDescription scene(double mass = 1.0)
@@ -466,12 +437,12 @@ TEST(RayStoreConnection, WrongCredentialsFailQuicklyAndClearly)
 {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string e =
-    errorOf([&] { RayStore store(server().conninfo() + " user=no_such_user"); });
+    errorOf([&] { RayStore store(sharedServer().conninfo() + " user=no_such_user"); });
   EXPECT_NE(e.find("cannot connect to PostgreSQL"), std::string::npos) << e;
   EXPECT_NE(e.find("no_such_user"), std::string::npos) << e;
   EXPECT_LT(secondsSince(t0), 5);
   const std::string db =
-    errorOf([&] { RayStore store(server().conninfo() + " dbname=no_such_db"); });
+    errorOf([&] { RayStore store(sharedServer().conninfo() + " dbname=no_such_db"); });
   EXPECT_NE(db.find("no_such_db"), std::string::npos) << db;
 }
 
