@@ -771,8 +771,7 @@ SceneDescription parseScene(const std::string& jsonText, const std::string& base
   return Parser(baseDir, loader).parse(jsonText);
 }
 
-SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader,
-                               const std::function<bool()>& cancelled)
+SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader)
 {
   std::ifstream in(path, std::ios::binary);
   if (!in || std::filesystem::is_directory(path))
@@ -782,8 +781,6 @@ SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loade
   std::vector<char> chunk(1 << 20);
   while (in)
   {
-    if (cancelled && cancelled())
-      throw SceneReadCancelled();
     in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
     text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
     if (text.size() > kMaxSceneBytes)

@@ -30,15 +30,6 @@ constexpr std::size_t kMaxSceneBytes = std::size_t(64) << 20;
 /// nlohmann's values recurses once a level.
 constexpr int kMaxSceneNesting = 64;
 
-/// Thrown by loadSceneFile when its `cancelled` callback asks it to stop reading.
-struct SceneReadCancelled : std::runtime_error
-{
-  SceneReadCancelled()
-    : std::runtime_error("reading the scene file was cancelled")
-  {
-  }
-};
-
 /// Pixels of an image file: RGB, 8 bits a channel, row-major, row 0 at the bottom (VTK's order).
 struct ImagePixels
 {
@@ -75,11 +66,9 @@ ASRTTRACING_EXPORT SceneDescription parseSceneWithoutImages(const std::string& j
 
 /// Reads and parses a scene file; its directory is the base for relative texture paths. Error
 /// messages are prefixed with the file's path. The file is read in chunks and refused once it
-/// exceeds kMaxSceneBytes, so that an endless file or pipe ends at that bound; `cancelled`, if
-/// given, is asked between chunks and throws SceneReadCancelled when it returns true.
-ASRTTRACING_EXPORT SceneDescription
-loadSceneFile(const std::string& path, const ImageLoader& loader,
-              const std::function<bool()>& cancelled = std::function<bool()>());
+/// exceeds kMaxSceneBytes, so that an endless file or pipe ends at that bound.
+ASRTTRACING_EXPORT SceneDescription loadSceneFile(const std::string& path,
+                                                  const ImageLoader& loader);
 }
 
 #endif

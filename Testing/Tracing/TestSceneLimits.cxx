@@ -1,7 +1,7 @@
 // The bounds of scene parsing: JSON nested deeper than kMaxSceneNesting is refused while parsing
 // (however deep, wherever it sits), scene text and files beyond kMaxSceneBytes are refused (and
-// endless files are read only up to the bound), reading can be cancelled between chunks, and the
-// values, keys and names quoted in messages are cut short.
+// endless files are read only up to the bound), and the values, keys and names quoted in messages
+// are cut short.
 #include "AddressSpaceLimit.h"
 #include "SceneFile.h"
 
@@ -199,21 +199,6 @@ TEST(SceneSize, EndlessPipesAreReadOnlyUpToTheCap)
   std::remove(fifo.c_str());
   EXPECT_NE(message.find("is larger than 64 MiB"), std::string::npos) << message;
   EXPECT_GT(sent.load(), static_cast<long long>(kMaxSceneBytes));
-}
-
-TEST(SceneSize, ReadingCanBeCancelledBetweenChunks)
-{
-  int asked = 0;
-  EXPECT_THROW(loadSceneFile("/dev/zero", nullptr, [&]() { return ++asked == 3; }),
-               SceneReadCancelled);
-  EXPECT_EQ(asked, 3);
-  // A small file is read in one chunk, asked about once before it.
-  const std::string path = ::testing::TempDir() + "asrt-small-scene.json";
-  std::ofstream(path) << sceneWith("");
-  asked = 0;
-  EXPECT_NO_THROW(loadSceneFile(path, nullptr, [&]() { return ++asked > 5; }));
-  EXPECT_GE(asked, 1);
-  std::remove(path.c_str());
 }
 
 TEST(SceneSize, DirectoryIsNotAScene)
