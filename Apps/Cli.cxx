@@ -40,8 +40,8 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
   --view-up X,Y,Z       the camera's up direction
   --view-angle DEG      vertical field of view, in degrees
   -r, --resolution WxH  image size in pixels, e.g. 200x200
-  --preset NAME         fast, balanced or accurate (Dormand-Prince at rtol 1e-6, 1e-8,
-                        1e-10; measured in bench/REPORT.md)
+  --preset NAME         fast, balanced or accurate (rtol 1e-8, 1e-10, 1e-12 for the
+                        method auto picks; measured in bench/REPORT.md)
   --method NAME         an integrator ("asrt bench" and bench/REPORT.md compare them)
   --step H              the integrator's step
   --max-failed-share F  refuse the frame (exit 1, nothing written or stored) when more than

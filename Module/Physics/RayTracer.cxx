@@ -16,6 +16,7 @@ TraceResult traceRay(const Spacetime& st, Propagator& prop, const PhasePoint& st
   const double rPlus = st.outerHorizon();
   const double captureRadius = rPlus > 0.0 ? rPlus * (1.0 + opts.horizonEpsilon) : 0.0;
   prop.setLimits(opts.escapeRadius, captureRadius);
+  prop.setFarField(std::isfinite(opts.farField.objectRadius) ? &opts.farField : nullptr);
   prop.start(start);
   res.final = start;
   if (!start.x.allFinite() || !start.p.allFinite())

@@ -15,6 +15,8 @@ struct TraceOptions
   /// has left the light cone: the integrator diverged, and whatever it "escaped" to is not a light
   /// ray. It ends as a numerical failure.
   double maxHamiltonianError = 1e-3;
+  /// Where the scene lets a propagator skip object tests (none by default); see FarField.
+  FarField farField;
 };
 
 struct TraceResult

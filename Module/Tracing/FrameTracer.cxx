@@ -35,9 +35,16 @@ FrameTracer::FrameTracer(const SceneDescription& scene)
   // Rays must be able to reach the sky before they count as escaped.
   this->Tracing.escapeRadius =
     std::max(this->Tracing.escapeRadius, 1.001 * scene.scene->celestialRadius());
+  // Beyond every object but the sky, propagators that can may run in one segment.
+  this->Tracing.farField = scene.scene->farField();
 }
 
 FrameTracer::~FrameTracer() = default;
+
+void FrameTracer::setFarField(bool enabled)
+{
+  this->Tracing.farField = enabled ? this->Desc.scene->farField() : FarField{};
+}
 
 namespace
 {
@@ -70,7 +77,14 @@ RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOpti
     }
     return false;
   };
-  const TraceResult res = traceRay(st, prop, z, opts, visitor);
+  // A path is drawn from the segments' starts: it is to follow the ray all the way out.
+  TraceOptions pathOptions;
+  if (path)
+  {
+    pathOptions = opts;
+    pathOptions.farField = FarField{};
+  }
+  const TraceResult res = traceRay(st, prop, z, path ? pathOptions : opts, visitor);
   rec.termination = res.termination;
   rec.steps = res.steps;
   rec.maxAbsH = res.maxAbsH;

@@ -28,6 +28,9 @@ public:
   const SceneDescription& description() const { return this->Desc; }
   /// The escape radius actually used: at least the scene's, the celestial sphere's and the eye's.
   double escapeRadius() const { return this->Tracing.escapeRadius; }
+  /// Whether propagators may cross the scene's far field in one segment (on by default; see
+  /// FarField). Off, every segment follows the ray: for comparisons.
+  void setFarField(bool enabled);
 
   /// Traces one pixel; appends its polyline to `path` if given.
   RayRecord tracePixel(int i, int j, std::vector<PathPoint>* path = nullptr) const;

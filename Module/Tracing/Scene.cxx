@@ -203,6 +203,13 @@ SceneObject::SceneObject(int id, std::string name, std::shared_ptr<const Texture
     invalid("object " + std::to_string(id) + " (\"" + this->Name + "\") has no texture");
 }
 
+double SceneObject::distanceFrom(const Vec3& x) const
+{
+  Vec3 c;
+  double r;
+  return this->boundingSphere(c, r) ? std::max(0.0, (x - c).norm() - r) : 0.0;
+}
+
 bool SceneObject::intersect(const Segment& seg, SurfaceHit& hit) const
 {
   const Vec3 a = seg.x0.tail<3>(), b = seg.x1.tail<3>();
@@ -398,6 +405,16 @@ bool Rectangle::boundingSphere(Vec3& center, double& radius) const
   return true;
 }
 
+double Rectangle::distanceFrom(const Vec3& x) const
+{
+  // Exact: the in-plane excess beyond the edges (0 along an infinite extent) and the height.
+  const Vec3 w = x - this->C;
+  const double du = std::max(0.0, std::abs(w.dot(this->Eu)) - this->HalfW);
+  const double dv = std::max(0.0, std::abs(w.dot(this->Ev)) - this->HalfH);
+  const double dn = w.dot(this->N);
+  return std::sqrt(du * du + dv * dv + dn * dn);
+}
+
 bool Rectangle::chordHit(const Vec3& a, const Vec3& b, double& tau) const
 {
   const Vec3 d = b - a;
@@ -469,6 +486,14 @@ bool Cylinder::boundingSphere(Vec3& center, double& radius) const
   return true;
 }
 
+double Cylinder::distanceFrom(const Vec3& x) const
+{
+  // The wall lies within R of the axis segment: the distance to that segment, less R.
+  const Vec3 w = x - this->Base;
+  const double t = std::clamp(w.dot(this->Axis), 0.0, this->Height);
+  return std::max(0.0, (w - t * this->Axis).norm() - this->R);
+}
+
 bool Cylinder::chordHit(const Vec3& a, const Vec3& b, double& tau) const
 {
   // |w⊥ + τ d⊥|² = R², with ⊥ the part perpendicular to the axis; each root is kept only if its
@@ -536,6 +561,11 @@ bool Sphere::boundingSphere(Vec3& center, double& radius) const
   center = this->C;
   radius = this->R;
   return true;
+}
+
+double Sphere::distanceFrom(const Vec3& x) const
+{
+  return std::abs((x - this->C).norm() - this->R);
 }
 
 bool Sphere::chordHit(const Vec3& a, const Vec3& b, double& tau) const
@@ -607,6 +637,16 @@ bool Disk::boundingSphere(Vec3& center, double& radius) const
   return true;
 }
 
+double Disk::distanceFrom(const Vec3& x) const
+{
+  // Exact: the height above the plane and the radial distance outside the annulus.
+  const Vec3 w = x - this->C;
+  const double dn = w.dot(this->N);
+  const double rho = (w - dn * this->N).norm();
+  const double dr = rho > this->Rout ? rho - this->Rout : (rho < this->Rin ? this->Rin - rho : 0.0);
+  return std::sqrt(dn * dn + dr * dr);
+}
+
 bool Disk::chordHit(const Vec3& a, const Vec3& b, double& tau) const
 {
   const Vec3 d = b - a;
@@ -659,6 +699,7 @@ void Scene::add(std::unique_ptr<SceneObject> object)
   }
   Bound bound;
   bound.finite = object->boundingSphere(bound.center, bound.radius);
+  bound.sky = dynamic_cast<const CelestialSphere*>(object.get()) != nullptr;
   this->Bounds.push_back(bound);
   this->Objects.push_back(std::move(object));
 }
@@ -683,12 +724,15 @@ bool Scene::firstHit(const Segment& seg, SurfaceHit& hit) const
   for (std::size_t k = 0; k < this->Objects.size(); ++k)
   {
     const Bound& bound = this->Bounds[k];
+    if (seg.farField && !bound.sky)
+      continue; // the segment lies outside every other object's reach
     if (bound.finite)
     {
       // The chord lies in the ball of radius `half` about its midpoint; the margin absorbs
-      // round-off for chords that touch the bounding ball.
+      // round-off for chords that touch the object.
       const double reach = (bound.radius + half) * (1.0 + 1e-9);
-      if ((mid - bound.center).squaredNorm() > reach * reach)
+      if ((mid - bound.center).squaredNorm() > reach * reach ||
+          this->Objects[k]->distanceFrom(mid) > half * (1.0 + 1e-9) + 1e-12 * (1.0 + half))
         continue;
     }
     if (this->Objects[k]->intersect(seg, candidate) && (!found || candidate.tau < hit.tau))
@@ -715,5 +759,35 @@ double Scene::celestialRadius() const
       r = std::max(r, sky->radius());
   }
   return r;
+}
+
+double Scene::objectDistance(const Vec3& x) const
+{
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < this->Objects.size(); ++k)
+  {
+    if (!this->Bounds[k].sky)
+      d = std::min(d, this->Objects[k]->distanceFrom(x));
+  }
+  return d;
+}
+
+FarField Scene::farField() const
+{
+  FarField far;
+  far.objectDistance = [this](const Vec3& x) { return this->objectDistance(x); };
+  far.objectRadius = 0.0;
+  for (std::size_t k = 0; k < this->Objects.size(); ++k)
+  {
+    const Bound& bound = this->Bounds[k];
+    if (bound.sky)
+      far.skyRadii.push_back(static_cast<const CelestialSphere&>(*this->Objects[k]).radius());
+    else if (!bound.finite)
+      far.objectRadius = std::numeric_limits<double>::infinity();
+    else
+      far.objectRadius = std::max(far.objectRadius, bound.center.norm() + bound.radius);
+  }
+  std::sort(far.skyRadii.begin(), far.skyRadii.end());
+  return far;
 }
 }

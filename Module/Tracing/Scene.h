@@ -110,6 +110,10 @@ public:
   /// A ball containing the object, for cheap rejection; false if the object is unbounded (or, like
   /// the celestial sphere, rejects segments cheaply itself).
   virtual bool boundingSphere(Vec3& center, double& radius) const = 0;
+  /// A lower bound on the distance from x to the object (0 on it): no chord in the ball of that
+  /// radius about x can meet it. The default is the bounding sphere's (0 if there is none); the
+  /// finite objects give the exact distance or a tight bound.
+  virtual double distanceFrom(const Vec3& x) const;
 
 protected:
   /// Smallest τ ∈ [0, 1] at which the chord a + τ(b − a) meets the surface. Planar objects test
@@ -161,6 +165,7 @@ class ASRTTRACING_EXPORT Rectangle final : public SceneObject
 public:
   Vec3 surfacePoint(double u, double v) const override;
   bool isInfinite() const override { return std::isinf(this->HalfW) || std::isinf(this->HalfH); }
+  double distanceFrom(const Vec3& x) const override;
   Rectangle(int id, std::string name, std::shared_ptr<const Texture> t, const Vec3& center,
             const Vec3& uAxis, const Vec3& vAxis, double halfWidth, double halfHeight,
             double tile = 1.0);
@@ -192,6 +197,7 @@ public:
            const Vec3& axis, double radius, double height);
   const char* type() const override { return "cylinder"; }
   bool boundingSphere(Vec3& center, double& radius) const override;
+  double distanceFrom(const Vec3& x) const override;
 
 protected:
   bool chordHit(const Vec3& a, const Vec3& b, double& tau) const override;
@@ -214,6 +220,7 @@ public:
          double radius);
   const char* type() const override { return "sphere"; }
   bool boundingSphere(Vec3& center, double& radius) const override;
+  double distanceFrom(const Vec3& x) const override;
 
 protected:
   bool chordHit(const Vec3& a, const Vec3& b, double& tau) const override;
@@ -237,6 +244,7 @@ public:
        const Vec3& normal, double innerRadius, double outerRadius);
   const char* type() const override { return "disk"; }
   bool boundingSphere(Vec3& center, double& radius) const override;
+  double distanceFrom(const Vec3& x) const override;
 
 protected:
   bool chordHit(const Vec3& a, const Vec3& b, double& tau) const override;
@@ -271,6 +279,13 @@ public:
   Color horizonColor = Color(0, 0, 0); ///< for rays captured by the hole
   /// Radius of the largest celestial sphere, 0 if none: rays farther out can hit nothing.
   double celestialRadius() const;
+  /// The far field of this scene about the origin: the radius of the smallest ball about the origin
+  /// that holds every object but the celestial spheres (infinite if one is unbounded, 0 if there
+  /// are none), and the celestial spheres' radii, ascending.
+  FarField farField() const;
+  /// A lower bound on the distance from x to every object but the celestial spheres (infinite if
+  /// there are none).
+  double objectDistance(const Vec3& x) const;
 
 private:
   /// Bounding balls cached at add(), so that rejection costs no virtual call.
@@ -279,6 +294,7 @@ private:
     Vec3 center = Vec3::Zero();
     double radius = 0;
     bool finite = false;
+    bool sky = false; ///< a celestial sphere: the only object a far-field segment can hit
   };
   std::vector<std::unique_ptr<SceneObject>> Objects;
   std::vector<Bound> Bounds;

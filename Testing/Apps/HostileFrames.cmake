@@ -25,10 +25,10 @@ asrt_frames_test(CameraOutsideTheSky "${no_files}" 4
 # is the failure colour alone).
 asrt_frames_test(HugeStepIsRefused "${no_files}" 1
   "failed share is 100 % \\(64 of 64 rays failed numerically.*--max-failed-share 1"
-  "${scenes}/fig1-cylinders.json" --step 1e300)
+  "${scenes}/fig1-cylinders.json" --method DormandPrince54 --step 1e300)
 asrt_frames_test(HugeStepAcceptedOnRequest "~out.png=8x8;~out.vti=8x8" 0
   "64 rays, 64 failed numerically.*at most 100 % allowed" "${scenes}/fig1-cylinders.json"
-  --step 1e300 --max-failed-share 1)
+  --method DormandPrince54 --step 1e300 --max-failed-share 1)
 asrt_frames_test(FailedShareOutOfRange "${no_files}" 2 "--max-failed-share: must be a fraction"
   "${scenes}/fig1-cylinders.json" --max-failed-share 1.5)
 # Overflowing values are named with their bound, not as the horizon or view-up they break.
@@ -61,6 +61,6 @@ add_test(NAME CLI.Frames.OneLineErrorForAHugeMass
 add_test(NAME CLI.Frames.OneLineErrorForAFailedFrame
   COMMAND ${CMAKE_COMMAND} -E env TERM=xterm-256color
     bash ${one_line_error} 1 "failed share" --
-      ${asrt} trace "${scenes}/fig1-cylinders.json" --step 1e300 -r 8x8 -q -o "${frames_work}/out")
+      ${asrt} trace "${scenes}/fig1-cylinders.json" --method DormandPrince54 --step 1e300 -r 8x8 -q -o "${frames_work}/out")
 set_tests_properties(CLI.Frames.OneLineErrorForAnUnreadableTexture CLI.Frames.OneLineErrorForAHugeMass
   CLI.Frames.OneLineErrorForAFailedFrame PROPERTIES LABELS cli TIMEOUT 120)

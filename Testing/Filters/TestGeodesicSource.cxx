@@ -424,11 +424,12 @@ TEST(GeodesicSource, FieldDataReflectEveryOverride)
 
 TEST(GeodesicSource, PresetReplacesTheIntegratorAndMethodStepRefineIt)
 {
-  // Presets are documented (Data/scenes/README.md) as Dormand-Prince at rtol 1e-6, 1e-8, 1e-10
-  // with atol = 1e-2 rtol; a method or step given beside one refines it.
-  const std::pair<const char*, double> presets[] = { { "fast", 1e-6 },
-                                                     { "balanced", 1e-8 },
-                                                     { "accurate", 1e-10 } };
+  // Presets are documented (Data/scenes/README.md) as rtol 1e-8, 1e-10, 1e-12 with atol = 1e-2
+  // rtol for the method "auto" picks (PlanarOrbit for Schwarzschild); a method or step given beside
+  // one refines it.
+  const std::pair<const char*, double> presets[] = { { "fast", 1e-8 },
+                                                     { "balanced", 1e-10 },
+                                                     { "accurate", 1e-12 } };
   for (const auto& [name, rtol] : presets)
   {
     const Frame f = traceFrame(
@@ -440,7 +441,7 @@ TEST(GeodesicSource, PresetReplacesTheIntegratorAndMethodStepRefineIt)
         s->SetIntegrationPreset(name);
       });
     ASSERT_TRUE(f.errors.empty()) << f.errors.front();
-    EXPECT_EQ(fieldString(f.hits, "IntegrationMethod"), "DormandPrince54") << name;
+    EXPECT_EQ(fieldString(f.hits, "IntegrationMethod"), "PlanarOrbit") << name;
     EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 0), rtol) << name;
     EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 1), 1e-2 * rtol) << name;
   }
@@ -457,7 +458,7 @@ TEST(GeodesicSource, PresetReplacesTheIntegratorAndMethodStepRefineIt)
   ASSERT_TRUE(refined.errors.empty()) << refined.errors.front();
   EXPECT_EQ(fieldString(refined.hits, "IntegrationMethod"), "GaussLegendre4");
   EXPECT_EQ(fieldValue(refined.hits, "IntegrationStep"), 0.2);
-  EXPECT_DOUBLE_EQ(fieldValue(refined.hits, "Tolerances", 0), 1e-6);
+  EXPECT_DOUBLE_EQ(fieldValue(refined.hits, "Tolerances", 0), 1e-8);
 }
 
 TEST(GeodesicSource, ZeroResolutionKeepsTheScenes)
@@ -636,8 +637,10 @@ TEST(GeodesicSource, PixelSubsetTracesOnlyThosePixelsAndMatchesTheFullFrame)
 namespace
 {
 /// Checks port 2 against the reference frame: one line per chosen pixel, in order, from the eye
-/// to the pixel's recorded end, with increasing λ, outside the horizon and with |H| no larger
-/// than the record's maximum.
+/// to the pixel's recorded end, with increasing λ, outside the horizon and on the light cone. The
+/// line is traced again with every segment on the ray, while the frame's record may have crossed
+/// the far field in one segment (FarField): the two agree to the tracing tolerance, not bit for
+/// bit.
 void checkPolylines(vtkPolyData* lines, const std::vector<Pixel>& chosen)
 {
   const double rPlus = 2.0; // Schwarzschild, M = 1
@@ -684,8 +687,9 @@ void checkPolylines(vtkPolyData* lines, const std::vector<Pixel>& chosen)
     }
     EXPECT_EQ(lineTerm->GetComponent(c, 0),
               ref->GetPointData()->GetArray("Termination")->GetComponent(k, 0));
-    EXPECT_NEAR(lambda->GetComponent(ids->GetId(ids->GetNumberOfIds() - 1), 0),
-                ref->GetPointData()->GetArray("PathLength")->GetComponent(k, 0), 1e-9)
+    const double pathLength = ref->GetPointData()->GetArray("PathLength")->GetComponent(k, 0);
+    EXPECT_NEAR(lambda->GetComponent(ids->GetId(ids->GetNumberOfIds() - 1), 0), pathLength,
+                1e-11 * pathLength)
       << "λ at the end is not the record's path length";
     EXPECT_EQ(lambda->GetComponent(ids->GetId(0), 0), 0.0);
     const double maxAbsH = ref->GetPointData()->GetArray("MaxAbsH")->GetComponent(k, 0);
@@ -697,12 +701,13 @@ void checkPolylines(vtkPolyData* lines, const std::vector<Pixel>& chosen)
         ++notIncreasing;
       if (!(radius->GetComponent(q, 0) >= rPlus))
         ++inside;
-      if (!(absH->GetComponent(q, 0) <= maxAbsH * (1 + 1e-12) + 1e-300))
+      if (!(absH->GetComponent(q, 0) <= 1e-6))
         ++hTooLarge;
     }
     EXPECT_EQ(notIncreasing, 0) << "of " << ids->GetNumberOfIds() << " points";
     EXPECT_EQ(inside, 0) << "points with R below the horizon r+ = " << rPlus;
-    EXPECT_EQ(hTooLarge, 0) << "points with |H| above the record's MaxAbsH " << maxAbsH;
+    EXPECT_EQ(hTooLarge, 0) << "points off the light cone, |H| > 1e-6 (the record's MaxAbsH is "
+                            << maxAbsH << ")";
     EXPECT_LT(maxAbsH, 1e-3) << "the tracing tolerance";
     // R is the distance from the hole in this chart: at the eye, |(0, −30, 8)|.
     EXPECT_NEAR(radius->GetComponent(ids->GetId(0), 0), std::sqrt(30.0 * 30.0 + 8.0 * 8.0), 1e-9);

@@ -631,12 +631,12 @@ TEST(SceneFile, IntegratorPresetsSetTolerancesAndAreRefinedByFields)
         integrator + "}",
       ".", none);
   };
-  EXPECT_EQ(parse(R"({"preset": "fast"})").integrator.relativeTolerance, 1e-6);
-  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.relativeTolerance, 1e-10);
-  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.absoluteTolerance, 1e-12);
+  EXPECT_EQ(parse(R"({"preset": "fast"})").integrator.relativeTolerance, 1e-8);
+  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.relativeTolerance, 1e-12);
+  EXPECT_EQ(parse(R"({"preset": "accurate"})").integrator.absoluteTolerance, 1e-14);
   const SceneDescription refined = parse(R"({"preset": "fast", "method": "RK4", "step": 0.01})");
   EXPECT_EQ(refined.integrator.method, "RK4");
-  EXPECT_EQ(refined.integrator.relativeTolerance, 1e-6);
+  EXPECT_EQ(refined.integrator.relativeTolerance, 1e-8);
   try
   {
     parse(R"({"preset": "ludicrous"})");
