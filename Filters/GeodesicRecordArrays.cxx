@@ -7,6 +7,7 @@
 #include "vtkCellData.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
+#include "vtkIdTypeArray.h"
 #include "vtkImageData.h"
 #include "vtkIntArray.h"
 #include "vtkLongLongArray.h"
@@ -19,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 namespace asrt
@@ -42,16 +44,30 @@ std::string requireString(vtkFieldData* fd, const char* name)
     throw InvalidParameter(std::string("frame field data lack \"") + name + "\"");
   return a->GetValue(0);
 }
+
+/// The 8-bit RGB of a record's colour.
+void setColorBytes(vtkUnsignedCharArray* colors, vtkIdType k, const RayRecord& r)
+{
+  for (int c = 0; c < 3; ++c)
+    colors->SetTypedComponent(
+      k, c, static_cast<unsigned char>(std::lround(255.0 * std::clamp(r.color[c], 0.0, 1.0))));
 }
 
-void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
-                    vtkImageData* image)
+/// The image's geometry: rows [rowBegin, rowEnd) of `width` pixels, unit spacing from the origin.
+void setRowsExtent(vtkImageData* image, int width, int rowBegin, int rowEnd)
 {
   int ext[6] = { 0, width - 1, rowBegin, rowEnd - 1, 0, 0 };
   image->Initialize();
   image->SetExtent(ext);
   image->SetSpacing(1, 1, 1);
   image->SetOrigin(0, 0, 0);
+}
+}
+
+void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
+                    vtkImageData* image)
+{
+  setRowsExtent(image, width, rowBegin, rowEnd);
   const vtkIdType n = image->GetNumberOfPoints();
   auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
   auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
@@ -69,9 +85,7 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
         r.i >= width)
       continue; // not traced, or outside these rows
     const vtkIdType k = static_cast<vtkIdType>(r.j - rowBegin) * width + r.i;
-    for (int c = 0; c < 3; ++c)
-      colors->SetTypedComponent(
-        k, c, static_cast<unsigned char>(std::lround(255.0 * std::clamp(r.color[c], 0.0, 1.0))));
+    setColorBytes(colors, k, r);
     objectId->SetValue(k, r.objectId);
     order->SetValue(k, r.imageOrder);
     pathLength->SetValue(k, r.affineLength);
@@ -85,61 +99,168 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
   pd->AddArray(termination);
 }
 
-void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits)
+struct HitsBuilder::Arrays
 {
-  const vtkIdType m = static_cast<vtkIdType>(records.size());
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(m);
-  auto pixel = makeArray<vtkIntArray>("Pixel", 2, m);
-  auto origin = makeArray<vtkDoubleArray>("Origin", 3, m);
-  auto direction = makeArray<vtkDoubleArray>("Direction", 3, m);
-  auto momentum = makeArray<vtkDoubleArray>("Momentum", 4, m);
-  auto term = makeArray<vtkIntArray>("Termination", 1, m);
-  auto object = makeArray<vtkIntArray>("ObjectId", 1, m);
-  auto normal = makeArray<vtkDoubleArray>("HitNormal", 3, m);
-  auto uv = makeArray<vtkDoubleArray>("UV", 2, m);
-  auto chord = makeArray<vtkDoubleArray>("ChordError", 1, m);
-  auto length = makeArray<vtkDoubleArray>("PathLength", 1, m);
-  auto winding = makeArray<vtkDoubleArray>("Winding", 1, m);
-  auto imageOrder = makeArray<vtkIntArray>("ImageOrder", 1, m);
-  auto steps = makeArray<vtkLongLongArray>("Steps", 1, m);
-  auto maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
-  auto color = makeArray<vtkDoubleArray>("Color", 3, m);
-  auto jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
-  auto verts = vtkSmartPointer<vtkCellArray>::New();
-  for (vtkIdType k = 0; k < m; ++k)
+  vtkPolyData* hits = nullptr;
+  vtkIdType count = 0, next = 0;
+  vtkSmartPointer<vtkDoubleArray> points;
+  vtkSmartPointer<vtkIntArray> pixel, term, object, imageOrder;
+  vtkSmartPointer<vtkDoubleArray> origin, direction, momentum, normal, uv, chord, length, winding,
+    maxH, color, jacobian;
+  vtkSmartPointer<vtkLongLongArray> steps;
+};
+
+HitsBuilder::HitsBuilder(vtkPolyData* hits, vtkIdType count)
+  : A(std::make_unique<Arrays>())
+{
+  Arrays& a = *this->A;
+  a.hits = hits;
+  a.count = count;
+  const vtkIdType m = count;
+  a.points = makeArray<vtkDoubleArray>("Points", 3, m);
+  a.pixel = makeArray<vtkIntArray>("Pixel", 2, m);
+  a.origin = makeArray<vtkDoubleArray>("Origin", 3, m);
+  a.direction = makeArray<vtkDoubleArray>("Direction", 3, m);
+  a.momentum = makeArray<vtkDoubleArray>("Momentum", 4, m);
+  a.term = makeArray<vtkIntArray>("Termination", 1, m);
+  a.object = makeArray<vtkIntArray>("ObjectId", 1, m);
+  a.normal = makeArray<vtkDoubleArray>("HitNormal", 3, m);
+  a.uv = makeArray<vtkDoubleArray>("UV", 2, m);
+  a.chord = makeArray<vtkDoubleArray>("ChordError", 1, m);
+  a.length = makeArray<vtkDoubleArray>("PathLength", 1, m);
+  a.winding = makeArray<vtkDoubleArray>("Winding", 1, m);
+  a.imageOrder = makeArray<vtkIntArray>("ImageOrder", 1, m);
+  a.steps = makeArray<vtkLongLongArray>("Steps", 1, m);
+  a.maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
+  a.color = makeArray<vtkDoubleArray>("Color", 3, m);
+  a.jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
+}
+
+HitsBuilder::~HitsBuilder() = default;
+
+void HitsBuilder::add(const RayRecord* records, std::size_t count)
+{
+  Arrays& a = *this->A;
+  if (static_cast<vtkIdType>(count) > a.count - a.next)
+    throw std::logic_error("HitsBuilder: more records than the " + std::to_string(a.count) +
+                           " it was made for");
+  for (const RayRecord* r = records; r != records + count; ++r)
   {
-    const RayRecord& r = records[k];
-    points->SetPoint(k, r.hitPoint.data());
-    pixel->SetTypedComponent(k, 0, r.i);
-    pixel->SetTypedComponent(k, 1, r.j);
-    origin->SetTuple(k, r.origin.data());
-    direction->SetTuple(k, r.direction.data());
-    momentum->SetTuple(k, r.momentum.data());
-    term->SetValue(k, static_cast<int>(r.termination));
-    object->SetValue(k, r.objectId);
-    normal->SetTuple(k, r.hitNormal.data());
-    uv->SetTypedComponent(k, 0, r.u);
-    uv->SetTypedComponent(k, 1, r.v);
-    chord->SetValue(k, r.chordError);
-    length->SetValue(k, r.affineLength);
-    winding->SetValue(k, r.winding);
-    imageOrder->SetValue(k, r.imageOrder);
-    steps->SetValue(k, r.steps);
-    maxH->SetValue(k, r.maxAbsH);
-    color->SetTuple(k, r.color.data());
-    const double jac[4] = { r.dudi, r.dudj, r.dvdi, r.dvdj };
-    jacobian->SetTuple(k, jac);
-    verts->InsertNextCell(1, &k);
+    const vtkIdType k = a.next++;
+    a.points->SetTypedTuple(k, r->hitPoint.data());
+    a.pixel->SetTypedComponent(k, 0, r->i);
+    a.pixel->SetTypedComponent(k, 1, r->j);
+    a.origin->SetTypedTuple(k, r->origin.data());
+    a.direction->SetTypedTuple(k, r->direction.data());
+    a.momentum->SetTypedTuple(k, r->momentum.data());
+    a.term->SetValue(k, static_cast<int>(r->termination));
+    a.object->SetValue(k, r->objectId);
+    a.normal->SetTypedTuple(k, r->hitNormal.data());
+    a.uv->SetTypedComponent(k, 0, r->u);
+    a.uv->SetTypedComponent(k, 1, r->v);
+    a.chord->SetValue(k, r->chordError);
+    a.length->SetValue(k, r->affineLength);
+    a.winding->SetValue(k, r->winding);
+    a.imageOrder->SetValue(k, r->imageOrder);
+    a.steps->SetValue(k, r->steps);
+    a.maxH->SetValue(k, r->maxAbsH);
+    a.color->SetTypedTuple(k, r->color.data());
+    const double jac[4] = { r->dudi, r->dudj, r->dvdi, r->dvdj };
+    a.jacobian->SetTypedTuple(k, jac);
   }
+}
+
+void HitsBuilder::finish()
+{
+  Arrays& a = *this->A;
+  if (a.next != a.count)
+    throw std::logic_error("HitsBuilder: " + std::to_string(a.next) + " records of the " +
+                           std::to_string(a.count) + " it was made for");
+  // One vertex a point, made at its exact size (cells inserted one by one would grow the arrays
+  // by doubling).
+  auto offsets = makeArray<vtkIdTypeArray>("", 1, a.count + 1);
+  auto connectivity = makeArray<vtkIdTypeArray>("", 1, a.count);
+  for (vtkIdType k = 0; k < a.count; ++k)
+  {
+    offsets->SetValue(k, k);
+    connectivity->SetValue(k, k);
+  }
+  offsets->SetValue(a.count, a.count);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(offsets, connectivity);
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetData(a.points);
+  vtkPolyData* hits = a.hits;
   hits->Initialize();
   hits->SetPoints(points);
   hits->SetVerts(verts);
-  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{
-         pixel, origin, direction, momentum, term, object, normal, uv, chord, length, winding,
-         imageOrder, steps, maxH, color, jacobian })
-    hits->GetPointData()->AddArray(a);
+  for (vtkDataArray* array : std::initializer_list<vtkDataArray*>{
+         a.pixel, a.origin, a.direction, a.momentum, a.term, a.object, a.normal, a.uv, a.chord,
+         a.length, a.winding, a.imageOrder, a.steps, a.maxH, a.color, a.jacobian })
+    hits->GetPointData()->AddArray(array);
+}
+
+void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits)
+{
+  HitsBuilder builder(hits, static_cast<vtkIdType>(records.size()));
+  builder.add(records.data(), records.size());
+  builder.finish();
+}
+
+struct RowsBuilder::Parts
+{
+  vtkImageData* image;
+  vtkPolyData* hits;
+  int width, rowBegin, rowEnd;
+  vtkIdType count, next = 0;
+  HitsBuilder hitArrays;
+  vtkSmartPointer<vtkUnsignedCharArray> colors;
+  Parts(vtkImageData* i, vtkPolyData* h, int w, int b, int e)
+    : image(i)
+    , hits(h)
+    , width(w)
+    , rowBegin(b)
+    , rowEnd(e)
+    , count(static_cast<vtkIdType>(w) * (e - b))
+    , hitArrays(h, count)
+    , colors(makeArray<vtkUnsignedCharArray>("Colors", 3, count))
+  {
+  }
+};
+
+RowsBuilder::RowsBuilder(vtkImageData* image, vtkPolyData* hits, int width, int rowBegin,
+                         int rowEnd)
+  : P(std::make_unique<Parts>(image, hits, width, rowBegin, rowEnd))
+{
+}
+
+RowsBuilder::~RowsBuilder() = default;
+
+void RowsBuilder::add(const RayRecord* records, std::size_t count)
+{
+  Parts& p = *this->P;
+  // The image shares the hits' arrays only if the hits are its pixels in order, all traced.
+  for (const RayRecord* r = records; r != records + count; ++r, ++p.next)
+  {
+    const vtkIdType i = p.next % p.width, j = p.rowBegin + p.next / p.width;
+    if (p.next >= p.count || r->i != i || r->j != j || r->termination == Termination::Running)
+      throw std::logic_error("RowsBuilder: record " + std::to_string(p.next) +
+                             " is not the traced pixel (" + std::to_string(i) + ", " +
+                             std::to_string(j) + ") of the rows");
+    setColorBytes(p.colors, p.next, *r);
+  }
+  p.hitArrays.add(records, count);
+}
+
+void RowsBuilder::finish()
+{
+  Parts& p = *this->P;
+  p.hitArrays.finish();
+  setRowsExtent(p.image, p.width, p.rowBegin, p.rowEnd);
+  vtkPointData* pd = p.image->GetPointData();
+  pd->SetScalars(p.colors);
+  for (const char* name : { "ObjectId", "ImageOrder", "PathLength", "Termination" })
+    pd->AddArray(p.hits->GetPointData()->GetArray(name));
 }
 
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)

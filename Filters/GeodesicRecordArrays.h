@@ -8,7 +8,9 @@
 
 #include "vtkSmartPointer.h"
 
+#include <cstddef>
 #include <initializer_list>
+#include <memory>
 #include <vector>
 
 class vtkDataArray;
@@ -37,6 +39,44 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
                     vtkImageData* image);
 /// One vertex per record at its hit point, every record field as point data.
 void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits);
+
+/// recordsToPolyData a run of records at a time: the arrays of `count` records are made at once,
+/// filled as the runs come, and handed to `hits` by finish(), which throws std::logic_error
+/// unless exactly `count` records came (as add() does past them).
+class HitsBuilder
+{
+public:
+  HitsBuilder(vtkPolyData* hits, vtkIdType count);
+  ~HitsBuilder();
+  void add(const RayRecord* records, std::size_t count);
+  void finish();
+
+private:
+  struct Arrays;
+  std::unique_ptr<Arrays> A;
+};
+
+/// The image and the hit points of the whole rows [rowBegin, rowEnd) of a frame `width` pixels
+/// wide, a run of records at a time, the records being those of every pixel in row-major order
+/// from (0, rowBegin), all traced (FrameTracer::traceRows's). finish() gives `hits` what
+/// recordsToPolyData and `image` what recordsToImage would, except that the image's "ObjectId",
+/// "ImageOrder", "PathLength" and "Termination" are the hits' arrays of these names: for such
+/// records they hold the same values in the same order, and a copy would only double them. add()
+/// throws std::logic_error at a record out of that order or untraced, finish() if some are
+/// missing.
+class RowsBuilder
+{
+public:
+  RowsBuilder(vtkImageData* image, vtkPolyData* hits, int width, int rowBegin, int rowEnd);
+  ~RowsBuilder();
+  void add(const RayRecord* records, std::size_t count);
+  void finish();
+
+private:
+  struct Parts;
+  std::unique_ptr<Parts> P;
+};
+
 /// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
 /// Ray paths as polylines, one per path in order, double points with point data "Lambda", "R",

@@ -3,6 +3,7 @@
 #include "FrameTracer.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
+#include "RowBands.h"
 #include "TextureFiles.h"
 
 #include "vtkCommand.h"
@@ -42,8 +43,9 @@ bool isSet(double v)
   return !std::isnan(v);
 }
 
-/// Bytes a traced pixel needs at most: its record, the image arrays and the hit arrays.
-constexpr double kBytesPerPixel = sizeof(asrt::RayRecord) + 32.0 + 320.0;
+/// Bytes a pixel of the outputs needs: the image's arrays (23) and its hit point's (the point,
+/// the record's fields and the vertex: 276), rounded up.
+constexpr double kOutputBytesPerPixel = 24.0 + 280.0;
 
 /// Rays a frame may draw as polylines: each keeps a point a step, hundreds of times a pixel's
 /// record, so their count is bounded apart from the frame's memory.
@@ -307,6 +309,60 @@ struct vtkGeodesicSource::Internals
     }
     return d;
   }
+
+  /// Traces rows [rowBegin, rowEnd) of the frame into the image and the hit points: the pixel
+  /// subset's among them, or all of them; false if the filter was aborted (the outputs are then
+  /// incomplete).
+  static bool Trace(vtkGeodesicSource* self, const asrt::FrameTracer& tracer, int rowBegin,
+                    int rowEnd, vtkImageData* image, vtkPolyData* hits)
+  {
+    const int W = tracer.description().camera.width, H = tracer.description().camera.height;
+    auto progress = [self](double f)
+    {
+      self->UpdateProgress(0.95 * f);
+      return !self->GetAbortExecute();
+    };
+    bool aborted = false;
+    if (self->PixelSubset)
+    {
+      std::vector<std::pair<int, int>> subset;
+      for (vtkIdType k = 0; k < self->PixelSubset->GetNumberOfTuples(); ++k)
+      {
+        const int i = self->PixelSubset->GetTypedComponent(k, 0);
+        const int j = self->PixelSubset->GetTypedComponent(k, 1);
+        if (i < 0 || i >= W || j < 0 || j >= H)
+        {
+          std::ostringstream os;
+          os << "pixel subset entry " << k << " = (" << i << ", " << j << ") lies outside the " << W
+             << " x " << H << " frame";
+          throw asrt::InvalidParameter(os.str());
+        }
+        if (j >= rowBegin && j < rowEnd)
+          subset.emplace_back(i, j);
+      }
+      const std::vector<asrt::RayRecord> records = tracer.tracePixels(subset, progress);
+      aborted = self->GetAbortExecute();
+      if (!aborted)
+      {
+        asrt::recordsToImage(records, W, rowBegin, rowEnd, image);
+        asrt::recordsToPolyData(records, hits);
+      }
+    }
+    else
+    {
+      // The records of a band go into the outputs as soon as they are finished: a frame's
+      // records are never all held beside the arrays made of them.
+      asrt::RowsBuilder outputs(image, hits, W, rowBegin, rowEnd);
+      const bool traced = asrt::traceRowsInBands(
+        tracer, rowBegin, rowEnd,
+        [&](const asrt::RayRecord* records, std::size_t count) { outputs.add(records, count); },
+        progress);
+      aborted = !traced || self->GetAbortExecute();
+      if (!aborted)
+        outputs.finish();
+    }
+    return !aborted;
+  }
 };
 
 std::string vtkGeodesicSource::GetFrameSceneText()
@@ -408,13 +464,19 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       rowEnd = std::clamp(ue[3] + 1, rowBegin, H);
     }
 
+    // Whole rows are traced a band at a time (asrt::traceRowsInBands), a subset's records all
+    // together.
     const double pixels = static_cast<double>(W) * (rowEnd - rowBegin);
+    const double bytes =
+      pixels * kOutputBytesPerPixel +
+      (this->PixelSubset ? pixels : static_cast<double>(asrt::kBandPixels + 2 * W)) *
+        sizeof(asrt::RayRecord);
     const double limit = this->MemoryLimit > 0.0 ? this->MemoryLimit : 0.8 * physicalMemory();
-    if (pixels * kBytesPerPixel > limit)
+    if (bytes > limit)
     {
       std::ostringstream os;
-      os << "a " << W << " x " << H << " frame needs about " << pixels * kBytesPerPixel / 1e9
-         << " GB, more than the " << limit / 1e9 << " GB allowed";
+      os << "a " << W << " x " << H << " frame needs about " << bytes / 1e9 << " GB, more than the "
+         << limit / 1e9 << " GB allowed";
       throw asrt::InvalidParameter(os.str());
     }
     if (this->GeneratePolylines)
@@ -430,12 +492,6 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
           std::to_string(kMaxPolylines) + " are drawn (choose a larger stride or fewer pixels)");
     }
 
-    auto progress = [this](double f)
-    {
-      this->UpdateProgress(0.95 * f);
-      return !this->GetAbortExecute();
-    };
-    std::vector<asrt::RayRecord> records;
     auto requirePairs = [](vtkIntArray* a, const char* what)
     {
       if (a && a->GetNumberOfComponents() != 2)
@@ -447,30 +503,7 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
     };
     requirePairs(this->PixelSubset, "PixelSubset");
     requirePairs(this->PolylinePixels, "PolylinePixels");
-    if (this->PixelSubset)
-    {
-      std::vector<std::pair<int, int>> subset;
-      for (vtkIdType k = 0; k < this->PixelSubset->GetNumberOfTuples(); ++k)
-      {
-        const int i = this->PixelSubset->GetTypedComponent(k, 0);
-        const int j = this->PixelSubset->GetTypedComponent(k, 1);
-        if (i < 0 || i >= W || j < 0 || j >= H)
-        {
-          std::ostringstream os;
-          os << "pixel subset entry " << k << " = (" << i << ", " << j << ") lies outside the " << W
-             << " x " << H << " frame";
-          throw asrt::InvalidParameter(os.str());
-        }
-        if (j >= rowBegin && j < rowEnd)
-          subset.emplace_back(i, j);
-      }
-      records = tracer.tracePixels(subset, progress);
-    }
-    else
-    {
-      records = tracer.traceRows(rowBegin, rowEnd, progress);
-    }
-    if (this->GetAbortExecute())
+    if (!Internals::Trace(this, tracer, rowBegin, rowEnd, image, hits))
     {
       image->Initialize();
       hits->Initialize();
@@ -478,8 +511,6 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
       return 1;
     }
 
-    asrt::recordsToImage(records, W, rowBegin, rowEnd, image);
-    asrt::recordsToPolyData(records, hits);
     // The frame's parameters travel with the hits, for the writer and for readers of the data.
     asrt::setFrameFieldData(d, hits->GetFieldData());
 

@@ -9,13 +9,17 @@
  *    "ImageOrder", "PathLength" and "Termination";
  *  - port 1: a vtkPolyData with one vertex per traced ray at its hit point (or where it ended),
  *    carrying every field of the ray's record as point data, and the scene and frame parameters
- *    as field data;
+ *    as field data (without a PixelSubset, the image's "ObjectId", "ImageOrder", "PathLength"
+ *    and "Termination" are these points' arrays of the same names, not copies: the points are
+ *    the image's pixels in order);
  *  - port 2: optionally, the rays themselves as polylines (point data "Lambda", "R", "AbsH"), for
  *    a chosen subset or stride of pixels; off by default, as a full frame's paths are large.
  *
  * Scene values can be overridden per frame (mass, spin, camera, resolution, method, step), which
  * is how a movie's frames differ. A subset of pixels can be traced alone. VTK pieces split the
- * image by rows. Tracing runs on OpenMP threads; results do not depend on their number.
+ * image by rows. Tracing runs on OpenMP threads; results do not depend on their number. Whole
+ * rows are traced a band at a time, each band's records going into the outputs as it is done, so
+ * that a large frame's records are never all in memory beside its outputs.
  */
 #ifndef vtkGeodesicSource_h
 #define vtkGeodesicSource_h

@@ -3,11 +3,17 @@
 #include "AtomicFile.h"
 #include "VtkMessages.h"
 
+#include "vtkAbstractArray.h"
+#include "vtkCellData.h"
 #include "vtkErrorCode.h"
+#include "vtkFieldData.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkNew.h"
 #include "vtkPNGWriter.h"
 #include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkXMLImageDataWriter.h"
@@ -17,6 +23,7 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <vector>
 
 namespace asrt
 {
@@ -52,6 +59,31 @@ void checkWriter(unsigned long code, const VtkMessageCatcher& messages, const st
     throw std::runtime_error(failed + vtkErrorCode::GetStringFromErrorCode(code));
 }
 
+/// The arrays of `data` (its field, point and cell data, and its points) whose information holds
+/// no key.
+std::vector<vtkSmartPointer<vtkAbstractArray>> arraysWithoutInformation(vtkDataObject* data)
+{
+  std::vector<vtkSmartPointer<vtkAbstractArray>> arrays;
+  auto add = [&arrays](vtkAbstractArray* a)
+  {
+    if (a && (!a->HasInformation() || a->GetInformation()->GetNumberOfKeys() == 0))
+      arrays.emplace_back(a);
+  };
+  std::vector<vtkFieldData*> groups = { data->GetFieldData() };
+  if (auto* set = vtkDataSet::SafeDownCast(data))
+  {
+    groups.push_back(set->GetPointData());
+    groups.push_back(set->GetCellData());
+  }
+  for (vtkFieldData* fd : groups)
+    for (int k = 0; fd && k < fd->GetNumberOfArrays(); ++k)
+      add(fd->GetAbstractArray(k));
+  if (auto* set = vtkPointSet::SafeDownCast(data))
+    if (set->GetPoints())
+      add(set->GetPoints()->GetData());
+  return arrays;
+}
+
 /// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
 /// its name) and checks that it wrote the whole file.
 template<class Writer>
@@ -65,7 +97,15 @@ void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
   writer->SetInputData(data);
   const std::string name = file.openName();
   writer->SetFileName(name.c_str());
+  // VTK's XML writers cache each array's range in its information, and write an array with
+  // information keys in a longer form (the same data, other bytes): the arrays leave as they came,
+  // so that a file is the same whatever was written before from arrays it shares (a frame's image
+  // and hit points share four).
+  const auto untouched = arraysWithoutInformation(data);
   writer->Write();
+  for (vtkAbstractArray* a : untouched)
+    if (a->HasInformation())
+      a->GetInformation()->Clear();
   writer->SetFileName(nullptr);
   checkWriter(writer->GetErrorCode(), messages, name, path);
   struct stat st;

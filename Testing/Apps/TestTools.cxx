@@ -17,6 +17,7 @@
 #include "vtkDirectory.h"
 #include "vtkDoubleArray.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkPNGReader.h"
@@ -278,6 +279,41 @@ pid_t deadPid()
   waitpid(child, &status, 0);
   return child;
 }
+}
+
+TEST(DataFiles, AFileDoesNotDependOnWhatWasWrittenBeforeFromItsArrays)
+{
+  // A frame's image and hit points share arrays (vtkGeodesicSource); VTK's writers cache ranges
+  // in an array's information, and write an array with information keys in another form.
+  const std::string dir = scratch("xml-shared");
+  vtkSmartPointer<vtkImageData> image = gradient(6, 4);
+  vtkDataArray* values = image->GetPointData()->GetArray("Values");
+  vtkNew<vtkDoubleArray> labelled;
+  labelled->SetName("Labelled");
+  labelled->SetNumberOfTuples(24);
+  labelled->Fill(2.5);
+  labelled->GetInformation()->Set(vtkDataArray::UNITS_LABEL(), "m");
+  vtkNew<vtkPolyData> points;
+  vtkNew<vtkPoints> xyz;
+  xyz->SetDataTypeToDouble();
+  for (int k = 0; k < 24; ++k)
+    xyz->InsertNextPoint(k, 0.5 * k, -k);
+  points->SetPoints(xyz);
+  points->GetPointData()->AddArray(values);
+  points->GetPointData()->AddArray(labelled);
+  image->GetPointData()->AddArray(labelled);
+
+  writeVtp(points, dir + "/first.vtp");
+  const std::string alone = contentOf(dir + "/first.vtp");
+  EXPECT_NE(alone.find("Name=\"Values\""), std::string::npos);
+  EXPECT_EQ(values->GetInformation()->GetNumberOfKeys(), 0) << "writing left keys behind";
+  writeVti(image, dir + "/g.vti");
+  writeVtp(points, dir + "/second.vtp");
+  EXPECT_EQ(contentOf(dir + "/second.vtp"), alone)
+    << "the .vtp differs once the .vti was written from an array it shares";
+  // The caller's own information stays.
+  EXPECT_TRUE(labelled->GetInformation()->Has(vtkDataArray::UNITS_LABEL()));
+  EXPECT_STREQ(labelled->GetInformation()->Get(vtkDataArray::UNITS_LABEL()), "m");
 }
 
 TEST(AtomicFile, TemporariesAreNewHiddenFilesNamedWithThePid)

@@ -1,0 +1,100 @@
+#include "RowBands.h"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+namespace asrt
+{
+namespace
+{
+/// Appends the Jacobian inputs of records [from, from + count).
+void appendSamples(const std::vector<RayRecord>& records, std::size_t from, std::size_t count,
+                   std::vector<JacobianSample>& out)
+{
+  for (std::size_t k = from; k < from + count; ++k)
+  {
+    const RayRecord& r = records[k];
+    out.push_back({ r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination });
+  }
+}
+}
+
+bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
+                      const std::function<void(const RayRecord*, std::size_t)>& sink,
+                      const std::function<bool(double)>& progress, std::size_t bandPixels)
+{
+  const int W = tracer.description().camera.width, H = tracer.description().camera.height;
+  rowBegin = std::clamp(rowBegin, 0, H);
+  rowEnd = std::clamp(rowEnd, rowBegin, H);
+  if (rowEnd == rowBegin || W <= 0)
+    return true;
+  const std::size_t width = static_cast<std::size_t>(W);
+  // A Jacobian needs the rows either side (FrameTracer::computeJacobians): trace one row more at
+  // each end of the band, as traceRows does.
+  const int first = std::max(0, rowBegin - 1), last = std::min(H, rowEnd + 1);
+  const int bandRows = static_cast<int>(std::clamp<std::size_t>(bandPixels / width, 1, H));
+  const double total = static_cast<double>(last - first) * W;
+
+  // Rows [from, to) of `records`, whose first row is `firstRow`, to the sink; those outside
+  // [rowBegin, rowEnd) are dropped.
+  auto handOn = [&](const std::vector<RayRecord>& records, int firstRow, int from, int to)
+  {
+    from = std::max(from, rowBegin);
+    to = std::min(to, rowEnd);
+    if (from < to)
+      sink(records.data() + static_cast<std::size_t>(from - firstRow) * width,
+           static_cast<std::size_t>(to - from) * width);
+  };
+
+  // The last row traced waits for the row above it; `below` has the samples of the row under it.
+  std::vector<RayRecord> held;
+  std::vector<JacobianSample> below, edge;
+  std::vector<std::pair<int, int>> pixels;
+  double done = 0;
+  for (int b = first; b < last;)
+  {
+    const int e = std::min(last, b + bandRows);
+    pixels.clear();
+    for (int j = b; j < e; ++j)
+      for (int i = 0; i < W; ++i)
+        pixels.emplace_back(i, j);
+    bool stopped = false;
+    const double share = static_cast<double>(pixels.size());
+    std::function<bool(double)> bandProgress;
+    if (progress)
+      bandProgress = [&](double f)
+      {
+        stopped = !progress((done + f * share) / total);
+        return !stopped;
+      };
+    std::vector<RayRecord> band = tracer.tracePixels(pixels, bandProgress);
+    if (stopped)
+      return false;
+    done += share;
+
+    edge.clear();
+    if (!held.empty())
+    {
+      // Row b − 1 completes row b's Jacobians, and row b those of row b − 1.
+      appendSamples(held, 0, width, edge);
+      FrameTracer::computeJacobians(band, edge);
+      appendSamples(band, 0, width, below);
+      FrameTracer::computeJacobians(held, below);
+      handOn(held, b - 1, b - 1, b);
+    }
+    // Rows b .. e − 2 have both neighbours; row e − 1 waits for row e.
+    handOn(band, b, b, e - 1);
+    below.clear();
+    if (e - b >= 2)
+      appendSamples(band, static_cast<std::size_t>(e - 2 - b) * width, width, below);
+    else
+      below.swap(edge); // row e − 2 is the row held before (none before the first band)
+    held.assign(band.end() - static_cast<std::ptrdiff_t>(width), band.end());
+    b = e;
+  }
+  FrameTracer::computeJacobians(held, below);
+  handOn(held, last - 1, last - 1, last);
+  return true;
+}
+}
