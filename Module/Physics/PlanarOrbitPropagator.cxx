@@ -272,19 +272,22 @@ bool PlanarOrbitPropagator::step(const Plane& s, const Plane& k1, double& h, dou
   K[0] = pack(k1);
   for (int attempt = 0; attempt < 60; ++attempt)
   {
+    // Fully unrolled, the tableau's zeros drop out at compile time.
+#pragma GCC unroll 12
     for (int i = 1; i < 12; ++i)
     {
       Row z = y;
+#pragma GCC unroll 12
       for (int j = 0; j < i; ++j)
       {
-        const double a = h * A[i][j];
-        if (a != 0.0)
+        if (A[i][j] != 0.0)
           for (int c = 0; c < 5; ++c)
-            z[c] += a * K[j][c];
+            z[c] += h * A[i][j] * K[j][c];
       }
       K[i] = pack(this->slope(unpack(z)));
     }
     Row z = y, e5{}, e3{};
+#pragma GCC unroll 12
     for (int j = 0; j < 12; ++j)
       for (int c = 0; c < 5; ++c)
       {
