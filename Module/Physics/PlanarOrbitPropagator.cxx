@@ -77,6 +77,7 @@ void PlanarOrbitPropagator::start(const PhasePoint& z)
   this->Evaluations = 0;
   this->Dense.active = false;
   this->Slope = this->slope(this->S);
+  this->Start = this->endPoint();
   // The local error grows as h⁹: start near the step the tolerance allows, so that the controller
   // does not spend segments climbing to it.
   const double speed = std::hypot(this->S.U, this->S.V);
@@ -93,14 +94,6 @@ PlanarOrbitPropagator::Plane PlanarOrbitPropagator::slope(const Plane& s)
   const double k = this->L2 * (3.0 * this->M - 2.0 * this->Q2 * inv) * inv2 * inv2 * inv;
   const double nv = (s.X * s.U + s.Y * s.V) * inv;
   return Plane{ s.U, s.V, -k * s.X, -k * s.Y, (this->E + f * nv) / (1.0 - f) };
-}
-
-Vec3 PlanarOrbitPropagator::centralAcceleration(const Plane& s) const
-{
-  const double inv = 1.0 / this->radius(s);
-  const double inv2 = inv * inv;
-  const double k = this->L2 * (3.0 * this->M - 2.0 * this->Q2 * inv) * inv2 * inv2 * inv;
-  return -k * (s.X * this->E1 + s.Y * this->E2);
 }
 
 Vec4 PlanarOrbitPropagator::position(const Plane& s) const
@@ -121,10 +114,13 @@ Vec4 PlanarOrbitPropagator::momentum(const Plane& s) const
   return Vec4(-this->E, p.x(), p.y(), p.z());
 }
 
-Vec4 PlanarOrbitPropagator::velocity(const Plane& k) const
+PlanarOrbitPropagator::EndPoint PlanarOrbitPropagator::endPoint() const
 {
-  const Vec3 v = k.X * this->E1 + k.Y * this->E2; // a slope's X, Y are dX/dλ, dY/dλ
-  return Vec4(k.T, v.x(), v.y(), v.z());
+  // The slope holds dx/dλ in its X, Y and d²x/dλ² = −k(r) x in its U, V: nothing to recompute.
+  const Vec3 v = this->Slope.X * this->E1 + this->Slope.Y * this->E2;
+  const Vec3 a = this->Slope.U * this->E1 + this->Slope.V * this->E2;
+  return { this->position(this->S), this->momentum(this->S),
+           Vec4(this->Slope.T, v.x(), v.y(), v.z()), Vec4(0.0, a.x(), a.y(), a.z()), this->Lambda };
 }
 
 PhasePoint PlanarOrbitPropagator::state() const
@@ -152,7 +148,7 @@ namespace
 {
 // Dormand & Prince's DOP853 tableau (Hairer, Nørsett & Wanner, Solving ODEs I, 2nd ed., §II.10,
 // and their dop853.f): stage rows 1-11, the order-8 weights (row 12), and the order-5 and order-3
-// error weights (the latter over the 12 stages and the new state's slope).
+// error weights over the 12 stages.
 constexpr double A[13][12] = {
   { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 },
   { 5.26001519587677318785587544488e-2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 },
@@ -360,36 +356,28 @@ bool PlanarOrbitPropagator::runOut(double target)
   return true;
 }
 
-void PlanarOrbitPropagator::finishSegment(Segment& seg, const Plane& from, double lambdaFrom,
-                                          bool farField) const
+void PlanarOrbitPropagator::finishSegment(Segment& seg, bool farField)
 {
-  // The start's slope is recomputed from the state rather than kept: its force term is not needed
-  // for the tangent, only U, V and dt/dλ.
-  const double h = this->Lambda - lambdaFrom;
-  const double r0 = this->radius(from);
-  const double f0 = this->f(r0);
-  const double nv0 = (from.X * from.U + from.Y * from.V) / r0;
-  Plane k0{ from.U, from.V, 0, 0, (this->E + f0 * nv0) / (1.0 - f0) };
-  seg.x0 = this->position(from);
-  seg.p0 = this->momentum(from);
-  seg.d0 = h * this->velocity(k0);
-  seg.x1 = this->position(this->S);
-  seg.p1 = this->momentum(this->S);
-  seg.d1 = h * this->velocity(this->Slope);
-  // d²x/dτ² = h² d²x/dλ² = −h² k(r) x spatially; t's second derivative is left out (the scene does
-  // not look at t, and its ends and slopes stay exact).
-  auto acceleration = [this, h](const Plane& s)
-  {
-    const Vec3 a = h * h * this->centralAcceleration(s);
-    return Vec4(0.0, a.x(), a.y(), a.z());
-  };
-  seg.a0 = acceleration(from);
-  seg.a1 = acceleration(this->S);
+  // The segment runs from the end point kept since the last one to the current state; d²x/dτ² =
+  // h² d²x/dλ², with t's second derivative left out (the scene does not look at t, and its ends
+  // and slopes stay exact).
+  const EndPoint& a = this->Start;
+  const EndPoint b = this->endPoint();
+  const double h = b.lambda - a.lambda;
+  seg.x0 = a.x;
+  seg.p0 = a.p;
+  seg.d0 = h * a.v;
+  seg.a0 = h * h * a.a;
+  seg.x1 = b.x;
+  seg.p1 = b.p;
+  seg.d1 = h * b.v;
+  seg.a1 = h * h * b.a;
   seg.quintic = true;
-  seg.lambda0 = lambdaFrom;
-  seg.lambda1 = this->Lambda;
+  seg.lambda0 = a.lambda;
+  seg.lambda1 = b.lambda;
   seg.dl0 = seg.dl1 = h;
   seg.farField = farField;
+  this->Start = b;
 }
 
 bool PlanarOrbitPropagator::advance(Segment& seg)
@@ -401,7 +389,6 @@ bool PlanarOrbitPropagator::advance(Segment& seg)
   }
   this->Dense.active = false;
   const Plane from = this->S;
-  const double lambdaFrom = this->Lambda;
   const double r = this->radius(from);
   const double farRadius = this->Far
                              ? std::max(this->Far->objectRadius, innerFarFieldLimit * this->M)
@@ -411,48 +398,47 @@ bool PlanarOrbitPropagator::advance(Segment& seg)
   {
     if (!this->runOut(this->nextStopRadius(r)))
       return false;
-    this->finishSegment(seg, from, lambdaFrom, true);
+    this->finishSegment(seg, true);
     return true;
   }
   // Coming in through the far field, steps merge into one segment while they stay outside it, keep
-  // coming in and sweep little; the step that leaves it is taken again, as a dense step.
+  // coming in and sweep little. The step that leaves it stays the dense step, to be cut into
+  // segments: after the merged segment if there is one, at once if not.
   int merged = 0;
-  while (r > farRadius)
+  for (;;)
   {
-    double h = this->NextStep, next;
-    Plane out, k13;
-    if (!this->step(this->S, this->Slope, h, next, out, k13))
+    if (!this->beginDenseStep())
       return false;
+    if (!(r > farRadius))
+      break;
+    const Plane& out = this->Dense.to;
     const bool stillFar = this->radius(out) > farRadius && out.X * out.U + out.Y * out.V < 0.0 &&
                           std::atan2(std::abs(from.X * out.Y - from.Y * out.X),
                                      from.X * out.X + from.Y * out.Y) <= maxMergedSweep;
     if (!stillFar)
     {
-      this->NextStep = h;
       if (merged == 0)
         break;
-      this->finishSegment(seg, from, lambdaFrom, true);
+      this->finishSegment(seg, true);
       return true;
     }
     this->S = out;
-    this->Slope = k13;
-    this->Lambda += h;
-    this->NextStep = next;
+    this->Slope = this->Dense.toSlope;
+    this->Lambda += this->Dense.h;
+    this->Dense.active = false;
     ++merged;
   }
-  // An embedded error estimate cannot be trusted over a step that spans scales of r (from far away
-  // into the strong field in one go): steps stay below maxIntegrationFraction·r/|v|.
-  const double speed = std::sqrt(from.U * from.U + from.V * from.V);
-  if (!this->beginDenseStep(std::min(this->NextStep, maxIntegrationFraction * r / speed)))
-    return false;
   this->cutSegment(seg);
   return true;
 }
 
-bool PlanarOrbitPropagator::beginDenseStep(double hTry)
+bool PlanarOrbitPropagator::beginDenseStep()
 {
+  // An embedded error estimate cannot be trusted over a step that spans scales of r (from far away
+  // into the strong field in one go): steps stay below maxIntegrationFraction·r/|v|.
   DenseStep& d = this->Dense;
-  double h = hTry, next;
+  const double speed = std::sqrt(this->S.U * this->S.U + this->S.V * this->S.V);
+  double h = std::min(this->NextStep, maxIntegrationFraction * this->radius(this->S) / speed), next;
   Plane out, k13;
   if (!this->step(this->S, this->Slope, h, next, out, k13, &d.K))
     return false;
@@ -524,7 +510,6 @@ void PlanarOrbitPropagator::cutSegment(Segment& seg)
 {
   DenseStep& d = this->Dense;
   const Plane from = this->S;
-  const double lambdaFrom = this->Lambda;
   const double r = this->radius(from);
   const double speed = std::sqrt(from.U * from.U + from.V * from.V);
   // Segments no longer than maxStepFraction·r, so that their interpolant is as good as the
@@ -535,7 +520,7 @@ void PlanarOrbitPropagator::cutSegment(Segment& seg)
   double length = maxStepFraction * r;
   if (this->Far && this->Far->objectDistance)
   {
-    const double clear = 0.9 * this->Far->objectDistance(this->position(from).tail<3>());
+    const double clear = 0.9 * this->Far->objectDistance(this->Start.x.tail<3>());
     const double sky = 0.5 * (this->nextStopRadius(r) - r);
     length = std::max(length, std::min({ clear, r, sky }));
   }
@@ -581,6 +566,6 @@ void PlanarOrbitPropagator::cutSegment(Segment& seg)
   this->Slope = tau == 1.0 ? d.toSlope : this->slope(end);
   this->Lambda = tau == 1.0 ? d.lambda0 + d.h : d.lambda0 + tau * d.h;
   d.tau = tau;
-  this->finishSegment(seg, from, lambdaFrom, false);
+  this->finishSegment(seg, false);
 }
 }

@@ -87,8 +87,8 @@ private:
     std::array<Row, 7> F;
     Plane at(double x) const;
   };
-  /// Takes a step of at most `hTry` from the current state as a DenseStep.
-  bool beginDenseStep(double hTry);
+  /// Takes the next step from the current state as a DenseStep.
+  bool beginDenseStep();
   /// The dense step's continuous extension (three more evaluations).
   void interpolateDenseStep();
   /// Cuts the next segment from the dense step: at most maxStepFraction·r/|v| long, ending
@@ -97,13 +97,18 @@ private:
   /// Covers the outgoing far field up to radius `target` without emitting segments, ending on or
   /// just beyond it.
   bool runOut(double target);
-  /// Fills the segment from the saved start (x, p, tangent, λ) to the current state.
-  void finishSegment(Segment& seg, const Plane& from, double lambdaFrom, bool farField) const;
+  /// Fills the segment from Start to the current state, which becomes the next Start.
+  void finishSegment(Segment& seg, bool farField);
   Vec4 position(const Plane& s) const;
   Vec4 momentum(const Plane& s) const;
-  Vec4 velocity(const Plane& s) const;
-  /// d²x/dλ² in 3-space.
-  Vec3 centralAcceleration(const Plane& s) const;
+  /// A state in the Kerr–Schild chart, as a segment's end needs it.
+  struct EndPoint
+  {
+    Vec4 x, p, v, a; ///< position, momentum, dx/dλ, d²x/dλ² (t's left at 0)
+    double lambda = 0;
+  };
+  /// The current state and slope as an EndPoint.
+  EndPoint endPoint() const;
   double f(double r) const { return (2.0 * this->M - this->Q2 / r) / r; }
   double radius(const Plane& s) const { return std::sqrt(s.X * s.X + s.Y * s.Y); }
   /// The smallest sky radius beyond r, or the escape radius.
@@ -114,6 +119,7 @@ private:
   Vec3 E1 = Vec3::UnitX(), E2 = Vec3::UnitY(); // the plane: X along E1, Y along E2
   Plane S, Slope;                              // current state and its slope
   DenseStep Dense;
+  EndPoint Start; // where the next segment starts: the last one's end, converted once
   double Lambda = 0;
   double NextStep = 0;
   long Evaluations = 0;

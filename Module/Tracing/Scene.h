@@ -281,7 +281,8 @@ public:
   double celestialRadius() const;
   /// The far field of this scene about the origin: the radius of the smallest ball about the origin
   /// that holds every object but the celestial spheres (infinite if one is unbounded, 0 if there
-  /// are none), and the celestial spheres' radii, ascending.
+  /// are none), the celestial spheres' radii, ascending, and objectDistance, which refers to this
+  /// scene: the scene must outlive the FarField.
   FarField farField() const;
   /// A lower bound on the distance from x to every object but the celestial spheres (infinite if
   /// there are none).
