@@ -208,7 +208,7 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
   std::vector<JacobianSample> samples;
   samples.reserve(records.size() + neighbours.size());
   for (const RayRecord& r : records)
-    samples.push_back({ r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination });
+    samples.push_back(jacobianSample(r));
   samples.insert(samples.end(), neighbours.begin(), neighbours.end());
   if (samples.empty())
     return;

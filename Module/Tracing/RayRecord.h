@@ -46,6 +46,12 @@ struct JacobianSample
   Termination termination = Termination::Running;
 };
 
+/// The part of a record its neighbours' Jacobians read.
+inline JacobianSample jacobianSample(const RayRecord& r)
+{
+  return { r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination };
+}
+
 /// One point of a traced ray's polyline.
 struct PathPoint
 {

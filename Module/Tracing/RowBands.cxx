@@ -13,10 +13,7 @@ void appendSamples(const std::vector<RayRecord>& records, std::size_t from, std:
                    std::vector<JacobianSample>& out)
 {
   for (std::size_t k = from; k < from + count; ++k)
-  {
-    const RayRecord& r = records[k];
-    out.push_back({ r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination });
-  }
+    out.push_back(jacobianSample(records[k]));
 }
 }
 
