@@ -30,7 +30,11 @@ struct RayRecord
   std::int32_t imageOrder = 0; ///< half-turns: floor(winding / π)
   std::int64_t steps = 0;
   double maxAbsH = 0;
-  Color color = Color::Zero();
+  Color color =
+    Color::Zero(); ///< the pixel's colour: filtered and sampled as the frame's rendering says
+  /// How many rays the colour comes from: 1 for the centre ray alone, more for a supersampled
+  /// pixel (the centre ray's fields are still the record's).
+  std::int32_t raysPerPixel = 1;
   /// Screen-space Jacobian ∂(u, v)/∂(i, j) of the hit from neighbouring pixels that hit the same
   /// object in the same image order (u differences taken modulo 1); NaN where no neighbour does.
   double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;

@@ -233,5 +233,6 @@ void validateScene(const SceneDescription& d)
     if (const auto* sky = dynamic_cast<const CelestialSphere*>(objects[k].get()))
       validateCelestialSphere(sky->radius(), d.camera.position,
                               "objects[" + std::to_string(k) + "].radius");
+  validateRendering(d.rendering, static_cast<long long>(d.camera.width) * d.camera.height);
 }
 }

@@ -4,6 +4,7 @@
 #ifndef asrt_SceneDescription_h
 #define asrt_SceneDescription_h
 
+#include "Antialiasing.h"
 #include "Camera.h"
 #include "RayTracer.h"
 #include "Scene.h"
@@ -44,6 +45,8 @@ struct SceneDescription
   CameraParameters camera;
   IntegratorConfig integrator;
   TraceOptions tracing;
+  /// The "rendering" section: how pixels are anti-aliased (Antialiasing.h).
+  AntialiasOptions rendering;
   std::shared_ptr<Scene> scene = std::make_shared<Scene>();
   /// Non-empty for a frame of only some pixels (the optional root field "subset": {"pixels": n,
   /// "digest": "..."}, written by the tools, not by hand).

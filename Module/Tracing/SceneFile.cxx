@@ -427,7 +427,7 @@ public:
     SceneDescription d;
     Fields root(doc, "",
                 { "name", "description", "spacetime", "camera", "integrator", "tracing",
-                  "background", "horizonColor", "objects", "subset" });
+                  "background", "horizonColor", "objects", "rendering", "subset" });
     if (const json* v = root.get("name"))
       d.name = str(*v, "name");
     if (const json* v = root.get("description"))
@@ -445,6 +445,12 @@ public:
     if (const json* v = root.get("horizonColor"))
       d.scene->horizonColor = color(*v, "horizonColor");
     this->objects(root.require("objects"), d);
+    // A text without the section was traced before anti-aliasing existed, one ray a pixel; the
+    // store gives such stored texts the section (schema version 5), so only hand-written scenes
+    // come here without it, and they get the default.
+    if (const json* v = root.get("rendering"))
+      this->rendering(*v, d);
+    validateRendering(d.rendering, static_cast<long long>(d.camera.width) * d.camera.height);
     if (const json* v = root.get("subset"))
       d.subset = subset(*v);
     d.sourceText = doc.dump();
@@ -556,6 +562,34 @@ private:
     if (const json* v = f.get("absoluteTolerance"))
       c.absoluteTolerance = positive(*v, f.sub("absoluteTolerance"));
     validateIntegrator(c, st);
+  }
+
+  static void rendering(const json& j, SceneDescription& d)
+  {
+    Fields f(j, "rendering", { "antialias", "maxRaysPerPixel", "supersample", "colorThreshold" });
+    AntialiasOptions& o = d.rendering;
+    if (const json* v = f.get("antialias"))
+    {
+      try
+      {
+        o.mode = antialiasModeFromString(clipped(str(*v, f.sub("antialias"), true)));
+      }
+      catch (const InvalidParameter& e)
+      {
+        fail(f.sub("antialias"), e.what());
+      }
+    }
+    if (const json* v = f.get("maxRaysPerPixel"))
+      o.maxRaysPerPixel =
+        static_cast<int>(integer(*v, f.sub("maxRaysPerPixel"), 1, kMaxRaysPerPixel));
+    if (const json* v = f.get("supersample"))
+      o.supersample = static_cast<int>(integer(*v, f.sub("supersample"), 1, 32));
+    if (const json* v = f.get("colorThreshold"))
+    {
+      o.colorThreshold = nonNegative(*v, f.sub("colorThreshold"));
+      if (o.colorThreshold > 1.0)
+        fail(f.sub("colorThreshold"), "must lie in [0, 1], got " + show(*v));
+    }
   }
 
   void tracing(const json& j, SceneDescription& d)
@@ -825,6 +859,11 @@ std::string effectiveSceneText(const SceneDescription& d)
                    { "maxSteps", t.maxSteps },
                    { "horizonEpsilon", t.horizonEpsilon },
                    { "maxHamiltonianError", t.maxHamiltonianError } };
+  const AntialiasOptions& a = d.rendering;
+  j["rendering"] = { { "antialias", toString(a.mode) },
+                     { "maxRaysPerPixel", a.maxRaysPerPixel },
+                     { "supersample", a.supersample },
+                     { "colorThreshold", a.colorThreshold } };
   // Whole frames keep exactly the text they always had; a subset frame is a frame of its own.
   if (d.subset.count > 0)
     j["subset"] = { { "pixels", d.subset.count }, { "digest", d.subset.digest } };

@@ -1,0 +1,77 @@
+// How a frame's pixels get their colours from more than one point of the scene: the options of the
+// scene's "rendering" section (AntialiasOptions) and the pass that applies them to traced records.
+//
+// A pixel is the square of side 1 about its centre ray (Camera::localDirection's convention, pixel
+// (i, j) at screen position (i, j)), and its colour is the box-filtered average of the picture
+// over that square:
+//  - `filter`: the centre ray's texture lookup is averaged over the pixel's footprint on the
+//    surface, the parallelogram spanned by the record's Jacobian ∂(u, v)/∂(i, j) (Texture's
+//    sampleFootprint). Where the Jacobian is undefined the texture is point-sampled.
+//  - `adaptive`: `filter`, and where the 8 neighbours' centre rays disagree with the pixel's
+//    (object, image order, termination, a colour difference above colorThreshold) or its footprint
+//    is undefined or far from linear, the pixel is sampled by an n × n stratified grid of rays,
+//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged.
+//  - `supersample` N > 1 samples every pixel by an N × N grid the same way (for references);
+//    with `none`, the cells are point-sampled.
+// Every sample position is fixed by the pixel alone, so that a frame is the same bit for bit at
+// any thread count and in any split into pieces.
+#ifndef asrt_Antialiasing_h
+#define asrt_Antialiasing_h
+
+#include "asrtTracingModule.h"
+
+#include <string>
+
+namespace asrt
+{
+enum class AntialiasMode
+{
+  None,    ///< one ray at each pixel's centre, point-sampled textures
+  Filter,  ///< one ray a pixel, textures filtered over the pixel's footprint
+  Adaptive ///< Filter, and extra rays where neighbouring rays disagree
+};
+
+ASRTTRACING_EXPORT const char* toString(AntialiasMode m);
+/// "none", "filter" or "adaptive"; throws InvalidParameter naming the accepted values otherwise.
+ASRTTRACING_EXPORT AntialiasMode antialiasModeFromString(const std::string& s);
+
+/// The largest number of rays a pixel may take (a supersample of 32 × 32).
+constexpr int kMaxRaysPerPixel = 1024;
+
+/// The scene file's "rendering" section.
+struct AntialiasOptions
+{
+  AntialiasMode mode = AntialiasMode::None;
+  /// The most rays an adaptively sampled pixel takes (centre ray included), 1 to
+  /// kMaxRaysPerPixel; the grid is ⌊√maxRaysPerPixel⌋ on a side.
+  int maxRaysPerPixel = 16;
+  /// N × N rays in every pixel, 1 to 32 (1: only what `mode` adds).
+  int supersample = 1;
+  /// Largest difference of any channel between neighbouring centre colours (point-sampled, in
+  /// [0, 1]) that adaptive sampling leaves alone; above it the pixel is sampled.
+  double colorThreshold = 0.25;
+
+  bool operator==(const AntialiasOptions& o) const
+  {
+    return mode == o.mode && maxRaysPerPixel == o.maxRaysPerPixel && supersample == o.supersample &&
+           colorThreshold == o.colorThreshold;
+  }
+  bool operator!=(const AntialiasOptions& o) const { return !(*this == o); }
+};
+
+/// The options of a frame traced one ray a pixel with point-sampled textures: what a scene text
+/// without a "rendering" section was traced with before anti-aliasing existed.
+inline AntialiasOptions singleRayRendering()
+{
+  AntialiasOptions o;
+  o.mode = AntialiasMode::None;
+  return o;
+}
+
+/// Throws InvalidParameter naming the field ("rendering.maxRaysPerPixel: ...") unless the cap
+/// lies in [1, kMaxRaysPerPixel], the supersample in [1, 32], the threshold in [0, 1], and a frame
+/// of `pixels` pixels supersampled N × N stays within kMaxFramePixels rays.
+ASRTTRACING_EXPORT void validateRendering(const AntialiasOptions& o, long long pixels);
+}
+
+#endif
