@@ -10,7 +10,8 @@
 //  - `adaptive`: `filter`, and where the 8 neighbours' centre rays disagree with the pixel's
 //    (object, image order, termination, a colour difference above colorThreshold) or its footprint
 //    is undefined or far from linear, the pixel is sampled by an n × n stratified grid of rays,
-//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged.
+//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged (a box
+//    reconstruction). The centre ray is one of the n² (FrameAntialiasing.cxx).
 //  - `supersample` N > 1 samples every pixel by an N × N grid the same way (for references);
 //    with `none`, the cells are point-sampled.
 // Every sample position is fixed by the pixel alone, so that a frame is the same bit for bit at
@@ -48,8 +49,10 @@ struct AntialiasOptions
   /// N × N rays in every pixel, 1 to 32 (1: only what `mode` adds).
   int supersample = 1;
   /// Largest difference of any channel between neighbouring centre colours (point-sampled, in
-  /// [0, 1]) that adaptive sampling leaves alone; above it the pixel is sampled.
-  double colorThreshold = 0.25;
+  /// [0, 1]) that adaptive sampling leaves alone; above it the pixel is sampled. At 1 (the
+  /// default) colour never decides: texture detail within an object is the filter's to average,
+  /// and a lower threshold spends rays on it (bench/REPORT.md measures the trade).
+  double colorThreshold = 1.0;
 
   bool operator==(const AntialiasOptions& o) const
   {
@@ -60,13 +63,23 @@ struct AntialiasOptions
 };
 
 /// The options of a frame traced one ray a pixel with point-sampled textures: what a scene text
-/// without a "rendering" section was traced with before anti-aliasing existed.
+/// without a "rendering" section was traced with before anti-aliasing existed. Every field is set
+/// here, not taken from the defaults: the store writes this section into such texts (schema
+/// version 5), and stored frames must keep being found if the defaults change.
 inline AntialiasOptions singleRayRendering()
 {
   AntialiasOptions o;
   o.mode = AntialiasMode::None;
+  o.maxRaysPerPixel = 1;
+  o.supersample = 1;
+  o.colorThreshold = 1.0;
   return o;
 }
+
+/// The anti-aliasing of the speed/accuracy presets ("fast", "balanced", "accurate"; the
+/// integrator's are integratorPreset's), chosen by measurement in bench/REPORT.md: the best quality
+/// for its cost. Throws InvalidParameter for any other name.
+ASRTTRACING_EXPORT AntialiasOptions renderingPreset(const std::string& name);
 
 /// Throws InvalidParameter naming the field ("rendering.maxRaysPerPixel: ...") unless the cap
 /// lies in [1, kMaxRaysPerPixel], the supersample in [1, 32], the threshold in [0, 1], and a frame
