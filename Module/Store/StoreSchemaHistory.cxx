@@ -463,6 +463,6 @@ CROSS JOIN LATERAL generate_series(0, b.n - 1) AS k;
 // singleRayRendering(), as effectiveSceneText() writes it (one ray a pixel, point-sampled
 // textures; what every frame before version 5 was traced with).
 const char* const RenderingSectionV5 =
-  R"JSON({"antialias":"none","colorThreshold":0.25,"maxRaysPerPixel":16,"supersample":1})JSON";
+  R"JSON({"antialias":"none","colorThreshold":1.0,"maxRaysPerPixel":1,"supersample":1})JSON";
 }
 }

@@ -373,7 +373,7 @@ std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSe
 /// The rendering section that effectiveSceneText() writes for singleRayRendering(), written out
 /// here: what the texts of versions 1 to 4 lacked, and migration 5 gives them.
 inline const std::string SingleRaySection =
-  R"("rendering":{"antialias":"none","colorThreshold":0.25,"maxRaysPerPixel":16,"supersample":1})";
+  R"("rendering":{"antialias":"none","colorThreshold":1.0,"maxRaysPerPixel":1,"supersample":1})";
 
 /// The texts a writer of schema version 4 or earlier stored for a frame of `d` (whose rendering
 /// must be singleRayRendering(), the only one there was): its effective text, which had no
@@ -395,8 +395,10 @@ inline StoredTexts storedTexts(const std::string& frame)
     j["integrator"].erase(k);
   return { frame, j.dump() };
 }
-inline StoredTexts legacyTexts(const asrt::SceneDescription& d)
+inline StoredTexts legacyTexts(asrt::SceneDescription d)
 {
+  // A frame stored before anti-aliasing was one ray a pixel.
+  d.rendering = asrt::singleRayRendering();
   std::string frame = asrt::effectiveSceneText(d);
   // Keys sorted: "spacetime" always follows the section.
   const std::size_t at = frame.find(SingleRaySection + ",");

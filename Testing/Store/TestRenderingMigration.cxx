@@ -57,6 +57,8 @@ SceneDescription scene(int width, int height, double mass = 1.0)
   d.camera.width = width;
   d.camera.height = height;
   d.spacetime.mass = mass;
+  // The frames these scenes stand for were stored before anti-aliasing: one ray a pixel.
+  d.rendering = asrt::singleRayRendering();
   return d;
 }
 
@@ -592,7 +594,9 @@ TEST(RenderingMigration, AFrameOf200By200Migrates)
   EXPECT_EQ(firstDifference(store.readFrame(id), singleRay(f.tiles[0])), -1);
   EXPECT_EQ(db.value("SELECT count(*) || ':' || max(n) FROM ray_blocks"),
             std::to_string((200 * 200 + 29) / 30) + ":30");
-  EXPECT_EQ(store.findFrame(f.scene), id);
+  SceneDescription lookup = f.scene;
+  lookup.rendering = asrt::singleRayRendering();
+  EXPECT_EQ(store.findFrame(lookup), id);
   std::printf("[ migration 5 ] a version 4 database with one 200x200 frame (40000 rays) migrated "
               "in %.3f s\n",
               seconds);
