@@ -43,6 +43,11 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
   --preset NAME         fast, balanced or accurate (rtol 1e-8, 1e-10, 1e-12 for the
                         method auto picks; measured in bench/REPORT.md)
   --method NAME         an integrator ("asrt bench" and bench/REPORT.md compare them)
+  --antialias MODE      none (one ray a pixel), filter (textures filtered over each
+                        pixel's footprint) or adaptive (filter, and up to --max-rays rays
+                        in pixels whose neighbours disagree); the preset's otherwise
+  --max-rays N          the most rays an adaptively sampled pixel takes (1 to 1024)
+  --supersample N       N x N rays in every pixel (1 to 32), for reference pictures
   --step H              the integrator's step
   --max-failed-share F  refuse the frame (exit 1, nothing written or stored) when more than
                         this fraction of its rays failed numerically or ran out of steps
@@ -236,7 +241,9 @@ const std::vector<OptionSpec>& sceneOverrideSpecs()
     { "focal", OptionSpec::Value },      { "view-up", OptionSpec::Value },
     { "view-angle", OptionSpec::Value }, { "resolution", OptionSpec::Value, 'r' },
     { "preset", OptionSpec::Value },     { "method", OptionSpec::Value },
-    { "step", OptionSpec::Value },       { "max-failed-share", OptionSpec::Value }
+    { "step", OptionSpec::Value },       { "max-failed-share", OptionSpec::Value },
+    { "antialias", OptionSpec::Value },  { "max-rays", OptionSpec::Value },
+    { "supersample", OptionSpec::Value }
   };
   return specs;
 }
@@ -293,6 +300,32 @@ void applySceneOverrides(const Options& options, vtkGeodesicSource* source)
     if (!(*h > 0.0))
       throw UsageError("--step: must be positive");
     source->SetIntegrationStep(*h);
+  }
+  if (options.has("antialias"))
+  {
+    const std::string mode = options.get("antialias");
+    try
+    {
+      asrt::antialiasModeFromString(mode);
+    }
+    catch (const std::exception& e)
+    {
+      throw UsageError("--antialias: " + std::string(e.what()));
+    }
+    source->SetAntialias(mode.c_str());
+  }
+  if (auto n = options.positiveInteger("max-rays"))
+  {
+    if (*n > asrt::kMaxRaysPerPixel)
+      throw UsageError("--max-rays: must lie in [1, " + std::to_string(asrt::kMaxRaysPerPixel) +
+                       "], got " + std::to_string(*n));
+    source->SetMaxRaysPerPixel(*n);
+  }
+  if (auto n = options.positiveInteger("supersample"))
+  {
+    if (*n > 32)
+      throw UsageError("--supersample: must lie in [1, 32], got " + std::to_string(*n));
+    source->SetSupersample(*n);
   }
   maxFailedShare(options); // a malformed value is refused before anything is traced
 }

@@ -435,12 +435,12 @@ struct vtkGeodesicDistributedSource::DataRequest
     const auto traceStart = std::chrono::steady_clock::now();
     try
     {
-      this->records = this->tracer->tracePixels(pixels,
-                                                [this](double f)
-                                                {
-                                                  this->source->UpdateProgress(0.8 * f);
-                                                  return !this->source->GetAbortExecute();
-                                                });
+      this->records = this->tracer->traceCentres(pixels,
+                                                 [this](double f)
+                                                 {
+                                                   this->source->UpdateProgress(0.8 * f);
+                                                   return !this->source->GetAbortExecute();
+                                                 });
       if (this->source->GetAbortExecute())
         this->failure = { "interrupted", false, true };
     }
@@ -449,6 +449,28 @@ struct vtkGeodesicDistributedSource::DataRequest
       this->failure.message = e.what();
     }
     this->traceSeconds = secondsSince(traceStart);
+    return this->run.agree(this->failure);
+  }
+
+  /// Anti-aliases this process's rows, judged with the neighbouring rows of the others.
+  /// Collective: every process agrees on a failure.
+  bool antialiasOwnRows(const std::vector<asrt::JacobianSample>& neighbours)
+  {
+    try
+    {
+      this->tracer->antialias(this->records, neighbours,
+                              [this](double f)
+                              {
+                                this->source->UpdateProgress(0.8 + 0.02 * f);
+                                return !this->source->GetAbortExecute();
+                              });
+      if (this->source->GetAbortExecute())
+        this->failure = { "interrupted", false, true };
+    }
+    catch (const std::exception& e)
+    {
+      this->failure.message = e.what();
+    }
     return this->run.agree(this->failure);
   }
 
@@ -538,10 +560,12 @@ int vtkGeodesicDistributedSource::RequestData(vtkInformation*, vtkInformationVec
   // Whatever fails from here on, a begun frame must not stay behind half-written.
   if (!request.traceOwnRows())
     return request.failAndForget(request.failure.message);
-  // The Jacobians across the rows other processes traced.
-  asrt::FrameTracer::computeJacobians(
-    request.records, request.run.exchangeNeighbourRows(*request.partition, request.records,
-                                                       request.scene->camera.width));
+  // The Jacobians and the anti-aliasing across the rows other processes traced.
+  const std::vector<asrt::JacobianSample> neighbours = request.run.exchangeNeighbourRows(
+    *request.partition, request.records, request.scene->camera.width);
+  asrt::FrameTracer::computeJacobians(request.records, neighbours);
+  if (!request.antialiasOwnRows(neighbours))
+    return request.failAndForget(request.failure.message);
   this->UpdateProgress(0.82);
   request.storeTiles();
   request.assembleImage();

@@ -92,6 +92,7 @@ vtkGeodesicSource::~vtkGeodesicSource()
   this->SetTextureDirectory(nullptr);
   this->SetIntegrationMethod(nullptr);
   this->SetIntegrationPreset(nullptr);
+  this->SetAntialias(nullptr);
 }
 
 vtkImageData* vtkGeodesicSource::GetImageOutput()
@@ -277,6 +278,7 @@ struct vtkGeodesicSource::Internals
       try
       {
         d.integrator = asrt::integratorPreset(self->IntegrationPreset);
+        d.rendering = asrt::renderingPreset(self->IntegrationPreset);
       }
       catch (const asrt::InvalidParameter& e)
       {
@@ -287,6 +289,21 @@ struct vtkGeodesicSource::Internals
       d.integrator.method = self->IntegrationMethod;
     if (isSet(self->IntegrationStep))
       d.integrator.step = self->IntegrationStep;
+    if (self->Antialias && *self->Antialias)
+    {
+      try
+      {
+        d.rendering.mode = asrt::antialiasModeFromString(self->Antialias);
+      }
+      catch (const asrt::InvalidParameter& e)
+      {
+        throw asrt::InvalidParameter(std::string("rendering.antialias: ") + e.what());
+      }
+    }
+    if (self->MaxRaysPerPixel != 0)
+      d.rendering.maxRaysPerPixel = self->MaxRaysPerPixel;
+    if (self->Supersample != 0)
+      d.rendering.supersample = self->Supersample;
     // The overridden values pass the scene file's own checks: a frame the file could not describe
     // is refused (a camera outside its celestial sphere, a mass whose horizon overflows, ...).
     asrt::validateScene(d);
@@ -589,7 +606,10 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent
      << "IntegrationPreset: " << (this->IntegrationPreset ? this->IntegrationPreset : "(scene)")
-     << "\n";
+     << "\n"
+     << indent << "Antialias: " << (this->Antialias ? this->Antialias : "(scene)") << "\n"
+     << indent << "MaxRaysPerPixel: " << this->MaxRaysPerPixel << "\n"
+     << indent << "Supersample: " << this->Supersample << "\n";
   os << indent << "IntegrationStep: " << this->IntegrationStep << "\n";
   os << indent << "PixelSubset: " << (this->PixelSubset ? "set" : "(none)") << "\n";
   os << indent << "GeneratePolylines: " << this->GeneratePolylines << "\n";

@@ -108,6 +108,18 @@ public:
   ///@}
 
   ///@{
+  /// Anti-aliasing override ("none", "filter" or "adaptive"; asrt::AntialiasOptions), the most
+  /// rays an adaptively sampled pixel takes (1 to 1024) and a fixed supersample N × N (1 to 32).
+  /// Empty and 0 keep the scene's "rendering" (or the preset's, if IntegrationPreset is set).
+  vtkSetStringMacro(Antialias);
+  vtkGetStringMacro(Antialias);
+  vtkSetMacro(MaxRaysPerPixel, int);
+  vtkGetMacro(MaxRaysPerPixel, int);
+  vtkSetMacro(Supersample, int);
+  vtkGetMacro(Supersample, int);
+  ///@}
+
+  ///@{
   /// Trace only these pixels: a 2-component array of (i, j). Null traces the whole frame.
   /// Untraced pixels of the image are black with Termination 0 ("running"). The frame's scene
   /// (field data "SceneJSON") then names the subset ("subset": count and digest of the pixels),
@@ -182,6 +194,9 @@ protected:
   int Resolution[2] = { 0, 0 };
   char* IntegrationMethod = nullptr;
   char* IntegrationPreset = nullptr;
+  char* Antialias = nullptr;
+  int MaxRaysPerPixel = 0;
+  int Supersample = 0;
   bool GeneratePolylines = false;
   int PolylineStride = 10;
   double MemoryLimit = 0.0;

@@ -33,6 +33,27 @@ AntialiasMode antialiasModeFromString(const std::string& s)
                          "\" (use none, filter or adaptive)");
 }
 
+AntialiasOptions renderingPreset(const std::string& name)
+{
+  AntialiasOptions o;
+  if (name == "fast")
+    o.mode = AntialiasMode::Filter;
+  else if (name == "balanced")
+  {
+    o.mode = AntialiasMode::Adaptive;
+    o.maxRaysPerPixel = 9;
+  }
+  else if (name == "accurate")
+  {
+    o.mode = AntialiasMode::Adaptive;
+    o.maxRaysPerPixel = 25;
+  }
+  else
+    throw InvalidParameter("unknown preset \"" + name.substr(0, 40) +
+                           "\" (use fast, balanced or accurate)");
+  return o;
+}
+
 void validateRendering(const AntialiasOptions& o, long long pixels)
 {
   auto refuse = [](const char* field, const std::string& msg)

@@ -48,8 +48,10 @@ struct AntialiasOptions
   /// N × N rays in every pixel, 1 to 32 (1: only what `mode` adds).
   int supersample = 1;
   /// Largest difference of any channel between neighbouring centre colours (point-sampled, in
-  /// [0, 1]) that adaptive sampling leaves alone; above it the pixel is sampled.
-  double colorThreshold = 0.25;
+  /// [0, 1]) that adaptive sampling leaves alone; above it the pixel is sampled. At 1 (the
+  /// default) colour never decides: texture detail within an object is the filter's to average,
+  /// and a lower threshold spends rays on it (bench/REPORT.md measures the trade).
+  double colorThreshold = 1.0;
 
   bool operator==(const AntialiasOptions& o) const
   {
@@ -67,6 +69,11 @@ inline AntialiasOptions singleRayRendering()
   o.mode = AntialiasMode::None;
   return o;
 }
+
+/// The anti-aliasing of the speed/accuracy presets ("fast", "balanced", "accurate"; the
+/// integrator's are integratorPreset's), chosen by measurement in bench/REPORT.md: the best quality
+/// for its cost. Throws InvalidParameter for any other name.
+ASRTTRACING_EXPORT AntialiasOptions renderingPreset(const std::string& name);
 
 /// Throws InvalidParameter naming the field ("rendering.maxRaysPerPixel: ...") unless the cap
 /// lies in [1, kMaxRaysPerPixel], the supersample in [1, 32], the threshold in [0, 1], and a frame

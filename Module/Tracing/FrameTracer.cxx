@@ -1,11 +1,12 @@
 #include "FrameTracer.h"
 
+#include "PixelLookup.h"
+
 #include <omp.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 namespace asrt
 {
@@ -145,8 +146,52 @@ RayRecord FrameTracer::traceAt(double x, double y) const
   return r;
 }
 
+RayRecord FrameTracer::traceThrough(Propagator& prop, double x, double y) const
+{
+  return traceWith(*this, prop, this->Tracing, x, y, nullptr);
+}
+
+Color FrameTracer::pointColor(const JacobianSample& s) const
+{
+  const Scene& scene = *this->Desc.scene;
+  if (s.objectId >= 0)
+    return scene.shade(s.objectId, s.u, s.v);
+  switch (s.termination)
+  {
+    case Termination::Captured:
+      return scene.horizonColor;
+    case Termination::Escaped:
+      return scene.background;
+    default:
+      return failureColor;
+  }
+}
+
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
+{
+  // The centre rays take the first share of the progress; anti-aliasing reports the rest.
+  const bool extra =
+    this->Desc.rendering.mode == AntialiasMode::Adaptive || this->Desc.rendering.supersample > 1;
+  const double share = extra ? 0.5 : 1.0;
+  std::function<bool(double)> centreProgress;
+  if (progress)
+    centreProgress = [&](double f) { return progress(share * f); };
+  std::vector<RayRecord> out = this->traceCentres(pixels, centreProgress);
+  bool stopped = false;
+  if (progress)
+    stopped = !progress(share);
+  if (stopped)
+    return out;
+  std::function<bool(double)> restProgress;
+  if (progress)
+    restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
+  this->antialias(out, {}, restProgress);
+  return out;
+}
+
+std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int, int>>& pixels,
+                                                 const std::function<bool(double)>& progress) const
 {
   const long n = static_cast<long>(pixels.size());
   std::vector<RayRecord> out(pixels.size());
@@ -190,14 +235,30 @@ std::vector<RayRecord> FrameTracer::traceRows(int rowBegin, int rowEnd,
   for (int j = first; j < last; ++j)
     for (int i = 0; i < w; ++i)
       pixels.emplace_back(i, j);
-  std::vector<RayRecord> records = this->tracePixels(pixels, progress);
-  // Drop the halo rows, which were traced only for their neighbours' Jacobians.
-  const size_t before = static_cast<size_t>(rowBegin - first) * w;
-  const size_t after = static_cast<size_t>(last - std::max(rowBegin, rowEnd)) * w;
-  records.erase(records.end() - static_cast<std::ptrdiff_t>(std::min(after, records.size())),
-                records.end());
-  records.erase(records.begin(),
-                records.begin() + static_cast<std::ptrdiff_t>(std::min(before, records.size())));
+  const bool extra =
+    this->Desc.rendering.mode == AntialiasMode::Adaptive || this->Desc.rendering.supersample > 1;
+  const double share = extra ? 0.5 : 1.0;
+  std::function<bool(double)> centreProgress, restProgress;
+  if (progress)
+  {
+    centreProgress = [&](double f) { return progress(share * f); };
+    restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
+  }
+  std::vector<RayRecord> records = this->traceCentres(pixels, centreProgress);
+  // The halo rows were traced only for their neighbours' Jacobians and judgements: they go to
+  // the anti-aliasing as neighbours and are dropped.
+  const size_t before = std::min(static_cast<size_t>(rowBegin - first) * w, records.size());
+  const size_t after =
+    std::min(static_cast<size_t>(last - std::max(rowBegin, rowEnd)) * w, records.size() - before);
+  std::vector<JacobianSample> halo;
+  for (size_t k = 0; k < before; ++k)
+    halo.push_back(jacobianSample(records[k]));
+  for (size_t k = records.size() - after; k < records.size(); ++k)
+    halo.push_back(jacobianSample(records[k]));
+  records.erase(records.end() - static_cast<std::ptrdiff_t>(after), records.end());
+  records.erase(records.begin(), records.begin() + static_cast<std::ptrdiff_t>(before));
+  if (!progress || progress(share))
+    this->antialias(records, halo, restProgress);
   return records;
 }
 
@@ -205,54 +266,8 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
                                    const std::vector<JacobianSample>& neighbours)
 {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<JacobianSample> samples;
-  samples.reserve(records.size() + neighbours.size());
-  for (const RayRecord& r : records)
-    samples.push_back(jacobianSample(r));
-  samples.insert(samples.end(), neighbours.begin(), neighbours.end());
-  if (samples.empty())
-    return;
-  // Pixels by (i, j): a dense grid over their bounding box when they fill much of it (a frame,
-  // bands or interleaved rows of one), a hash map when they are scattered (a pixel subset).
-  int iMin = samples[0].i, iMax = iMin, jMin = samples[0].j, jMax = jMin;
-  for (const JacobianSample& s : samples)
-  {
-    iMin = std::min(iMin, s.i);
-    iMax = std::max(iMax, s.i);
-    jMin = std::min(jMin, s.j);
-    jMax = std::max(jMax, s.j);
-  }
-  const std::int64_t boxWidth = std::int64_t(iMax) - iMin + 1;
-  const std::int64_t box = boxWidth * (std::int64_t(jMax) - jMin + 1);
-  const bool dense = box <= 4 * static_cast<std::int64_t>(samples.size());
-  std::vector<std::int64_t> grid(dense ? static_cast<std::size_t>(box) : 0, -1);
-  std::unordered_map<std::int64_t, std::size_t> index;
-  auto key = [](int i, int j)
-  { return (static_cast<std::int64_t>(j) << 32) ^ static_cast<std::uint32_t>(i); };
-  for (std::size_t k = 0; k < samples.size(); ++k)
-  {
-    if (dense)
-    {
-      std::int64_t& slot =
-        grid[static_cast<std::size_t>((samples[k].j - jMin) * boxWidth + (samples[k].i - iMin))];
-      if (slot < 0)
-        slot = static_cast<std::int64_t>(k);
-    }
-    else
-      index.emplace(key(samples[k].i, samples[k].j), k);
-  }
-  auto at = [&](int i, int j) -> const JacobianSample*
-  {
-    if (dense)
-    {
-      if (i < iMin || i > iMax || j < jMin || j > jMax)
-        return nullptr;
-      const std::int64_t k = grid[static_cast<std::size_t>((j - jMin) * boxWidth + (i - iMin))];
-      return k < 0 ? nullptr : &samples[static_cast<std::size_t>(k)];
-    }
-    const auto it = index.find(key(i, j));
-    return it == index.end() ? nullptr : &samples[it->second];
-  };
+  const PixelLookup lookup(records, neighbours);
+  auto at = [&](int i, int j) { return lookup.at(i, j); };
   auto same = [](const RayRecord& a, const JacobianSample* b)
   {
     return b && b->termination != Termination::Running && b->objectId == a.objectId &&

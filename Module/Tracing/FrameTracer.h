@@ -41,16 +41,35 @@ public:
   RayRecord traceAt(double x, double y) const;
 
   /// Traces the given pixels (i, j) with OpenMP, dynamically scheduled (rays near the photon
-  /// sphere cost far more than the rest). The result is in the order given and identical for any
-  /// number of threads. `progress` is called now and then with the fraction done; if it returns
-  /// false the work stops early and the returned records of untraced pixels keep termination
-  /// Running. Jacobians come from the neighbours among these pixels (NaN without any).
+  /// sphere cost far more than the rest), and anti-aliases them as the description's rendering
+  /// says (antialias()), judging each pixel by its neighbours among these pixels. The result is in
+  /// the order given and identical for any number of threads. `progress` is called now and then
+  /// with the fraction done; if it returns false the work stops early and the returned records of
+  /// untraced pixels keep termination Running. Jacobians come from the neighbours among these
+  /// pixels (NaN without any).
   std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                      const std::function<bool(double)>& progress = nullptr) const;
 
+  /// The centre rays of tracePixels alone: point-sampled colours, one ray a pixel, Jacobians from
+  /// the neighbours among these pixels. For callers that complete the Jacobians with neighbours
+  /// traced elsewhere before anti-aliasing (row bands, other processes).
+  std::vector<RayRecord> traceCentres(const std::vector<std::pair<int, int>>& pixels,
+                                      const std::function<bool(double)>& progress = nullptr) const;
+
+  /// Anti-aliases records traced by traceCentres whose Jacobians are complete, as the
+  /// description's rendering says (Antialiasing.h): filters their textures over their
+  /// footprints, and traces the extra rays of the pixels that need them. A pixel is judged by its
+  /// 8 neighbours among the records and `neighbours`; the judgement reads only their centre rays
+  /// (JacobianSample), so pieces of a frame anti-aliased with their bordering rows as neighbours
+  /// assemble bit for bit into the whole frame. Only colours and raysPerPixel change. Returns
+  /// false if `progress` (as tracePixels') asked to stop; the colours are then incomplete.
+  bool antialias(std::vector<RayRecord>& records,
+                 const std::vector<JacobianSample>& neighbours = {},
+                 const std::function<bool(double)>& progress = nullptr) const;
+
   /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left. The rows just outside
-  /// the band are traced too (and dropped) so that the Jacobians of a band are those of the whole
-  /// frame: pieces assemble into exactly the single-piece frame.
+  /// the band are traced too (and dropped) so that the Jacobians and the anti-aliasing of a band
+  /// are those of the whole frame: pieces assemble into exactly the single-piece frame.
   std::vector<RayRecord> traceRows(int rowBegin, int rowEnd,
                                    const std::function<bool(double)>& progress = nullptr) const;
 
@@ -61,6 +80,12 @@ public:
                                const std::vector<JacobianSample>& neighbours = {});
 
 private:
+  /// The ray through screen position (x, y) with the given propagator (one per thread).
+  RayRecord traceThrough(Propagator& prop, double x, double y) const;
+  /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,
+  /// the background or the failure colour).
+  Color pointColor(const JacobianSample& s) const;
+
   SceneDescription Desc;
   std::unique_ptr<Spacetime> St;
   std::unique_ptr<Camera> Cam;

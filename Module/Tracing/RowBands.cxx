@@ -33,22 +33,39 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
   const int bandRows = static_cast<int>(std::clamp<std::size_t>(bandPixels / width, 1, H));
   const double total = static_cast<double>(last - first) * W;
 
-  // Rows [from, to) of `records`, whose first row is `firstRow`, to the sink; those outside
-  // [rowBegin, rowEnd) are dropped.
-  auto handOn = [&](const std::vector<RayRecord>& records, int firstRow, int from, int to)
+  // Rows [from, to) of `records`, whose first row is `firstRow`, anti-aliased and handed to the
+  // sink; those outside [rowBegin, rowEnd) are dropped. The rows either side of [from, to) are in
+  // `records` or in `around`.
+  double done = 0;
+  std::vector<RayRecord> out;
+  std::vector<JacobianSample> bordering;
+  auto handOn = [&](const std::vector<RayRecord>& records, int firstRow, int from, int to,
+                    const std::vector<JacobianSample>& around)
   {
     from = std::max(from, rowBegin);
     to = std::min(to, rowEnd);
-    if (from < to)
-      sink(records.data() + static_cast<std::size_t>(from - firstRow) * width,
-           static_cast<std::size_t>(to - from) * width);
+    if (from >= to)
+      return true;
+    const auto begin = records.begin() + static_cast<std::ptrdiff_t>(from - firstRow) * W;
+    out.assign(begin, begin + static_cast<std::ptrdiff_t>(to - from) * W);
+    bordering = around;
+    const int lastRow = firstRow + static_cast<int>(records.size() / width);
+    for (int j : { from - 1, to })
+      if (j >= firstRow && j < lastRow)
+        appendSamples(records, static_cast<std::size_t>(j - firstRow) * width, width, bordering);
+    std::function<bool(double)> keepGoing;
+    if (progress)
+      keepGoing = [&](double) { return progress(done / total); };
+    if (!tracer.antialias(out, bordering, keepGoing))
+      return false;
+    sink(out.data(), out.size());
+    return true;
   };
 
   // The last row traced waits for the row above it; `below` has the samples of the row under it.
   std::vector<RayRecord> held;
   std::vector<JacobianSample> below, edge;
   std::vector<std::pair<int, int>> pixels;
-  double done = 0;
   for (int b = first; b < last;)
   {
     const int e = std::min(last, b + bandRows);
@@ -65,7 +82,7 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
         stopped = !progress((done + f * share) / total);
         return !stopped;
       };
-    std::vector<RayRecord> band = tracer.tracePixels(pixels, bandProgress);
+    std::vector<RayRecord> band = tracer.traceCentres(pixels, bandProgress);
     if (stopped)
       return false;
     done += share;
@@ -78,10 +95,12 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
       FrameTracer::computeJacobians(band, edge);
       appendSamples(band, 0, width, below);
       FrameTracer::computeJacobians(held, below);
-      handOn(held, b - 1, b - 1, b);
+      if (!handOn(held, b - 1, b - 1, b, below))
+        return false;
     }
     // Rows b .. e − 2 have both neighbours; row e − 1 waits for row e.
-    handOn(band, b, b, e - 1);
+    if (!handOn(band, b, b, e - 1, edge))
+      return false;
     below.clear();
     if (e - b >= 2)
       appendSamples(band, static_cast<std::size_t>(e - 2 - b) * width, width, below);
@@ -91,7 +110,6 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
     b = e;
   }
   FrameTracer::computeJacobians(held, below);
-  handOn(held, last - 1, last - 1, last);
-  return true;
+  return handOn(held, last - 1, last - 1, last, below);
 }
 }

@@ -18,6 +18,7 @@ namespace asrt
 /// gamma conversion), so that a flat-space render reproduces an image's pixels.
 using Color = Vec3;
 
+struct TextureFootprint { double dudx = 0, dvdx = 0, dudy = 0, dvdy = 0; }; // SHIM
 class ASRTTRACING_EXPORT Texture
 {
 public:
@@ -275,6 +276,8 @@ public:
   bool firstHit(const Segment& seg, SurfaceHit& hit) const;
   /// The hit object's colour at the hit; the background if the id is unknown.
   Color shade(const SurfaceHit& hit) const;
+  Color shade(int id, double u, double v) const { auto* o = find(id); return o ? o->texture().sample(u, v) : background; } // SHIM
+  Color shadeFootprint(int id, double u, double v, const TextureFootprint&) const { return shade(id, u, v); } // SHIM
   Color background = Color(0, 0, 0);   ///< for rays that escape without hitting anything
   Color horizonColor = Color(0, 0, 0); ///< for rays captured by the hole
   /// Radius of the largest celestial sphere, 0 if none: rays farther out can hit nothing.

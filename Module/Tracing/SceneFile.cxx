@@ -566,8 +566,21 @@ private:
 
   static void rendering(const json& j, SceneDescription& d)
   {
-    Fields f(j, "rendering", { "antialias", "maxRaysPerPixel", "supersample", "colorThreshold" });
+    Fields f(j, "rendering",
+             { "preset", "antialias", "maxRaysPerPixel", "supersample", "colorThreshold" });
     AntialiasOptions& o = d.rendering;
+    // A preset sets every field first; the fields given beside it refine it.
+    if (const json* v = f.get("preset"))
+    {
+      try
+      {
+        o = renderingPreset(clipped(str(*v, f.sub("preset"), true)));
+      }
+      catch (const InvalidParameter& e)
+      {
+        fail(f.sub("preset"), e.what());
+      }
+    }
     if (const json* v = f.get("antialias"))
     {
       try

@@ -1,0 +1,235 @@
+// Anti-aliasing against independent truth: a head-on checker in flat space against its exact area
+// average over each pixel, adaptive sampling against a fixed 8 × 8 supersample the test traces
+// itself, the same frame at any thread count and in any split into pieces, and the rendering
+// options refused by name.
+#include "CameraFixtures.h"
+#include "FrameTracer.h"
+#include "RowBands.h"
+#include "SceneFile.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace asrt;
+using asrt::testing::looking;
+
+namespace
+{
+/// The integral of the ±1 square wave s(x) = (−1)^⌊x⌋ from 0 to x: a triangle wave.
+double squareWaveIntegral(double x)
+{
+  const double f = x - 2.0 * std::floor(0.5 * x); // x mod 2, in [0, 2)
+  return f <= 1.0 ? f : 2.0 - f;
+}
+
+/// The mean of s over [a, b].
+double squareWaveMean(double a, double b)
+{
+  return (squareWaveIntegral(b) - squareWaveIntegral(a)) / (b - a);
+}
+
+SceneDescription checkerWall(double mass, int w, int h)
+{
+  SceneDescription d;
+  d.spacetime.mass = mass;
+  d.camera = looking(Vec3(0, -30, 0), Vec3(0, 0, 0), Vec3(0, 0, 1), 40, w, h);
+  d.scene = std::make_shared<Scene>();
+  d.scene->add(std::make_unique<Rectangle>(
+    1, "wall", std::make_shared<CheckerTexture>(12, 12, Color(0.9, 0.2, 0.1), Color(0.1, 0.3, 0.9)),
+    Vec3(0, 10, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 20.0, 20.0));
+  d.scene->add(std::make_unique<CelestialSphere>(
+    0, "sky", std::make_shared<CheckerTexture>(24, 12, Color(1, 1, 1), Color(0, 0, 0)), 200.0));
+  return d;
+}
+
+double rmsDifference(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
+{
+  double s = 0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    s += (a[k].color - b[k].color).squaredNorm();
+  return std::sqrt(s / (3.0 * a.size()));
+}
+
+std::vector<RayRecord> traceFrame(SceneDescription d, const AntialiasOptions& o)
+{
+  d.rendering = o;
+  FrameTracer tracer(d);
+  return tracer.traceRows(0, d.camera.height);
+}
+
+AntialiasOptions options(AntialiasMode mode, int cap = 16, int supersample = 1)
+{
+  AntialiasOptions o;
+  o.mode = mode;
+  o.maxRaysPerPixel = cap;
+  o.supersample = supersample;
+  return o;
+}
+}
+
+TEST(Antialiasing, HeadOnCheckerIsItsExactAreaAverageOverEachPixel)
+{
+  // Flat space, the wall perpendicular to the line of sight: a pixel's footprint is the square of
+  // the wall that the pinhole projects it onto, and the checker's average over it is a product of
+  // square-wave means.
+  const int W = 48, H = 36;
+  SceneDescription d = checkerWall(0.0, W, H);
+  const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::Filter));
+  const double t = std::tan(0.5 * 40.0 * M_PI / 180.0), aspect = double(W) / H;
+  const double distance = 40.0, side = 40.0, checks = 12.0; // eye to wall, wall side, checks a side
+  const Color a(0.9, 0.2, 0.1), b(0.1, 0.3, 0.9);
+  double worst = 0;
+  for (const RayRecord& r : frame)
+  {
+    ASSERT_EQ(r.objectId, 1) << "pixel " << r.i << ", " << r.j;
+    EXPECT_EQ(r.raysPerPixel, 1);
+    // The pixel's edges on the wall, in checks from the wall's corner (u = 0 at x = −20).
+    auto checkX = [&](double i)
+    { return ((2.0 * i + 1.0 - W) / W * t * aspect * distance + 20.0) / side * checks; };
+    auto checkZ = [&](double j)
+    { return ((2.0 * j + 1.0 - H) / H * t * distance + 20.0) / side * checks; };
+    const double mean = squareWaveMean(checkX(r.i - 0.5), checkX(r.i + 0.5)) *
+                        squareWaveMean(checkZ(r.j - 0.5), checkZ(r.j + 0.5));
+    const Color exact = 0.5 * (a + b) + 0.5 * (a - b) * mean;
+    worst = std::max(worst, (r.color - exact).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst, 1.0 / 255.0);
+  // One ray a pixel point-samples, and is far from the average where a check edge crosses.
+  const std::vector<RayRecord> point = traceFrame(d, options(AntialiasMode::None));
+  EXPECT_GT(rmsDifference(point, frame), 0.05);
+}
+
+TEST(Antialiasing, AdaptiveSamplingConvergesToTheFixedSupersampleAsItsCapGrows)
+{
+  const int W = 24, H = 24;
+  SceneDescription d = checkerWall(1.0, W, H);
+  d.camera.position = Vec3(0, -60, 0);
+  d.camera.viewAngle = 30;
+  const std::vector<RayRecord> reference = traceFrame(d, options(AntialiasMode::Filter, 1, 8));
+  for (const RayRecord& r : reference)
+    ASSERT_EQ(r.raysPerPixel, 65);
+  double previous = rmsDifference(traceFrame(d, options(AntialiasMode::None)), reference);
+  const double none = previous;
+  double last = 0;
+  for (int cap : { 4, 16, 36, 64 })
+  {
+    const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::Adaptive, cap));
+    const double e = rmsDifference(frame, reference);
+    EXPECT_LT(e, previous) << "cap " << cap;
+    previous = e;
+    last = e;
+    long sampled = 0;
+    for (std::size_t k = 0; k < frame.size(); ++k)
+    {
+      const int n = static_cast<int>(std::floor(std::sqrt(cap)));
+      if (frame[k].raysPerPixel == 1)
+        continue;
+      ++sampled;
+      EXPECT_EQ(frame[k].raysPerPixel, n * n + (n % 2 == 0 ? 1 : 0));
+      // At the reference's grid the sampled pixels are the reference's pixels.
+      if (cap == 64)
+      {
+        EXPECT_EQ((frame[k].color - reference[k].color).norm(), 0.0);
+      }
+    }
+    EXPECT_GT(sampled, 0);
+    EXPECT_LT(sampled, static_cast<long>(frame.size()) / 2)
+      << "adaptive sampling samples everything";
+  }
+  EXPECT_LT(last, 0.25 * none);
+}
+
+TEST(Antialiasing, FramesAreTheSameAtAnyThreadCountAndInAnySplit)
+{
+  const int W = 20, H = 17;
+  SceneDescription d = checkerWall(1.0, W, H);
+  d.rendering = options(AntialiasMode::Adaptive, 9);
+  FrameTracer tracer(d);
+  const int threads = omp_get_max_threads();
+  std::vector<std::vector<RayRecord>> frames;
+  for (int n : { 1, 2, 3 })
+  {
+    omp_set_num_threads(n);
+    frames.push_back(tracer.traceRows(0, H));
+  }
+  omp_set_num_threads(threads);
+  // Pieces: two calls of traceRows, row bands of 3 rows, and tracePixels of the whole frame.
+  std::vector<RayRecord> pieces = tracer.traceRows(0, 7), upper = tracer.traceRows(7, H);
+  pieces.insert(pieces.end(), upper.begin(), upper.end());
+  frames.push_back(pieces);
+  std::vector<RayRecord> banded;
+  ASSERT_TRUE(traceRowsInBands(
+    tracer, 0, H, [&](const RayRecord* r, std::size_t n) { banded.insert(banded.end(), r, r + n); },
+    nullptr, 3 * W));
+  frames.push_back(banded);
+  std::vector<std::pair<int, int>> all;
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i)
+      all.emplace_back(i, j);
+  frames.push_back(tracer.tracePixels(all));
+  long sampled = 0;
+  for (const RayRecord& r : frames[0])
+    sampled += r.raysPerPixel > 1;
+  EXPECT_GT(sampled, 0);
+  for (std::size_t f = 1; f < frames.size(); ++f)
+  {
+    ASSERT_EQ(frames[f].size(), frames[0].size()) << "frame " << f;
+    for (std::size_t k = 0; k < frames[0].size(); ++k)
+    {
+      const RayRecord &a = frames[0][k], &b = frames[f][k];
+      ASSERT_EQ(a.i, b.i);
+      ASSERT_EQ(a.j, b.j);
+      EXPECT_EQ(a.raysPerPixel, b.raysPerPixel) << "frame " << f << " pixel " << a.i << ", " << a.j;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_EQ(a.color[c], b.color[c]) << "frame " << f << " pixel " << a.i << ", " << a.j;
+    }
+  }
+}
+
+TEST(Antialiasing, BadRenderingOptionsAreRefusedNamingTheField)
+{
+  const std::string head =
+    R"({"spacetime": {"mass": 1}, "camera": {"position": [0, -30, 0], "focalPoint": [0, 0, 0], "resolution": [%R%]},
+        "objects": [], "rendering": {)";
+  auto parse = [&](const std::string& rendering, const std::string& resolution = "20, 20")
+  {
+    std::string text = head + rendering + "}}";
+    text.replace(text.find("%R%"), 3, resolution);
+    parseScene(text, ".", nullptr);
+  };
+  auto refused = [&](const std::string& rendering, const std::string& field,
+                     const std::string& resolution = "20, 20")
+  {
+    try
+    {
+      parse(rendering, resolution);
+      ADD_FAILURE() << rendering << " was accepted";
+    }
+    catch (const InvalidParameter& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  EXPECT_NO_THROW(parse(R"("antialias": "adaptive", "maxRaysPerPixel": 1024, "supersample": 32)"));
+  refused(R"("maxRaysPerPixel": 0)", "rendering.maxRaysPerPixel");
+  refused(R"("maxRaysPerPixel": 1025)", "rendering.maxRaysPerPixel");
+  refused(R"("antialias": "supersample")", "rendering.antialias");
+  refused(R"("antialias": 3)", "rendering.antialias");
+  refused(R"("supersample": 0)", "rendering.supersample");
+  refused(R"("supersample": 33)", "rendering.supersample");
+  refused(R"("colorThreshold": -0.1)", "rendering.colorThreshold");
+  refused(R"("colorThreshold": 2)", "rendering.colorThreshold");
+  refused(R"("preset": "fastest")", "rendering.preset");
+  refused(R"("supersamples": 2)", "rendering.supersamples");
+  // 2²⁸ pixels are a frame's most; supersampled 2 × 2 they are four times the rays a frame may
+  // take.
+  refused(R"("supersample": 2)", "rendering.supersample", "16384, 16384");
+  // A description changed after parsing is refused by the same rule.
+  SceneDescription d = checkerWall(1.0, 10, 10);
+  d.rendering.maxRaysPerPixel = 0;
+  EXPECT_THROW(validateScene(d), InvalidParameter);
+}
