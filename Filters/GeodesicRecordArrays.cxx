@@ -74,11 +74,13 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
   auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
   auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
   auto termination = makeArray<vtkIntArray>("Termination", 1, n);
+  auto raysPerPixel = makeArray<vtkIntArray>("RaysPerPixel", 1, n);
   colors->Fill(0);
   objectId->Fill(-1);
   order->Fill(0);
   pathLength->Fill(0);
   termination->Fill(0);
+  raysPerPixel->Fill(0);
   for (const RayRecord& r : records)
   {
     if (r.termination == Termination::Running || r.j < rowBegin || r.j >= rowEnd || r.i < 0 ||
@@ -90,6 +92,7 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
     order->SetValue(k, r.imageOrder);
     pathLength->SetValue(k, r.affineLength);
     termination->SetValue(k, static_cast<int>(r.termination));
+    raysPerPixel->SetValue(k, r.raysPerPixel);
   }
   vtkPointData* pd = image->GetPointData();
   pd->SetScalars(colors);
@@ -97,6 +100,7 @@ void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBeg
   pd->AddArray(order);
   pd->AddArray(pathLength);
   pd->AddArray(termination);
+  pd->AddArray(raysPerPixel);
 }
 
 struct HitsBuilder::Arrays
@@ -104,7 +108,7 @@ struct HitsBuilder::Arrays
   vtkPolyData* hits = nullptr;
   vtkIdType count = 0, next = 0;
   vtkSmartPointer<vtkDoubleArray> points;
-  vtkSmartPointer<vtkIntArray> pixel, term, object, imageOrder;
+  vtkSmartPointer<vtkIntArray> pixel, term, object, imageOrder, raysPerPixel;
   vtkSmartPointer<vtkDoubleArray> origin, direction, momentum, normal, uv, chord, length, winding,
     maxH, color, jacobian;
   vtkSmartPointer<vtkLongLongArray> steps;
@@ -133,6 +137,7 @@ HitsBuilder::HitsBuilder(vtkPolyData* hits, vtkIdType count)
   a.steps = makeArray<vtkLongLongArray>("Steps", 1, m);
   a.maxH = makeArray<vtkDoubleArray>("MaxAbsH", 1, m);
   a.color = makeArray<vtkDoubleArray>("Color", 3, m);
+  a.raysPerPixel = makeArray<vtkIntArray>("RaysPerPixel", 1, m);
   a.jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
 }
 
@@ -165,6 +170,7 @@ void HitsBuilder::add(const RayRecord* records, std::size_t count)
     a.steps->SetValue(k, r->steps);
     a.maxH->SetValue(k, r->maxAbsH);
     a.color->SetTypedTuple(k, r->color.data());
+    a.raysPerPixel->SetValue(k, r->raysPerPixel);
     const double jac[4] = { r->dudi, r->dudj, r->dvdi, r->dvdj };
     a.jacobian->SetTypedTuple(k, jac);
   }
@@ -196,7 +202,7 @@ void HitsBuilder::finish()
   hits->SetVerts(verts);
   for (vtkDataArray* array : std::initializer_list<vtkDataArray*>{
          a.pixel, a.origin, a.direction, a.momentum, a.term, a.object, a.normal, a.uv, a.chord,
-         a.length, a.winding, a.imageOrder, a.steps, a.maxH, a.color, a.jacobian })
+         a.length, a.winding, a.imageOrder, a.steps, a.maxH, a.color, a.raysPerPixel, a.jacobian })
     hits->GetPointData()->AddArray(array);
 }
 
@@ -259,7 +265,7 @@ void RowsBuilder::finish()
   setRowsExtent(p.image, p.width, p.rowBegin, p.rowEnd);
   vtkPointData* pd = p.image->GetPointData();
   pd->SetScalars(p.colors);
-  for (const char* name : { "ObjectId", "ImageOrder", "PathLength", "Termination" })
+  for (const char* name : { "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
     pd->AddArray(p.hits->GetPointData()->GetArray(name));
 }
 
@@ -282,6 +288,10 @@ std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
   vtkDataArray* maxH = requirePointArray(hits, "MaxAbsH", 1);
   vtkDataArray* color = requirePointArray(hits, "Color", 3);
   vtkDataArray* jacobian = requirePointArray(hits, "Jacobian", 4);
+  // Hit points made before anti-aliasing have no RaysPerPixel: their pixels had one ray each.
+  vtkDataArray* raysPerPixel = hits->GetPointData()->GetArray("RaysPerPixel")
+                                 ? requirePointArray(hits, "RaysPerPixel", 1)
+                                 : nullptr;
   std::vector<RayRecord> records(static_cast<size_t>(m));
   for (vtkIdType k = 0; k < m; ++k)
   {
@@ -308,6 +318,7 @@ std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
     r.steps = static_cast<std::int64_t>(steps->GetComponent(k, 0));
     r.maxAbsH = maxH->GetComponent(k, 0);
     color->GetTuple(k, r.color.data());
+    r.raysPerPixel = raysPerPixel ? static_cast<std::int32_t>(raysPerPixel->GetComponent(k, 0)) : 1;
     double jac[4];
     jacobian->GetTuple(k, jac);
     r.dudi = jac[0];

@@ -34,10 +34,12 @@ vtkSmartPointer<A> makeArray(const char* name, int components, vtkIdType tuples)
 /// point; throws InvalidParameter naming it otherwise.
 vtkDataArray* requirePointArray(vtkPolyData* hits, const char* name, int components);
 /// The frame rows [rowBegin, rowEnd) as an image: RGB "Colors" and "ObjectId", "ImageOrder",
-/// "PathLength", "Termination"; pixels without a record stay black, id −1, termination 0.
+/// "PathLength", "Termination", "RaysPerPixel" (int32); pixels without a record stay black, id
+/// −1, termination 0, 0 rays.
 void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
                     vtkImageData* image);
-/// One vertex per record at its hit point, every record field as point data.
+/// One vertex per record at its hit point, every record field as point data (raysPerPixel as the
+/// int32 "RaysPerPixel").
 void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits);
 
 /// recordsToPolyData a run of records at a time: the arrays of `count` records are made at once,
@@ -60,10 +62,10 @@ private:
 /// wide, a run of records at a time, the records being those of every pixel in row-major order
 /// from (0, rowBegin), all traced (FrameTracer::traceRows's). finish() gives `hits` what
 /// recordsToPolyData and `image` what recordsToImage would, except that the image's "ObjectId",
-/// "ImageOrder", "PathLength" and "Termination" are the hits' arrays of these names: for such
-/// records they hold the same values in the same order, and a copy would only double them. add()
-/// throws std::logic_error at a record out of that order or untraced, finish() if some are
-/// missing.
+/// "ImageOrder", "PathLength", "Termination" and "RaysPerPixel" are the hits' arrays of these
+/// names: for such records they hold the same values in the same order, and a copy would only
+/// double them. add() throws std::logic_error at a record out of that order or untraced, finish()
+/// if some are missing.
 class RowsBuilder
 {
 public:
@@ -78,6 +80,7 @@ private:
 };
 
 /// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
+/// Without a "RaysPerPixel" array (hit points made before anti-aliasing) every record gets 1.
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
 /// Ray paths as polylines, one per path in order, double points with point data "Lambda", "R",
 /// "AbsH" and cell data "Pixel" (i, j) and "Termination": vtkGeodesicSource's port 2.

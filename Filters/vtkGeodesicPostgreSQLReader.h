@@ -4,15 +4,15 @@
  *
  * RequestInformation lists the stored frames (GetNumberOfFrames, GetFrameIdAt,
  * GetFrameDescription). RequestData reads the frame FrameId back as vtkGeodesicSource's outputs:
- * port 0 the image, shaded again from the stored colours, port 1 the hit points with every record
- * field, bit-exact for doubles, and the frame's scene as field data, port 2 the polylines stored
- * with the frame (empty if none), bit-exact. An optional SQL Predicate over the columns of the
- * view rays_v (e.g. "object_id = 2 AND image_order = 1") selects a subset of rays, evaluated by
- * the server in a read-only transaction with the rights of the role asrt_predicate alone (it
- * reads the rays views and nothing else: asrt::RayStore::readFrame); port 2 then holds the
- * polylines of the selected rays' pixels only. Connection as for vtkGeodesicPostgreSQLWriter; a
- * database without an ASRT schema is an error (the reader creates none), an older schema is
- * upgraded.
+ * port 0 the image, shaded again from the stored colours (with "RaysPerPixel" among its arrays),
+ * port 1 the hit points with every record field, bit-exact for doubles, and the frame's scene as
+ * field data, port 2 the polylines stored with the frame (empty if none), bit-exact. An optional
+ * SQL Predicate over the columns of the view rays_v (e.g. "object_id = 2 AND image_order = 1")
+ * selects a subset of rays, evaluated by the server in a read-only transaction with the rights of
+ * the role asrt_predicate alone (it reads the rays views and nothing else:
+ * asrt::RayStore::readFrame); port 2 then holds the polylines of the selected rays' pixels only.
+ * Connection as for vtkGeodesicPostgreSQLWriter; a database without an ASRT schema is an error
+ * (the reader creates none), an older schema is upgraded.
  */
 #ifndef vtkGeodesicPostgreSQLReader_h
 #define vtkGeodesicPostgreSQLReader_h

@@ -3,8 +3,9 @@
  * @brief   accumulates a traced frame in PostgreSQL
  *
  * Input port 0: the hit points of vtkGeodesicSource (its port 1): one vertex per ray with the ray
- * records as point data and the frame's effective scene as field data. Input port 1, optional:
- * the source's polylines (its port 2), stored with the frame, one per pixel, bit-exact
+ * records as point data (hit points without "RaysPerPixel", made before anti-aliasing, are
+ * stored with one ray a pixel) and the frame's effective scene as field data. Input port 1,
+ * optional: the source's polylines (its port 2), stored with the frame, one per pixel, bit-exact
  * (vtkGeodesicPostgreSQLReader gives them back on its port 2). The frame, and its polylines if
  * connected, are written in one transaction with binary COPY (asrt::RayStore): wholly stored or
  * not at all. The same scene with the same parameters is the same frame; writing it again is an

@@ -160,10 +160,10 @@ std::vector<RayRecord> plausibleFrame(int width, int height)
 }
 
 // ---------------------------------------------------------------------------------------------
-// The raw file: the same fields the store sends (5 int32, 1 int64 and 29 float64 words, 260
+// The raw file: the same fields the store sends (6 int32, 1 int64 and 29 float64 words, 264
 // bytes per record), packed in native byte order.
 
-constexpr std::size_t RecordBytes = 5 * 4 + 8 + 29 * 8;
+constexpr std::size_t RecordBytes = 6 * 4 + 8 + 29 * 8;
 
 template<class T>
 char* put(char* p, T v)
@@ -201,6 +201,7 @@ void pack(const RayRecord& r, char* p)
   p = put(p, r.maxAbsH);
   for (int c = 0; c < 3; ++c)
     p = put(p, r.color[c]);
+  p = put(p, r.raysPerPixel);
   for (double v : { r.dudi, r.dudj, r.dvdi, r.dvdj })
     p = put(p, v);
 }
@@ -230,6 +231,7 @@ void unpack(const char* p, RayRecord& r)
   p = get(p, r.maxAbsH);
   for (int c = 0; c < 3; ++c)
     p = get(p, r.color[c]);
+  p = get(p, r.raysPerPixel);
   for (double* v : { &r.dudi, &r.dudj, &r.dvdi, &r.dvdj })
     p = get(p, *v);
 }
@@ -409,7 +411,16 @@ SceneDescription frameScene(int width, int height, double mass)
 
 /// Field sizes in pack() order, which is also the order of the store's columns.
 constexpr int FieldSizes[] = { 4, 4, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 4, 4, 8, 8, 8, 8,
-                               8, 8, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8, 8, 8, 8, 8, 8 };
+                               8, 8, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8 };
+constexpr int fieldBytes()
+{
+  int n = 0;
+  for (const int size : FieldSizes)
+    n += size;
+  return n;
+}
+static_assert(fieldBytes() == int(RecordBytes) && int(RecordBytes) == RayStore::kRecordBytes,
+              "the file's and the layouts' records are the store's fields");
 constexpr int NumFields = int(sizeof(FieldSizes) / sizeof(FieldSizes[0]));
 
 /// Reverses the bytes of every field of a packed record (native ↔ big-endian), in place.

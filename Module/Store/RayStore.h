@@ -1,11 +1,12 @@
 // Accumulation of traced frames in PostgreSQL: scenes, frames and their rays, written in one
 // transaction each with binary COPY and read back bit-exact.
 //
-// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"). A ray is a
-// packed record of kRecordBytes bytes, its fields as big-endian 32/64-bit words in the column
-// order of the view rays_v (big-endian so that SQL can decode them with bit(n) casts). Rows of
-// ray_blocks hold kBlockSize consecutive records in one bytea kept inline (STORAGE PLAIN: one row
-// fills one 8 kB page, so nothing goes through TOAST). ray_blocks is partitioned by (frame, tile):
+// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"; version 5
+// added a word to the record). A ray is a packed record of kRecordBytes bytes, its fields as
+// big-endian 32/64-bit words in the column order of the view rays_v (big-endian so that SQL can
+// decode them with bit(n) casts). Rows of ray_blocks hold kBlockSize consecutive records in one
+// bytea kept inline (STORAGE PLAIN: one row fills one 8 kB page, so nothing goes through TOAST).
+// ray_blocks is partitioned by (frame, tile):
 // each tile's rows go into a table of their own, created in the transaction that writes them,
 // loaded with COPY FREEZE and attached to ray_blocks before the commit. A table created in the
 // writing transaction is what lets PostgreSQL skip the WAL under wal_level = minimal (the
@@ -33,6 +34,13 @@
 //
 // Paths: a frame may also keep the polylines of some of its rays (RayPath, one per pixel), in
 // ray_paths, written in the frame's transaction; the view path_points_v shows one row per point.
+//
+// Rendering (schema version 5): each record also keeps how many rays its pixel's colour comes from
+// (RayRecord::raysPerPixel, rays_v's rays_per_pixel), and every frame's scene text has a
+// "rendering" section. Migration 5 gave the frames stored before, all traced one ray a pixel,
+// raysPerPixel = 1 and the section of singleRayRendering(), their scene rows and hashes following,
+// so that such a frame is found (findFrame, writeFrame's duplicate check) by its description with
+// that rendering.
 //
 // Plain C++: no VTK types, no libpq types in this header.
 #ifndef asrt_RayStore_h
@@ -158,13 +166,14 @@ class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
-  /// Bytes of one packed ray record (the fields of rays_v, big-endian).
-  static constexpr int kRecordBytes = 260;
-  /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page.
-  static constexpr int kBlockSize = 31;
+  /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5).
+  static constexpr int kRecordBytes = 264;
+  /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page (31 of the
+  /// 260-byte records before version 5).
+  static constexpr int kBlockSize = 30;
   /// A parallel write gives each connection at least this many rays (smaller frames are written
   /// over one: another connection's table and commit would cost more than they save).
   static constexpr std::size_t kParallelMinRays = 65536;

@@ -10,7 +10,8 @@ namespace
 {
 // The per-ray fields, in storage order: column name, word kind, record member. This one list
 // makes the encoder and the decoder, so that they cannot disagree; the columns of rays_v (schema
-// version 3, StoreSchemaHistory.cxx) name the same fields in the same order.
+// version 5, StoreSchemaHistory.cxx) name the same fields in the same order. Versions 3 and 4
+// stored the same words without rays_per_pixel.
 #define ASRT_RAY_FIELDS(X)                                                                         \
   X(i, I32, r.i)                                                                                   \
   X(j, I32, r.j)                                                                                   \
@@ -43,6 +44,7 @@ namespace
   X(color_r, F64, r.color.x())                                                                     \
   X(color_g, F64, r.color.y())                                                                     \
   X(color_b, F64, r.color.z())                                                                     \
+  X(rays_per_pixel, I32, r.raysPerPixel)                                                           \
   X(dudi, F64, r.dudi)                                                                             \
   X(dudj, F64, r.dudj)                                                                             \
   X(dvdi, F64, r.dvdi)                                                                             \

@@ -2,6 +2,7 @@
 
 #include "PgSession.h"
 #include "RayStore.h"
+#include "StoreLegacyTexts.h"
 #include "StoreSchemaHistory.h"
 
 #include <utility>
@@ -48,6 +49,33 @@ void migrateToVersion3(PGconn* conn, const std::string& what)
     pg::exec(conn, tileStatement(AttachTileV3, frame, tile, "ray_blocks_v3"), what);
   }
   pg::execScript(conn, SchemaV3Finish, what);
+}
+
+/// Migration 5: every tile of version 4 whose frame exists re-packed into a table of its own of
+/// the new layout, which takes the old one's name and is attached to the new ray_blocks; then the
+/// texts (StoreLegacyTexts.h). The tables of frames deleted with plain SQL go with the old
+/// ray_blocks.
+void migrateToVersion5(PGconn* conn, const std::string& what)
+{
+  pg::execScript(conn, SchemaV5Tables, what);
+  pg::Result tiles = pg::exec(
+    conn,
+    "SELECT m[1]::bigint, m[2]::integer FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid "
+    "CROSS JOIN LATERAL regexp_match(c.relname::text, '^ray_blocks_([0-9]+)_([0-9]+)$') AS m "
+    "WHERE i.inhparent = 'ray_blocks_v4'::regclass AND EXISTS (SELECT 1 FROM frames f WHERE f.id "
+    "= m[1]::bigint) ORDER BY 1, 2",
+    what);
+  for (int row = 0; row < PQntuples(tiles.get()); ++row)
+  {
+    const std::int64_t frame = pg::getI64(tiles.get(), row, 0);
+    const std::int32_t tile = pg::getI32(tiles.get(), row, 1);
+    pg::exec(conn, tileStatement(SchemaV5StageTile, frame, tile), what);
+    pg::exec(conn, tileStatement(SchemaV5ConvertTile, frame, tile), what);
+    pg::execScript(conn, tileStatement(SchemaV5ReplaceTile, frame, tile), what);
+    pg::exec(conn, tileStatement(AttachTileV3, frame, tile, "ray_blocks"), what);
+  }
+  pg::execScript(conn, SchemaV5Finish, what);
+  addRenderingSections(conn, what);
 }
 
 /// `text` with each of `values`' tokens replaced, in one pass: a value that happens to contain a
@@ -229,9 +257,13 @@ void runMigration(PGconn* conn, int version)
   {
     migrateToVersion3(conn, what);
   }
-  else
+  else if (version == 4)
   {
     setUpPredicateRole(conn, what);
+  }
+  else
+  {
+    migrateToVersion5(conn, what);
   }
 }
 }

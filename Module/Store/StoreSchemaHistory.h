@@ -23,7 +23,8 @@ extern const char* const SchemaV3ConvertTile;
 /// paths, the views. A script.
 extern const char* const SchemaV3Finish;
 /// Version 3's table of one tile's rays: the table migration 3 makes for each tile, and the one
-/// every write of the current version makes. A tile statement.
+/// every write of the current version makes (LIKE the current ray_block_layout). A tile
+/// statement.
 extern const char* const TileTableV3;
 /// Version 3's attachment of a tile's table to a partitioned parent. A tile statement.
 extern const char* const AttachTileV3;
@@ -33,6 +34,20 @@ extern const char* const CreatePredicateRoleV4;
 /// Migration 4 (version 3 to 4), once the role exists and the migrating role may act as it: its
 /// grants and the function that evaluates predicates as it. A script with {schema} and {user}.
 extern const char* const SchemaV4;
+/// Migration 5 (version 4 to 5), first step: the old ray_blocks and layout renamed, the new
+/// layout of 264-byte records and its partitioned ray_blocks. A script.
+extern const char* const SchemaV5Tables;
+/// Migration 5, once per tile of version 4: its new table made beside the old one, its rays
+/// re-packed into it, then the old one replaced by it (attached with AttachTileV3). Tile
+/// statements; the last a tile script.
+extern const char* const SchemaV5StageTile;
+extern const char* const SchemaV5ConvertTile;
+extern const char* const SchemaV5ReplaceTile;
+/// Migration 5, last step of the rays: the old tables gone, rays_v with rays_per_pixel. A script.
+extern const char* const SchemaV5Finish;
+/// Migration 5's texts: the "rendering" section (JSON) that a frame's or scene's text without one
+/// gets, that of singleRayRendering() as effectiveSceneText() writes it.
+extern const char* const RenderingSectionV5;
 }
 }
 

@@ -10,7 +10,8 @@
 //  - `adaptive`: `filter`, and where the 8 neighbours' centre rays disagree with the pixel's
 //    (object, image order, termination, a colour difference above colorThreshold) or its footprint
 //    is undefined or far from linear, the pixel is sampled by an n × n stratified grid of rays,
-//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged.
+//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged (a box
+//    reconstruction). The centre ray is one of the n² (FrameAntialiasing.cxx).
 //  - `supersample` N > 1 samples every pixel by an N × N grid the same way (for references);
 //    with `none`, the cells are point-sampled.
 // Every sample position is fixed by the pixel alone, so that a frame is the same bit for bit at
@@ -62,11 +63,16 @@ struct AntialiasOptions
 };
 
 /// The options of a frame traced one ray a pixel with point-sampled textures: what a scene text
-/// without a "rendering" section was traced with before anti-aliasing existed.
+/// without a "rendering" section was traced with before anti-aliasing existed. Every field is set
+/// here, not taken from the defaults: the store writes this section into such texts (schema
+/// version 5), and stored frames must keep being found if the defaults change.
 inline AntialiasOptions singleRayRendering()
 {
   AntialiasOptions o;
   o.mode = AntialiasMode::None;
+  o.maxRaysPerPixel = 1;
+  o.supersample = 1;
+  o.colorThreshold = 1.0;
   return o;
 }
 

@@ -107,8 +107,10 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
     return true;
 
   // n × n cells, each traced through its centre and filtered over its own footprint (the centre
-  // ray's, scaled); the box reconstruction averages the cells. For odd n the middle cell is the
-  // centre ray itself.
+  // ray's, scaled); the box reconstruction averages the cells. The cell (⌊n/2⌋, ⌊n/2⌋) holds the
+  // pixel's centre (at its middle for odd n, at its corner for even n) and takes the centre ray
+  // for its sample, so that a pixel takes exactly n² rays: any fixed point of a cell stratifies
+  // the pixel alike.
   const long count = static_cast<long>(sampled.size());
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
@@ -131,7 +133,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       for (int b = 0; b < n; ++b)
         for (int a = 0; a < n; ++a)
         {
-          const bool middle = (n % 2 == 1) && 2 * a + 1 == n && 2 * b + 1 == n;
+          const bool middle = a == n / 2 && b == n / 2;
           RayRecord s;
           if (middle)
             s = r;

@@ -29,15 +29,6 @@ void requireFinite3(const Vec3& v, const std::string& what)
     invalid(what + " must be finite, got " + show(v));
 }
 
-void requireColor(const Color& c, const char* what)
-{
-  for (int k = 0; k < 3; ++k)
-  {
-    if (!(c[k] >= 0.0 && c[k] <= 1.0))
-      invalid(std::string(what) + " must have channels in [0, 1], got " + show(c));
-  }
-}
-
 void requirePositive(double v, const std::string& what)
 {
   if (!(std::isfinite(v) && v > 0.0))
@@ -105,90 +96,6 @@ void perpendicularBasis(const Vec3& n, Vec3& e1, Vec3& e2)
   const Vec3 e = Vec3::Unit(k);
   e1 = (e - e.dot(n) * n).normalized();
   e2 = n.cross(e1);
-}
-
-// ---------------------------------------------------------------------------------------------
-SolidTexture::SolidTexture(const Color& c)
-  : C(c)
-{
-  requireColor(c, "solid texture colour");
-}
-
-CheckerTexture::CheckerTexture(int nu, int nv, const Color& a, const Color& b)
-  : Nu(nu)
-  , Nv(nv)
-  , A(a)
-  , B(b)
-{
-  if (nu < 1 || nv < 1)
-  {
-    std::ostringstream os;
-    os << "checker texture needs at least one check each way, got " << nu << " x " << nv;
-    invalid(os.str());
-  }
-  requireColor(a, "checker texture colour a");
-  requireColor(b, "checker texture colour b");
-}
-
-Color CheckerTexture::sample(double u, double v) const
-{
-  if (!std::isfinite(u) || !std::isfinite(v))
-    return this->A;
-  // Reduce to [0, 1) first so that the cell index fits an integer whatever the coordinate.
-  const double fu = u - std::floor(u), fv = v - std::floor(v);
-  const long i = std::min(static_cast<long>(fu * this->Nu), static_cast<long>(this->Nu - 1));
-  const long j = std::min(static_cast<long>(fv * this->Nv), static_cast<long>(this->Nv - 1));
-  return ((i + j) % 2 == 0) ? this->A : this->B;
-}
-
-ImageTexture::ImageTexture(int width, int height, std::vector<std::uint8_t> rgb)
-  : W(width)
-  , H(height)
-  , Rgb(std::move(rgb))
-{
-  if (width < 1 || height < 1)
-  {
-    std::ostringstream os;
-    os << "image texture size must be positive, got " << width << " x " << height;
-    invalid(os.str());
-  }
-  const std::size_t expected =
-    3 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  if (this->Rgb.size() != expected)
-  {
-    std::ostringstream os;
-    os << "image texture of " << width << " x " << height << " pixels needs " << expected
-       << " RGB bytes, got " << this->Rgb.size();
-    invalid(os.str());
-  }
-}
-
-Color ImageTexture::sample(double u, double v) const
-{
-  if (!std::isfinite(u) || !std::isfinite(v))
-    return Color::Zero();
-  // Pixel centres sit at (i + ½)/W: the sample between centres i0 and i0 + 1 is x = u W − ½.
-  const double x = (u - std::floor(u)) * this->W - 0.5;
-  const double y = std::clamp(v * this->H - 0.5, 0.0, static_cast<double>(this->H - 1));
-  const double x0f = std::floor(x), y0f = std::floor(y);
-  const double fx = x - x0f, fy = y - y0f;
-  // x ∈ [−½, W − ½): x0 ∈ {−1, …, W − 1}, wrapped periodically.
-  int i0 = static_cast<int>(x0f);
-  int i1 = i0 + 1;
-  if (i0 < 0)
-    i0 += this->W;
-  if (i1 >= this->W)
-    i1 -= this->W;
-  const int j0 = static_cast<int>(y0f);
-  const int j1 = std::min(j0 + 1, this->H - 1);
-  auto px = [this](int i, int j)
-  {
-    const std::uint8_t* p = &this->Rgb[3 * (static_cast<std::size_t>(j) * this->W + i)];
-    return Color(p[0], p[1], p[2]);
-  };
-  const Color c = (1 - fy) * ((1 - fx) * px(i0, j0) + fx * px(i1, j0)) +
-                  fy * ((1 - fx) * px(i0, j1) + fx * px(i1, j1));
-  return c / 255.0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -700,18 +607,32 @@ void Scene::add(std::unique_ptr<SceneObject> object)
   Bound bound;
   bound.finite = object->boundingSphere(bound.center, bound.radius);
   bound.sky = dynamic_cast<const CelestialSphere*>(object.get()) != nullptr;
+  const int id = object->id();
+  const std::size_t index = this->Objects.size();
+  if (id < kDenseIds)
+  {
+    if (static_cast<std::size_t>(id) >= this->DenseIndex.size())
+      this->DenseIndex.resize(id + 1, -1);
+    this->DenseIndex[id] = static_cast<int>(index);
+  }
+  else
+    this->SparseIndex.emplace(id, index);
   this->Bounds.push_back(bound);
   this->Objects.push_back(std::move(object));
 }
 
 const SceneObject* Scene::find(int id) const
 {
-  for (const auto& o : this->Objects)
+  if (id < 0)
+    return nullptr;
+  if (id < kDenseIds)
   {
-    if (o->id() == id)
-      return o.get();
+    if (static_cast<std::size_t>(id) >= this->DenseIndex.size() || this->DenseIndex[id] < 0)
+      return nullptr;
+    return this->Objects[this->DenseIndex[id]].get();
   }
-  return nullptr;
+  const auto it = this->SparseIndex.find(id);
+  return it == this->SparseIndex.end() ? nullptr : this->Objects[it->second].get();
 }
 
 bool Scene::firstHit(const Segment& seg, SurfaceHit& hit) const
@@ -744,10 +665,16 @@ bool Scene::firstHit(const Segment& seg, SurfaceHit& hit) const
   return found;
 }
 
-Color Scene::shade(const SurfaceHit& hit) const
+Color Scene::shade(int objectId, double u, double v) const
 {
-  const SceneObject* o = this->find(hit.objectId);
-  return o ? o->color(hit) : this->background;
+  const SceneObject* o = this->find(objectId);
+  return o ? o->texture().sample(u, v) : this->background;
+}
+
+Color Scene::shadeFootprint(int objectId, double u, double v, const TextureFootprint& f) const
+{
+  const SceneObject* o = this->find(objectId);
+  return o ? o->texture().sampleFootprint(u, v, f) : this->background;
 }
 
 double Scene::celestialRadius() const

@@ -1,74 +1,22 @@
 // Scene objects that rays can hit, each with an id, a name and surface coordinates (u, v), and the
-// scene that finds a segment's first hit. Plain C++ on Eigen; images arrive as pixel buffers.
+// scene that finds a segment's first hit and colours it (the textures are in Texture.h). Plain C++
+// on Eigen.
 #ifndef asrt_Scene_h
 #define asrt_Scene_h
 
 #include "Propagator.h"
+#include "Texture.h"
 #include "asrtTracingModule.h"
 
 #include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace asrt
 {
-/// Colour, RGB, each channel in [0, 1]. Image textures give their 8-bit values / 255 unchanged (no
-/// gamma conversion), so that a flat-space render reproduces an image's pixels.
-using Color = Vec3;
-
-struct TextureFootprint { double dudx = 0, dvdx = 0, dudy = 0, dvdy = 0; }; // SHIM
-class ASRTTRACING_EXPORT Texture
-{
-public:
-  virtual ~Texture() = default;
-  /// Colour at surface coordinates (u, v) ∈ [0, 1]².
-  virtual Color sample(double u, double v) const = 0;
-};
-
-class ASRTTRACING_EXPORT SolidTexture final : public Texture
-{
-public:
-  /// Throws InvalidParameter unless every channel lies in [0, 1].
-  explicit SolidTexture(const Color& c);
-  Color sample(double, double) const override { return this->C; }
-
-private:
-  Color C;
-};
-
-/// nu × nv checks of two colours: `a` on the check containing (0, 0) and wherever
-/// floor(u·nu) + floor(v·nv) is even, `b` elsewhere. Periodic in u and v.
-class ASRTTRACING_EXPORT CheckerTexture final : public Texture
-{
-public:
-  /// Throws InvalidParameter unless nu, nv ≥ 1 and the colours lie in [0, 1].
-  CheckerTexture(int nu, int nv, const Color& a, const Color& b);
-  Color sample(double u, double v) const override;
-
-private:
-  int Nu, Nv;
-  Color A, B;
-};
-
-/// An RGB image, 8 bits a channel, row-major, row 0 at v = 0 (the bottom row, as VTK's readers
-/// store it); pixel (i, j) is centred at ((i + ½)/W, (j + ½)/H). Sampled bilinearly between pixel
-/// centres, periodic in u and clamped in v (the equirectangular convention of a sky).
-class ASRTTRACING_EXPORT ImageTexture final : public Texture
-{
-public:
-  /// Throws InvalidParameter unless width, height ≥ 1 and rgb holds 3 × width × height bytes.
-  ImageTexture(int width, int height, std::vector<std::uint8_t> rgb);
-  Color sample(double u, double v) const override;
-  int width() const { return this->W; }
-  int height() const { return this->H; }
-
-private:
-  int W, H;
-  std::vector<std::uint8_t> Rgb;
-};
-
 /// Where a ray's segment meets an object.
 struct SurfaceHit
 {
@@ -271,13 +219,19 @@ public:
   /// Throws InvalidParameter for a null object or if an object with the same id is already there.
   void add(std::unique_ptr<SceneObject> object);
   const std::vector<std::unique_ptr<SceneObject>>& objects() const { return this->Objects; }
+  /// The object with this id, nullptr if none. O(1): an index cached at add().
   const SceneObject* find(int id) const;
   /// The nearest hit along the segment over all objects. Thread-safe and allocation-free.
   bool firstHit(const Segment& seg, SurfaceHit& hit) const;
   /// The hit object's colour at the hit; the background if the id is unknown.
-  Color shade(const SurfaceHit& hit) const;
-  Color shade(int id, double u, double v) const { auto* o = find(id); return o ? o->texture().sample(u, v) : background; } // SHIM
-  Color shadeFootprint(int id, double u, double v, const TextureFootprint&) const { return shade(id, u, v); } // SHIM
+  Color shade(const SurfaceHit& hit) const { return this->shade(hit.objectId, hit.u, hit.v); }
+  /// The object's texture sampled at (u, v); the background if the id is unknown. Thread-safe,
+  /// allocation-free, O(1).
+  Color shade(int objectId, double u, double v) const;
+  /// The object's texture averaged over the footprint about (u, v) (Texture::sampleFootprint: a
+  /// box filter over the pixel; a non-finite footprint gives the point sample); the background if
+  /// the id is unknown. Thread-safe, allocation-free, O(1).
+  Color shadeFootprint(int objectId, double u, double v, const TextureFootprint& f) const;
   Color background = Color(0, 0, 0);   ///< for rays that escape without hitting anything
   Color horizonColor = Color(0, 0, 0); ///< for rays captured by the hole
   /// Radius of the largest celestial sphere, 0 if none: rays farther out can hit nothing.
@@ -300,8 +254,13 @@ private:
     bool finite = false;
     bool sky = false; ///< a celestial sphere: the only object a far-field segment can hit
   };
+  /// Ids below this index Objects through a vector, larger ones through a hash map, so that
+  /// sparse ids up to INT_MAX cost memory only for the ids used.
+  static constexpr int kDenseIds = 4096;
   std::vector<std::unique_ptr<SceneObject>> Objects;
   std::vector<Bound> Bounds;
+  std::vector<int> DenseIndex; ///< id → index into Objects, −1 for none
+  std::unordered_map<int, std::size_t> SparseIndex;
 };
 }
 

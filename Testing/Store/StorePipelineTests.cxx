@@ -103,7 +103,8 @@ TEST(StorePipeline, WriteThenReadGivesTheSameFrameBitForBit)
   vtkImageData* a = reader->GetImageOutput();
   vtkImageData* b = source->GetImageOutput();
   ASSERT_EQ(a->GetNumberOfPoints(), b->GetNumberOfPoints());
-  for (const char* name : { "Colors", "ObjectId", "ImageOrder", "PathLength", "Termination" })
+  for (const char* name :
+       { "Colors", "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
   {
     vtkDataArray* x = a->GetPointData()->GetArray(name);
     vtkDataArray* y = b->GetPointData()->GetArray(name);
@@ -112,6 +113,58 @@ TEST(StorePipeline, WriteThenReadGivesTheSameFrameBitForBit)
       for (int c = 0; c < x->GetNumberOfComponents(); ++c)
         ASSERT_EQ(x->GetComponent(k, c), y->GetComponent(k, c)) << name << " at " << k;
   }
+}
+
+TEST(StorePipeline, RaysPerPixelGoThroughTheWriterAndTheReader)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig2-no-hole.json").c_str());
+  source->SetResolution(6, 5);
+  source->Update();
+  vtkIntArray* traced =
+    vtkIntArray::SafeDownCast(source->GetHitsOutput()->GetPointData()->GetArray("RaysPerPixel"));
+  ASSERT_TRUE(traced);
+  // The scene has no rendering section: one ray a pixel.
+  for (vtkIdType k = 0; k < traced->GetNumberOfTuples(); ++k)
+    ASSERT_EQ(traced->GetValue(k), 1) << k;
+  vtkNew<vtkPolyData> hits;
+  hits->DeepCopy(source->GetHitsOutput());
+  vtkIntArray* counts = vtkIntArray::SafeDownCast(hits->GetPointData()->GetArray("RaysPerPixel"));
+  const int given[] = { 1, 9, 1024 };
+  for (vtkIdType k = 0; k < counts->GetNumberOfTuples(); ++k)
+    counts->SetValue(k, given[k % 3]);
+  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+  writer->SetInputData(hits);
+  writer->SetConnectionString(server().conninfo().c_str());
+  ASSERT_EQ(writer->Write(), 1);
+  vtkNew<vtkGeodesicPostgreSQLReader> reader;
+  reader->SetConnectionString(server().conninfo().c_str());
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(bitsByPixel(reader->GetHitsOutput()), bitsByPixel(hits));
+  vtkDataArray* pixel = hits->GetPointData()->GetArray("Pixel");
+  vtkIntArray* image =
+    vtkIntArray::SafeDownCast(reader->GetImageOutput()->GetPointData()->GetArray("RaysPerPixel"));
+  ASSERT_TRUE(image);
+  for (vtkIdType k = 0; k < counts->GetNumberOfTuples(); ++k)
+  {
+    const auto at =
+      static_cast<vtkIdType>(pixel->GetComponent(k, 1) * 6 + pixel->GetComponent(k, 0));
+    EXPECT_EQ(image->GetValue(at), given[k % 3]) << "pixel " << at;
+  }
+
+  // Hit points without the array, made before anti-aliasing, were traced one ray a pixel.
+  const vtkIdType n = counts->GetNumberOfTuples();
+  hits->GetPointData()->RemoveArray("RaysPerPixel");
+  writer->ReplaceExistingOn();
+  ASSERT_EQ(writer->Write(), 1);
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  vtkDataArray* read = reader->GetHitsOutput()->GetPointData()->GetArray("RaysPerPixel");
+  ASSERT_TRUE(read);
+  ASSERT_EQ(read->GetNumberOfTuples(), n);
+  for (vtkIdType k = 0; k < read->GetNumberOfTuples(); ++k)
+    EXPECT_EQ(read->GetComponent(k, 0), 1) << k;
 }
 
 TEST(StorePipeline, DuplicatesAreRefusedUnlessReplaced)

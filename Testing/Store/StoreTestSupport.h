@@ -8,6 +8,7 @@
 #include "SceneFile.h"
 
 #include <libpq-fe.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cerrno>
@@ -102,7 +103,24 @@ inline RayRecord syntheticRecord(std::uint64_t seed, std::size_t k, int width)
   r.dudj = real();
   r.dvdi = real();
   r.dvdj = real();
+  // One ray, a supersampled grid, the most a pixel may take, and widths a narrower word loses.
+  const std::int32_t rays[] = { 1, 9, 1024, 65537, std::numeric_limits<std::int32_t>::max() };
+  r.raysPerPixel = rays[splitmix(s) % 5];
   return r;
+}
+
+/// `r` as a store of schema version 4 or earlier kept it, read back by the current version: one
+/// ray a pixel (migration 5).
+inline RayRecord singleRay(RayRecord r)
+{
+  r.raysPerPixel = 1;
+  return r;
+}
+inline std::vector<RayRecord> singleRay(std::vector<RayRecord> records)
+{
+  for (RayRecord& r : records)
+    r.raysPerPixel = 1;
+  return records;
 }
 
 inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
@@ -112,7 +130,8 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
                                    std::uint64_t(r.termination),
                                    std::uint64_t(std::uint32_t(r.objectId)),
                                    std::uint64_t(std::uint32_t(r.imageOrder)),
-                                   std::uint64_t(r.steps) };
+                                   std::uint64_t(r.steps),
+                                   std::uint64_t(std::uint32_t(r.raysPerPixel)) };
   const double d[] = { r.origin.x(),
                        r.origin.y(),
                        r.origin.z(),
@@ -148,8 +167,10 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
 }
 
 /// The fields of a stored ray, in the order the store documents (the columns of rays_v, the words
-/// of its record_bytes, the bytea columns of schema versions 1 and 2), with their size in bytes
-/// and their value as a word: written out here independently of RayStore.
+/// of its record_bytes), with their size in bytes and their value as a word: written out here
+/// independently of RayStore. LegacyRecordFields: those of schema versions 1 to 4 (the bytea
+/// columns of versions 1 and 2, the 260-byte records of versions 3 and 4), without
+/// rays_per_pixel.
 struct RecordField
 {
   const char* name;
@@ -205,12 +226,21 @@ inline const RecordField RecordFields[] = {
   ASRT_RECORD_FIELD("color_r", 8, r.color.x()),
   ASRT_RECORD_FIELD("color_g", 8, r.color.y()),
   ASRT_RECORD_FIELD("color_b", 8, r.color.z()),
+  ASRT_RECORD_FIELD("rays_per_pixel", 4, r.raysPerPixel),
   ASRT_RECORD_FIELD("dudi", 8, r.dudi),
   ASRT_RECORD_FIELD("dudj", 8, r.dudj),
   ASRT_RECORD_FIELD("dvdi", 8, r.dvdi),
   ASRT_RECORD_FIELD("dvdj", 8, r.dvdj),
 };
 #undef ASRT_RECORD_FIELD
+inline const std::vector<RecordField> LegacyRecordFields = []
+{
+  std::vector<RecordField> fields;
+  for (const RecordField& f : RecordFields)
+    if (std::strcmp(f.name, "rays_per_pixel") != 0)
+      fields.push_back(f);
+  return fields;
+}();
 
 /// A binary result value of a PGresult as a big-endian word (integers and float8 alike).
 inline std::uint64_t resultWord(const PGresult* r, int row, int col)
@@ -228,17 +258,28 @@ inline bool sameFromSql(double got, double expected)
   return std::isnan(expected) ? std::isnan(got) : bitsOf(got) == bitsOf(expected);
 }
 
-/// The packed record of schema version 3 (rays_v's record_bytes): every field's word, big-endian.
-inline std::string packedRecord(const RayRecord& r)
+/// The words of `fields` of `r`, big-endian, concatenated.
+template<class Fields>
+std::string packedFields(const RayRecord& r, const Fields& fields)
 {
   std::string bytes;
-  for (const RecordField& f : RecordFields)
+  for (const RecordField& f : fields)
   {
     const std::uint64_t w = f.word(r);
     for (int m = f.size - 1; m >= 0; --m)
       bytes.push_back(char(w >> (8 * m)));
   }
   return bytes;
+}
+/// The packed record of the current schema (rays_v's record_bytes): every field's word.
+inline std::string packedRecord(const RayRecord& r)
+{
+  return packedFields(r, RecordFields);
+}
+/// The packed record of schema versions 3 and 4 (260 bytes, no rays_per_pixel).
+inline std::string legacyPackedRecord(const RayRecord& r)
+{
+  return packedFields(r, LegacyRecordFields);
 }
 
 inline double secondsSince(Clock::time_point t0)
@@ -324,9 +365,46 @@ std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSe
 }
 
 // ---------------------------------------------------------------------------------------------
-// Databases written by earlier versions. Their layout is written out here (with RecordFields),
-// from what versions 1 and 2 stored, rather than taken from RayStore: one bytea column per field,
-// the values of a block of up to 4096 rays as big-endian words; version 2 added tiles.
+// Databases written by earlier versions. Their layout is written out here (with
+// LegacyRecordFields), from what versions 1 and 2 stored, rather than taken from RayStore: one
+// bytea column per field, the values of a block of up to 4096 rays as big-endian words; version 2
+// added tiles. Their texts had no rendering section.
+
+/// The rendering section that effectiveSceneText() writes for singleRayRendering(), written out
+/// here: what the texts of versions 1 to 4 lacked, and migration 5 gives them.
+inline const std::string SingleRaySection =
+  R"("rendering":{"antialias":"none","colorThreshold":0.25,"maxRaysPerPixel":16,"supersample":1})";
+
+/// The texts a writer of schema version 4 or earlier stored for a frame of `d` (whose rendering
+/// must be singleRayRendering(), the only one there was): its effective text, which had no
+/// rendering section, and its scene's text, that text without the parameters of frames columns.
+struct StoredTexts
+{
+  std::string frame, scene;
+};
+/// The texts a writer stored for a frame whose effective text is `frame`: the scene's is the
+/// frame's without what the columns of frames hold (spelled out here as the writers of every
+/// version made it).
+inline StoredTexts storedTexts(const std::string& frame)
+{
+  nlohmann::json j = nlohmann::json::parse(frame);
+  j.erase("spacetime");
+  for (const char* k : { "position", "focalPoint", "viewUp", "viewAngle", "resolution" })
+    j["camera"].erase(k);
+  for (const char* k : { "method", "step", "relativeTolerance", "absoluteTolerance" })
+    j["integrator"].erase(k);
+  return { frame, j.dump() };
+}
+inline StoredTexts legacyTexts(const asrt::SceneDescription& d)
+{
+  std::string frame = asrt::effectiveSceneText(d);
+  // Keys sorted: "spacetime" always follows the section.
+  const std::size_t at = frame.find(SingleRaySection + ",");
+  if (at == std::string::npos)
+    throw std::logic_error("legacyTexts: the scene's text has no single-ray rendering section");
+  frame.erase(at, SingleRaySection.size() + 1);
+  return storedTexts(frame);
+}
 
 /// Rays per block of ray_blocks in versions 1 and 2.
 constexpr std::size_t LegacyBlock = 4096;
@@ -367,13 +445,14 @@ inline std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneD
   std::size_t rays = 0;
   for (const auto& t : tiles)
     rays += t.size();
-  const std::string effective = asrt::effectiveSceneText(scene);
+  const StoredTexts texts = legacyTexts(scene);
+  const std::string& effective = texts.frame;
   const std::string sceneId = legacyExec(
     c,
     "INSERT INTO scenes (content_hash, description, description_text) VALUES "
-    "(sha256(convert_to($1, 'UTF8')), '{}', $1) ON CONFLICT (content_hash) DO UPDATE SET "
+    "(sha256(convert_to($1, 'UTF8')), $1::jsonb, $1) ON CONFLICT (content_hash) DO UPDATE SET "
     "description_text = EXCLUDED.description_text RETURNING id",
-    { "the scene of " + effective });
+    { texts.scene });
   auto num = [](double x)
   {
     char b[32];
@@ -404,7 +483,7 @@ inline std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneD
     blockCols += ", tile";
     blockVals += ", $" + std::to_string(next++);
   }
-  for (const RecordField& f : RecordFields)
+  for (const RecordField& f : LegacyRecordFields)
   {
     blockCols += std::string(", ") + f.name;
     blockVals += ", $" + std::to_string(next++);
@@ -422,7 +501,7 @@ inline std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneD
       if (version >= 2)
         params.push_back(std::to_string(t));
       std::vector<bool> binary(params.size(), false);
-      for (const RecordField& f : RecordFields)
+      for (const RecordField& f : LegacyRecordFields)
       {
         std::string bytes;
         for (std::size_t k = 0; k < n; ++k)

@@ -103,6 +103,7 @@ std::vector<RayRecord> synthetic(std::size_t count, int width, std::uint64_t see
       r.dvdj = specials[(s + 2) % 9];
       r.winding = specials[(s + 3) % 9];
     }
+    r.raysPerPixel = k % 3 == 0 ? 1 : k % 3 == 1 ? 9 : 1024;
   }
   return out;
 }
@@ -242,10 +243,10 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
   const std::int64_t id = store.writeFrame(scene(), "view", records);
   Db db(ci);
   // Binary results: the doubles as the server computed them.
-  const auto rows =
-    db.binaryRows("SELECT ray, i, j, termination, object_id, steps, hit_x, u, "
-                  "dvdj, winding, dudi, record_bytes FROM rays_v WHERE frame_id = " +
-                  std::to_string(id) + " ORDER BY ray");
+  const auto rows = db.binaryRows(
+    "SELECT ray, i, j, termination, object_id, steps, hit_x, u, "
+    "dvdj, winding, dudi, record_bytes, rays_per_pixel FROM rays_v WHERE frame_id = " +
+    std::to_string(id) + " ORDER BY ray");
   const PGresult* r = rows.get();
   ASSERT_EQ(PQntuples(r), int(records.size()));
   auto word = [&](int row, int col) { return resultWord(r, row, col); };
@@ -262,11 +263,53 @@ TEST(RayStoreFrames, SqlViewDecodesEveryValueExactly)
     ASSERT_EQ(std::int32_t(word(row, 3)), int(e.termination));
     ASSERT_EQ(std::int32_t(word(row, 4)), e.objectId);
     ASSERT_EQ(std::int64_t(word(row, 5)), e.steps);
+    ASSERT_EQ(std::int32_t(word(row, 12)), e.raysPerPixel);
     const double expected[] = { e.hitPoint.x(), e.u, e.dvdj, e.winding, e.dudi };
     for (int c = 0; c < 5; ++c)
       ASSERT_TRUE(sameFromSql(fromBits(word(row, 6 + c)), expected[c]))
         << "row " << row << " column " << c;
   }
+}
+
+// The rays a pixel's colour comes from: one, a 3 × 3 supersample, the most a pixel may take.
+TEST(RayStoreFrames, RaysPerPixelComeBackThroughEveryPath)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  std::vector<RayRecord> records = synthetic(3 * RayStore::kBlockSize + 7, 10);
+  const std::int32_t counts[] = { 1, 9, 1024 };
+  for (std::size_t k = 0; k < records.size(); ++k)
+    records[k].raysPerPixel = counts[(k / 5) % 3];
+  const std::int64_t id = store.writeFrame(scene(), "rays per pixel", records);
+  expectSame(store.readFrame(id), records);
+  Db db(ci);
+  EXPECT_EQ(db.value("SELECT string_agg(rays_per_pixel::text, ',' ORDER BY ray) FROM rays_v "
+                     "WHERE frame_id = " +
+                     std::to_string(id)),
+            [&]
+            {
+              std::string s;
+              for (const RayRecord& r : records)
+                s += (s.empty() ? "" : ",") + std::to_string(r.raysPerPixel);
+              return s;
+            }());
+  // The word sits after color_b in the record (rays_v's column order), big-endian.
+  const std::string packed =
+    db.value("SELECT encode(substr(record_bytes, 229, 4), 'hex') FROM rays_v WHERE frame_id = " +
+             std::to_string(id) + " AND ray = 5");
+  EXPECT_EQ(packed, "00000009");
+  std::vector<RayRecord> supersampled;
+  for (const RayRecord& r : records)
+    if (r.raysPerPixel > 1)
+      supersampled.push_back(r);
+  expectSame(store.readFrame(id, "rays_per_pixel > 1"), supersampled);
+
+  // A tiled frame keeps them too.
+  const std::int64_t tiled = store.beginTiledFrame(scene(2.0), "tiled", 2);
+  store.writeTile(tiled, 1, std::vector<RayRecord>(records.begin() + 40, records.end()));
+  store.writeTile(tiled, 0, std::vector<RayRecord>(records.begin(), records.begin() + 40));
+  expectSame(store.readFrame(tiled), records);
 }
 
 TEST(RayStoreFrames, SameSceneAndParametersIsTheSameFrame)

@@ -1,9 +1,9 @@
 // Migrations from the frozen schemas of versions 1 and 2: databases built by migrate(1) and
 // migrate(2) (the frozen DDL of StoreSchemaHistory.cxx), filled through plain SQL in that
 // version's layout (insertLegacyFrame: one bytea column per field), then migrated to the current
-// version by RayStore. Every field of every ray must come back bit for bit, through readFrame()
-// and through rays_v's record_bytes, and each version's tables and views must keep the columns
-// they had.
+// version by RayStore (version 4's layout: TestRenderingMigration.cxx). Every field of every ray
+// must come back bit for bit, through readFrame() and through rays_v's record_bytes, and each
+// version's tables and views must keep the columns they had.
 #include "RayStore.h"
 #include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
@@ -37,7 +37,8 @@ const std::int32_t SpecialInts[] = { std::numeric_limits<std::int32_t>::min(), -
 
 /// Record k of a frame: field f holds SpecialDoubles[(k + f) % SpecialCount] (doubles) or a value
 /// made of k and f (integers), so that every double field sees every special value and no two
-/// records or fields are alike.
+/// records or fields are alike; raysPerPixel is 1, all that versions 1 to 4 could store (the
+/// migrated records have it).
 RayRecord knownRecord(std::size_t k)
 {
   std::size_t f = 0;
@@ -134,10 +135,11 @@ long firstViewDifference(Db& db, std::int64_t id, const std::vector<RayRecord>& 
 }
 
 /// The fields of a ray, comma-separated, in their stored order.
-std::string fieldNames()
+template<class Fields>
+std::string fieldNames(const Fields& fields)
 {
   std::string s;
-  for (const RecordField& f : RecordFields)
+  for (const RecordField& f : fields)
     s += std::string(s.empty() ? "" : ",") + f.name;
   return s;
 }
@@ -176,7 +178,7 @@ TEST(StoreMigrations, FrozenLayoutsKeepTheirColumns)
   const std::string ci = pg.conninfo();
   RayStore store(ci);
   Db db(ci);
-  const std::string fields = fieldNames();
+  const std::string fields = fieldNames(LegacyRecordFields);
   store.migrate(1);
   EXPECT_EQ(columnsOf(db, "ray_blocks"), "frame_id,block,first_ray,n," + fields);
   EXPECT_EQ(columnsOf(db, "rays_v"), "frame_id,block,ray," + fields);
@@ -190,6 +192,14 @@ TEST(StoreMigrations, FrozenLayoutsKeepTheirColumns)
             "frame_id,tile,block,ray,tile_ray," + fields + ",record_bytes");
   EXPECT_EQ(columnsOf(db, "path_points_v"), "frame_id,i,j,path,point,x,y,z,lambda,r,abs_h");
   EXPECT_EQ(columnsOf(db, "ray_paths"), "frame_id,i,j,seq,termination,n,points");
+  store.migrate(4);
+  EXPECT_EQ(columnsOf(db, "rays_v"),
+            "frame_id,tile,block,ray,tile_ray," + fields + ",record_bytes");
+  store.migrate(5);
+  EXPECT_EQ(columnsOf(db, "ray_blocks"), "frame_id,tile,block,first_ray,n,data");
+  EXPECT_EQ(columnsOf(db, "rays_v"),
+            "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
+  EXPECT_EQ(columnsOf(db, "path_points_v"), "frame_id,i,j,path,point,x,y,z,lambda,r,abs_h");
 }
 
 TEST(StoreMigrations, VersionOneRaysComeBackBitExact)
@@ -269,6 +279,8 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
   store.migrate(3);
   EXPECT_EQ(store.schemaVersion(), 3);
   store.migrate(4);
+  EXPECT_EQ(store.schemaVersion(), 4);
+  store.migrate(5);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
 }
 
@@ -286,7 +298,7 @@ TEST(StoreMigrations, VersionThreeGetsTheRoleThatEvaluatesPredicates)
   EXPECT_EQ(db.value("SELECT count(*) FROM pg_roles WHERE rolname = 'asrt_predicate'"), "0");
 
   store.migrate();
-  EXPECT_EQ(store.schemaVersion(), 4);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   EXPECT_EQ(db.value("SELECT proowner::regrole::text FROM pg_proc WHERE oid = "
                      "'asrt_selected_rays(bigint,text)'::regprocedure"),
             "asrt_predicate");
