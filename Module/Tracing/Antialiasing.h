@@ -7,7 +7,7 @@
 //  - `filter`: the centre ray's texture lookup is averaged over the pixel's footprint on the
 //    surface, the parallelogram spanned by the record's Jacobian ∂(u, v)/∂(i, j) (Texture's
 //    sampleFootprint). Where the Jacobian is undefined the texture is point-sampled.
-//  - `adaptive`: `filter`, and where the 8 neighbours' centre rays disagree with the pixel's
+//  - `adaptive`: `filter`, and where the 4 edge neighbours' centre rays disagree with the pixel's
 //    (object, image order, termination, a colour difference above colorThreshold) or its footprint
 //    is undefined or far from linear, the pixel is sampled by an n × n stratified grid of rays,
 //    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged (a box
@@ -42,10 +42,12 @@ constexpr int kMaxRaysPerPixel = 1024;
 /// The scene file's "rendering" section.
 struct AntialiasOptions
 {
-  AntialiasMode mode = AntialiasMode::None;
+  /// The defaults are the "balanced" preset's: of the settings measured in bench/REPORT.md, the
+  /// cheapest that reaches 38 dB against a converged picture on every scene there.
+  AntialiasMode mode = AntialiasMode::Adaptive;
   /// The most rays an adaptively sampled pixel takes (centre ray included), 1 to
   /// kMaxRaysPerPixel; the grid is ⌊√maxRaysPerPixel⌋ on a side.
-  int maxRaysPerPixel = 16;
+  int maxRaysPerPixel = 9;
   /// N × N rays in every pixel, 1 to 32 (1: only what `mode` adds).
   int supersample = 1;
   /// Largest difference of any channel between neighbouring centre colours (point-sampled, in

@@ -129,7 +129,8 @@ void packImageSamples(const std::vector<RayRecord>& records, std::vector<double>
     out.insert(out.end(),
                { static_cast<double>(r.i), static_cast<double>(r.j), r.color[0], r.color[1],
                  r.color[2], static_cast<double>(r.objectId), static_cast<double>(r.imageOrder),
-                 r.affineLength, static_cast<double>(static_cast<int>(r.termination)) });
+                 r.affineLength, static_cast<double>(static_cast<int>(r.termination)),
+                 static_cast<double>(r.raysPerPixel) });
 }
 
 std::vector<RayRecord> unpackImageSamples(const std::vector<double>& samples)
@@ -148,6 +149,7 @@ std::vector<RayRecord> unpackImageSamples(const std::vector<double>& samples)
     r.imageOrder = static_cast<std::int32_t>(s[6]);
     r.affineLength = s[7];
     r.termination = static_cast<Termination>(static_cast<int>(s[8]));
+    r.raysPerPixel = static_cast<std::int32_t>(s[9]);
     s += kImageSampleSize;
   }
   return records;

@@ -61,8 +61,8 @@ private:
 /// Doubles per pixel in packJacobianSamples() (u, v, object id, image order, termination).
 constexpr int kJacobianSampleSize = 5;
 /// Doubles per pixel in packImageSamples() (i, j, colour, object id, image order, path length,
-/// termination): what recordsToImage reads.
-constexpr int kImageSampleSize = 9;
+/// termination, rays per pixel): what recordsToImage reads.
+constexpr int kImageSampleSize = 10;
 
 /// Appends the Jacobian inputs of `records` whose row is one of `rows` (both bottom to top, the
 /// records row-major) to `out`, kJacobianSampleSize doubles per pixel, row after row.

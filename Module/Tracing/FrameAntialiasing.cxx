@@ -74,10 +74,14 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       const Color c = this->pointColor(self);
       const bool footprint = r.objectId >= 0 && hasFootprint(r);
       bool disagree = r.objectId >= 0 && !footprint;
-      for (int dj = -1; dj <= 1 && !disagree; ++dj)
-        for (int di = -1; di <= 1 && !disagree; ++di)
+      // The 4 edge neighbours: an edge that only a diagonal neighbour sees clips a corner of the
+      // pixel, and sampling those pixels too costs a fifth more rays for a tenth of a dB
+      // (bench/REPORT.md).
+      for (const auto& [di, dj] :
+           { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
+        if (!disagree)
         {
-          const JacobianSample* s = (di || dj) ? lookup.at(r.i + di, r.j + dj) : nullptr;
+          const JacobianSample* s = lookup.at(r.i + di, r.j + dj);
           if (!s || s->termination == Termination::Running)
             continue;
           disagree = s->objectId != r.objectId || s->imageOrder != r.imageOrder ||

@@ -170,23 +170,45 @@ Color FrameTracer::pointColor(const JacobianSample& s) const
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
 {
+  // The pixels' edge neighbours that are not among them are traced too, as the halo rows of a
+  // band are: a pixel's Jacobian and its anti-aliasing read its neighbours, so that with them a
+  // subset's records are the whole frame's records of those pixels, bit for bit.
+  const int W = this->Desc.camera.width, H = this->Desc.camera.height;
+  std::vector<std::pair<int, int>> all = pixels;
+  {
+    std::vector<std::pair<int, int>> sorted = pixels;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::pair<int, int>> halo;
+    for (const auto& [i, j] : pixels)
+      for (const auto& [di, dj] :
+           { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
+      {
+        const std::pair<int, int> n(i + di, j + dj);
+        if (n.first >= 0 && n.first < W && n.second >= 0 && n.second < H &&
+            !std::binary_search(sorted.begin(), sorted.end(), n))
+          halo.push_back(n);
+      }
+    std::sort(halo.begin(), halo.end());
+    halo.erase(std::unique(halo.begin(), halo.end()), halo.end());
+    all.insert(all.end(), halo.begin(), halo.end());
+  }
   // The centre rays take the first share of the progress; anti-aliasing reports the rest.
   const bool extra =
     this->Desc.rendering.mode == AntialiasMode::Adaptive || this->Desc.rendering.supersample > 1;
   const double share = extra ? 0.5 : 1.0;
-  std::function<bool(double)> centreProgress;
+  std::function<bool(double)> centreProgress, restProgress;
   if (progress)
+  {
     centreProgress = [&](double f) { return progress(share * f); };
-  std::vector<RayRecord> out = this->traceCentres(pixels, centreProgress);
-  bool stopped = false;
-  if (progress)
-    stopped = !progress(share);
-  if (stopped)
-    return out;
-  std::function<bool(double)> restProgress;
-  if (progress)
     restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
-  this->antialias(out, {}, restProgress);
+  }
+  std::vector<RayRecord> out = this->traceCentres(all, centreProgress);
+  std::vector<JacobianSample> halo;
+  for (std::size_t k = pixels.size(); k < out.size(); ++k)
+    halo.push_back(jacobianSample(out[k]));
+  out.resize(pixels.size());
+  if (!progress || progress(share))
+    this->antialias(out, halo, restProgress);
   return out;
 }
 

@@ -42,11 +42,11 @@ public:
 
   /// Traces the given pixels (i, j) with OpenMP, dynamically scheduled (rays near the photon
   /// sphere cost far more than the rest), and anti-aliases them as the description's rendering
-  /// says (antialias()), judging each pixel by its neighbours among these pixels. The result is in
-  /// the order given and identical for any number of threads. `progress` is called now and then
-  /// with the fraction done; if it returns false the work stops early and the returned records of
-  /// untraced pixels keep termination Running. Jacobians come from the neighbours among these
-  /// pixels (NaN without any).
+  /// says (antialias()). Their edge neighbours in the frame are traced too (and dropped), so that
+  /// each record, Jacobian and colour included, is the whole frame's record of that pixel. The
+  /// result is in the order given and identical for any number of threads. `progress` is called
+  /// now and then with the fraction done; if it returns false the work stops early and the
+  /// returned records of untraced pixels keep termination Running.
   std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                      const std::function<bool(double)>& progress = nullptr) const;
 
@@ -59,10 +59,10 @@ public:
   /// Anti-aliases records traced by traceCentres whose Jacobians are complete, as the
   /// description's rendering says (Antialiasing.h): filters their textures over their
   /// footprints, and traces the extra rays of the pixels that need them. A pixel is judged by its
-  /// 8 neighbours among the records and `neighbours`; the judgement reads only their centre rays
-  /// (JacobianSample), so pieces of a frame anti-aliased with their bordering rows as neighbours
-  /// assemble bit for bit into the whole frame. Only colours and raysPerPixel change. Returns
-  /// false if `progress` (as tracePixels') asked to stop; the colours are then incomplete.
+  /// 4 edge neighbours among the records and `neighbours`; the judgement reads only their centre
+  /// rays (JacobianSample), so pieces of a frame anti-aliased with their bordering rows as
+  /// neighbours assemble bit for bit into the whole frame. Only colours and raysPerPixel change.
+  /// Returns false if `progress` (as tracePixels') asked to stop; the colours are then incomplete.
   bool antialias(std::vector<RayRecord>& records,
                  const std::vector<JacobianSample>& neighbours = {},
                  const std::function<bool(double)>& progress = nullptr) const;

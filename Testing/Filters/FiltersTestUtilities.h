@@ -108,9 +108,9 @@ inline vtkSmartPointer<vtkIntArray> pixelList(const std::vector<std::pair<int, i
 inline const std::vector<std::string>& recordArrayNames()
 {
   static const std::vector<std::string> names = {
-    "Pixel",     "Origin",  "Direction",  "Momentum",   "Termination", "ObjectId",
-    "HitNormal", "UV",      "ChordError", "PathLength", "Winding",     "ImageOrder",
-    "Steps",     "MaxAbsH", "Color",      "Jacobian"
+    "Pixel",     "Origin",  "Direction",  "Momentum",     "Termination", "ObjectId",
+    "HitNormal", "UV",      "ChordError", "PathLength",   "Winding",     "ImageOrder",
+    "Steps",     "MaxAbsH", "Color",      "RaysPerPixel", "Jacobian"
   };
   return names;
 }

@@ -66,6 +66,7 @@ RecordBits bitsOfRecord(const asrt::RayRecord& r)
   add({ r.u, r.v, r.chordError, r.affineLength, r.winding, double(r.imageOrder), double(r.steps),
         r.maxAbsH });
   add3(r.color);
+  add({ static_cast<double>(r.raysPerPixel) });
   add({ r.dudi, r.dudj, r.dvdi, r.dvdj });
   return b;
 }
@@ -97,7 +98,7 @@ TEST(GeodesicSourceBands, PortsHoldTheRecordsOfTheWholeFrameTracedTogether)
     { "HitNormal", VTK_DOUBLE },  { "UV", VTK_DOUBLE },       { "ChordError", VTK_DOUBLE },
     { "PathLength", VTK_DOUBLE }, { "Winding", VTK_DOUBLE },  { "ImageOrder", VTK_INT },
     { "Steps", VTK_LONG_LONG },   { "MaxAbsH", VTK_DOUBLE },  { "Color", VTK_DOUBLE },
-    { "Jacobian", VTK_DOUBLE }
+    { "RaysPerPixel", VTK_INT },  { "Jacobian", VTK_DOUBLE }
   };
   for (const auto& [name, type] : types)
   {

@@ -718,3 +718,58 @@ TEST(FrameInterpolator, SourceNamesItsPixelSubset)
   EXPECT_EQ(field->GetValue(0), part);
   EXPECT_EQ(s->GetHitsOutput()->GetNumberOfPoints(), 3); // traced as listed
 }
+
+TEST(FrameInterpolator, ExactModeReTracesWithTheKeyFramesAntialiasing)
+{
+  // The key frames are anti-aliased (the default rendering); the pixels exact mode re-traces at t
+  // must be those pixels traced directly at t with the same rendering, not one ray a pixel.
+  auto keyFrame = [](double mass)
+  {
+    return traceWith(
+      [mass](vtkGeodesicSource* s)
+      {
+        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+        s->SetResolution(40, 40);
+        s->SetMass(mass);
+      });
+  };
+  const TracedFrame a = keyFrame(0.5), b = keyFrame(0.6);
+  const vtkSmartPointer<vtkImageData> shown = interpolate(a, b, 0.5,
+                                                          [](vtkGeodesicFrameInterpolator* f)
+                                                          {
+                                                            f->ExactModeOn();
+                                                            f->SetRetraceDisagreement(16);
+                                                          });
+  ASSERT_NE(shown, nullptr);
+  auto* cls = shown->GetPointData()->GetArray("InterpolationClass");
+  ASSERT_NE(cls, nullptr);
+  std::vector<std::pair<int, int>> retraced;
+  for (vtkIdType p = 0; p < cls->GetNumberOfTuples(); ++p)
+    if (cls->GetTuple1(p) == static_cast<double>(asrt::PixelClass::Retraced))
+      retraced.emplace_back(static_cast<int>(p % 40), static_cast<int>(p / 40));
+  ASSERT_GT(retraced.size(), 20u);
+  auto direct = [&](const char* antialias)
+  {
+    return traceWith(
+      [&](vtkGeodesicSource* s)
+      {
+        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+        s->SetResolution(40, 40);
+        s->SetMass(0.55);
+        s->SetAntialias(antialias);
+        s->SetPixelSubset(pixelList(retraced));
+      });
+  };
+  const auto same = rgbOf(direct("adaptive").image), single = rgbOf(direct("none").image),
+             got = rgbOf(shown);
+  long differentFromSingle = 0;
+  for (const auto& [i, j] : retraced)
+  {
+    const std::size_t p = 3 * (static_cast<std::size_t>(j) * 40 + i);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(got[p + c], same[p + c]) << "pixel " << i << ", " << j;
+    differentFromSingle +=
+      got[p] != single[p] || got[p + 1] != single[p + 1] || got[p + 2] != single[p + 2];
+  }
+  EXPECT_GT(differentFromSingle, 0) << "the re-traced pixels look as one ray a pixel would";
+}

@@ -190,9 +190,9 @@ TEST(DistributedFrame, SimulatedProcessesAssembleTheSingleProcessFrameBitForBit)
       for (int j : p.rowsOf(r))
         for (int i = 0; i < kW; ++i)
           pixels.emplace_back(i, j);
-      own[r] = tracer.tracePixels(pixels);
+      own[r] = tracer.traceCentres(pixels);
     }
-    // Each process's Jacobians from its own rows and what the others send.
+    // Each process's Jacobians and anti-aliasing from its own rows and what the others send.
     std::vector<std::vector<RayRecord>> done = own;
     for (int r = 0; r < s.ranks; ++r)
     {
@@ -205,6 +205,7 @@ TEST(DistributedFrame, SimulatedProcessesAssembleTheSingleProcessFrameBitForBit)
         asrt::unpackJacobianSamples(message, rows, kW, neighbours);
       }
       asrt::FrameTracer::computeJacobians(done[r], neighbours);
+      tracer.antialias(done[r], neighbours);
     }
     // The tiles in tile order, each from the process that owns it.
     std::vector<RayRecord> assembled;
@@ -251,11 +252,13 @@ TEST(DistributedFrame, ImageSamplesKeepWhatTheImageShows)
     ASSERT_EQ(a.objectId, b.objectId);
     ASSERT_EQ(a.imageOrder, b.imageOrder);
     ASSERT_EQ(a.termination, b.termination);
+    ASSERT_EQ(a.raysPerPixel, b.raysPerPixel);
     ASSERT_EQ(asrt::testing::bitsOf(a.affineLength), asrt::testing::bitsOf(b.affineLength));
     for (int c = 0; c < 3; ++c)
       ASSERT_EQ(asrt::testing::bitsOf(a.color[c]), asrt::testing::bitsOf(b.color[c]));
   }
-  EXPECT_THROW(asrt::unpackImageSamples(std::vector<double>(10)), asrt::InvalidParameter);
+  EXPECT_THROW(asrt::unpackImageSamples(std::vector<double>(asrt::kImageSampleSize + 1)),
+               asrt::InvalidParameter);
 }
 
 TEST(DistributedFrame, StepsPerRankAddUpAndInterleavingBalancesThePhotonRing)

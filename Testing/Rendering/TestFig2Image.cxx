@@ -1,5 +1,6 @@
 // The paper's Fig. 2: the Fig. 1 scene with no hole (M = 0), traced as exact straight lines. The
-// baseline was inspected: straight cylinders through the centre, an undistorted plane and sky.
+// baseline (default anti-aliasing) was inspected: straight cylinders through the centre, an
+// undistorted plane and sky, smooth check edges on the floor and no moiré on the far cylinder.
 #include "RenderingTestUtilities.h"
 #include "vtkGeodesicSource.h"
 
