@@ -192,6 +192,13 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
     halo.erase(std::unique(halo.begin(), halo.end()), halo.end());
     all.insert(all.end(), halo.begin(), halo.end());
   }
+  return this->traceKeeping(all, pixels.size(), progress);
+}
+
+std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int, int>>& pixels,
+                                                 std::size_t keep,
+                                                 const std::function<bool(double)>& progress) const
+{
   // The centre rays take the first share of the progress; anti-aliasing reports the rest.
   const bool extra =
     this->Desc.rendering.mode == AntialiasMode::Adaptive || this->Desc.rendering.supersample > 1;
@@ -202,11 +209,11 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
     centreProgress = [&](double f) { return progress(share * f); };
     restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
   }
-  std::vector<RayRecord> out = this->traceCentres(all, centreProgress);
+  std::vector<RayRecord> out = this->traceCentres(pixels, centreProgress);
   std::vector<JacobianSample> halo;
-  for (std::size_t k = pixels.size(); k < out.size(); ++k)
+  for (std::size_t k = keep; k < out.size(); ++k)
     halo.push_back(jacobianSample(out[k]));
-  out.resize(pixels.size());
+  out.resize(std::min(keep, out.size()));
   if (!progress || progress(share))
     this->antialias(out, halo, restProgress);
   return out;
@@ -251,37 +258,19 @@ std::vector<RayRecord> FrameTracer::traceRows(int rowBegin, int rowEnd,
   const int w = this->Desc.camera.width, h = this->Desc.camera.height;
   if (rowEnd <= rowBegin)
     return {};
+  // The rows just outside the band are traced after it, only for its Jacobians and judgements.
   const int first = std::max(0, rowBegin - 1), last = std::min(h, rowEnd + 1);
   std::vector<std::pair<int, int>> pixels;
   pixels.reserve(static_cast<size_t>(std::max(0, last - first)) * w);
-  for (int j = first; j < last; ++j)
+  for (int j = rowBegin; j < rowEnd; ++j)
     for (int i = 0; i < w; ++i)
       pixels.emplace_back(i, j);
-  const bool extra =
-    this->Desc.rendering.mode == AntialiasMode::Adaptive || this->Desc.rendering.supersample > 1;
-  const double share = extra ? 0.5 : 1.0;
-  std::function<bool(double)> centreProgress, restProgress;
-  if (progress)
-  {
-    centreProgress = [&](double f) { return progress(share * f); };
-    restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
-  }
-  std::vector<RayRecord> records = this->traceCentres(pixels, centreProgress);
-  // The halo rows were traced only for their neighbours' Jacobians and judgements: they go to
-  // the anti-aliasing as neighbours and are dropped.
-  const size_t before = std::min(static_cast<size_t>(rowBegin - first) * w, records.size());
-  const size_t after =
-    std::min(static_cast<size_t>(last - std::max(rowBegin, rowEnd)) * w, records.size() - before);
-  std::vector<JacobianSample> halo;
-  for (size_t k = 0; k < before; ++k)
-    halo.push_back(jacobianSample(records[k]));
-  for (size_t k = records.size() - after; k < records.size(); ++k)
-    halo.push_back(jacobianSample(records[k]));
-  records.erase(records.end() - static_cast<std::ptrdiff_t>(after), records.end());
-  records.erase(records.begin(), records.begin() + static_cast<std::ptrdiff_t>(before));
-  if (!progress || progress(share))
-    this->antialias(records, halo, restProgress);
-  return records;
+  const std::size_t keep = pixels.size();
+  for (int j : { first, last - 1 })
+    if (j < rowBegin || j >= rowEnd)
+      for (int i = 0; i < w; ++i)
+        pixels.emplace_back(i, j);
+  return this->traceKeeping(pixels, keep, progress);
 }
 
 void FrameTracer::computeJacobians(std::vector<RayRecord>& records,

@@ -80,6 +80,11 @@ public:
                                const std::vector<JacobianSample>& neighbours = {});
 
 private:
+  /// Traces the pixels' centre rays, keeps the first `keep` and anti-aliases them with the rest
+  /// (their neighbours) as bordering samples.
+  std::vector<RayRecord> traceKeeping(const std::vector<std::pair<int, int>>& pixels,
+                                      std::size_t keep,
+                                      const std::function<bool(double)>& progress) const;
   /// The ray through screen position (x, y) with the given propagator (one per thread).
   RayRecord traceThrough(Propagator& prop, double x, double y) const;
   /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,

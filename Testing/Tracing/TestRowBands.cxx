@@ -143,7 +143,7 @@ TEST(RowBands, TheSeamsNeedTheNeighbouringBand)
     for (int j = b; j < b + 3; ++j)
       for (int i = 0; i < kW; ++i)
         pixels.emplace_back(i, j);
-    const std::vector<RayRecord> alone = tracer().tracePixels(pixels);
+    const std::vector<RayRecord> alone = tracer().traceCentres(pixels);
     for (std::size_t k = 0; k < alone.size(); ++k)
       differing += firstDifference(alone[k], whole[static_cast<std::size_t>(b) * kW + k]) != "";
   }
