@@ -71,7 +71,10 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
     {
       const RayRecord& r = records[static_cast<std::size_t>(k)];
       const JacobianSample self = jacobianSample(r);
-      const Color c = this->pointColor(self);
+      // Colours lie in [0, 1]: at a threshold of 1 or more colour never decides, and the texture
+      // lookups of the pixel and its neighbours are skipped.
+      const bool byColor = opts.colorThreshold < 1.0;
+      const Color c = byColor ? this->pointColor(self) : Color::Zero();
       const bool footprint = r.objectId >= 0 && hasFootprint(r);
       bool disagree = r.objectId >= 0 && !footprint;
       // The 4 edge neighbours: an edge that only a diagonal neighbour sees clips a corner of the
@@ -84,10 +87,11 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
           const JacobianSample* s = lookup.at(r.i + di, r.j + dj);
           if (!s || s->termination == Termination::Running)
             continue;
-          disagree = s->objectId != r.objectId || s->imageOrder != r.imageOrder ||
-                     s->termination != r.termination ||
-                     (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold ||
-                     (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit);
+          disagree =
+            s->objectId != r.objectId || s->imageOrder != r.imageOrder ||
+            s->termination != r.termination ||
+            (byColor && (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold) ||
+            (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit);
         }
       if (disagree)
         side[static_cast<std::size_t>(k)] = adaptiveSide;
