@@ -514,7 +514,7 @@ std::vector<AntialiasOptions> smallConfigs()
 {
   std::vector<AntialiasOptions> c = { options(AntialiasMode::None),
                                       options(AntialiasMode::Filter) };
-  for (int cap : { 4, 9, 16, 25, 64 })
+  for (int cap : { 5, 9, 17, 25, 49 })
     c.push_back(options(AntialiasMode::Adaptive, cap));
   for (double threshold : { 0.25, 0.1 })
     c.push_back(options(AntialiasMode::Adaptive, 9, 1, threshold));
@@ -527,7 +527,7 @@ std::vector<AntialiasOptions> hdConfigs()
 {
   std::vector<AntialiasOptions> c = { options(AntialiasMode::None),
                                       options(AntialiasMode::Filter) };
-  for (int cap : { 4, 9, 16 })
+  for (int cap : { 9, 17 })
     c.push_back(options(AntialiasMode::Adaptive, cap));
   return c;
 }
@@ -548,18 +548,22 @@ void printSetUp(const std::string& command, int small[2], int hd[2], int repetit
   std::printf(
     "### Set-up\n\n"
     "- A pixel's true colour is the box-filtered average of the picture over its unit square "
-    "(`Antialiasing.h`). The **reference** of a view is that average estimated by N×N stratified "
-    "point samples (`supersample` N, mode `none`: each cell of the pixel's N×N grid sampled at "
-    "its centre, but the cell holding the pixel's centre by the centre ray): N = %d "
-    "(%d rays a pixel) at %d×%d, N = %d (%d rays) at %d×%d, traced in the same run.\n"
+    "(`Antialiasing.h`). The **reference** of a view is that average estimated by N×N point "
+    "samples on the rotated grid that adaptive sampling uses (`supersample` N, mode `none`; one "
+    "sample in each of the N×N cells and in each of the N² rows and columns of the pixel): N = %d "
+    "(%d samples a pixel) at %d×%d, N = %d (%d samples) at %d×%d, traced in the same run.\n"
     "- `none`: one ray through the pixel's centre, textures point-sampled (the cost unit). "
     "`filter`: the same ray, its texture lookup averaged over the pixel's footprint. "
-    "`adaptive`, cap n: `filter`, and pixels whose 8 neighbours' centre rays disagree with "
-    "theirs (object, image order, ending, footprint undefined or not linear, and with a colour "
-    "threshold below 1 a channel differing by more) take ⌊√n⌋×⌊√n⌋ rays, each filtered over its "
-    "cell. `filter, supersample` N: every pixel N×N filtered rays.\n"
-    "- **Rays**: the sum over the frame's pixels of `RayRecord::raysPerPixel` (the centre ray "
-    "included: an N×N grid takes N²), relative to `none`'s (one a pixel). **Wall time**: the best "
+    "`adaptive`, cap n: `filter`, and a pixel takes the k×k pattern (k the largest whose rays fit "
+    "in n: k² for odd k, k² + 1 for even k, whose pattern does not hold the centre ray) where its "
+    "footprint is undefined or misplaces an edge neighbour by half a pixel or more, or (with a "
+    "colour threshold below 1) a channel differs by more, or where an edge neighbour's centre ray "
+    "ends differently (object, image order, ending) and so does the ray through the midpoint "
+    "between the two centres. Each sample is filtered over its share of the footprint. "
+    "`filter, supersample` N: every pixel N×N filtered samples.\n"
+    "- **Rays**: the sum over the frame's pixels of `RayRecord::raysPerPixel` (every ray traced: "
+    "the centre ray, the pattern's, and the midpoint rays, each counted once), relative to "
+    "`none`'s (one a pixel). **Wall time**: the best "
     "of %d whole-frame traces (`FrameTracer::traceRows`: centre rays, Jacobians, anti-aliasing; no "
     "output), "
     "relative to `none`'s best in the same run (at 1920×1080 one trace each).\n"

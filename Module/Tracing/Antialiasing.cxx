@@ -71,10 +71,11 @@ void validateRendering(const AntialiasOptions& o, long long pixels)
   }
   // Rays, not memory, are what a supersample multiplies (the samples of a pixel are folded into
   // its colour as they come); the bound is the frame's: a frame of more rays would take days.
-  const long long rays = static_cast<long long>(o.supersample) * o.supersample * pixels;
+  const long long rays = static_cast<long long>(patternRays(o.supersample)) * pixels;
   if (pixels > 0 && rays > kMaxFramePixels)
     refuse("supersample", std::to_string(o.supersample) + " x " + std::to_string(o.supersample) +
-                            " rays on each of " + std::to_string(pixels) + " pixels make " +
+                            " samples (" + std::to_string(patternRays(o.supersample)) +
+                            " rays) on each of " + std::to_string(pixels) + " pixels make " +
                             std::to_string(rays) + " rays, more than the " +
                             std::to_string(kMaxFramePixels) + " a frame may trace");
 }

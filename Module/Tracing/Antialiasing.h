@@ -7,13 +7,19 @@
 //  - `filter`: the centre ray's texture lookup is averaged over the pixel's footprint on the
 //    surface, the parallelogram spanned by the record's Jacobian ∂(u, v)/∂(i, j) (Texture's
 //    sampleFootprint). Where the Jacobian is undefined the texture is point-sampled.
-//  - `adaptive`: `filter`, and where the 4 edge neighbours' centre rays disagree with the pixel's
-//    (object, image order, termination, a colour difference above colorThreshold) or its footprint
-//    is undefined or far from linear, the pixel is sampled by an n × n stratified grid of rays,
-//    n = ⌊√maxRaysPerPixel⌋, each filtered over its own cell, and the cells are averaged (a box
-//    reconstruction). The centre ray is one of the n² (FrameAntialiasing.cxx).
-//  - `supersample` N > 1 samples every pixel by an N × N grid the same way (for references);
-//    with `none`, the cells are point-sampled.
+//  - `adaptive`: `filter`, and a pixel is sampled by n × n rays (n = adaptivePatternSide) where its
+//    footprint is undefined or far from linear (a neighbour's centre ray half a pixel or more from
+//    where the footprint puts it), or a colour differs by more than colorThreshold from an edge
+//    neighbour's, or where an edge neighbour's centre ray ends differently (object, image order,
+//    termination) and the ray through the midpoint between the two centres ends unlike the
+//    pixel's own: the edge then crosses into this pixel's half. The n² rays lie on the grid
+//    rotated by atan(1/n), one in each of its n × n cells and in each of its n² rows and
+//    columns ("n-rooks"); for odd n the centre ray is one of them; each is
+//    filtered over its share of the footprint and they are averaged (a box reconstruction;
+//    FrameAntialiasing.cxx). A pixel's raysPerPixel counts its samples and the midpoint rays
+//    counted to it (those on its right and upper edges): at most maxRaysPerPixel + 2.
+//  - `supersample` N > 1 samples every pixel by the same N × N pattern (for references); with
+//    `none`, the samples are point-sampled.
 // Every sample position is fixed by the pixel alone, so that a frame is the same bit for bit at
 // any thread count and in any split into pieces.
 #ifndef asrt_Antialiasing_h
@@ -45,8 +51,10 @@ struct AntialiasOptions
   /// The defaults are the "balanced" preset's: of the settings measured in bench/REPORT.md, the
   /// cheapest that reaches 38 dB against a converged picture on every scene there.
   AntialiasMode mode = AntialiasMode::Adaptive;
-  /// The most rays an adaptively sampled pixel takes (centre ray included), 1 to
-  /// kMaxRaysPerPixel; the grid is ⌊√maxRaysPerPixel⌋ on a side.
+  /// The most rays an adaptively sampled pixel takes inside itself (centre ray included), 1 to
+  /// kMaxRaysPerPixel; the pattern is adaptivePatternSide(maxRaysPerPixel) on a side. The rays
+  /// through the midpoints of its edges that decide whether it is sampled come on top (at most
+  /// two).
   int maxRaysPerPixel = 9;
   /// N × N rays in every pixel, 1 to 32 (1: only what `mode` adds).
   int supersample = 1;
@@ -82,6 +90,24 @@ inline AntialiasOptions singleRayRendering()
 /// integrator's are integratorPreset's), chosen by measurement in bench/REPORT.md: the best quality
 /// for its cost. Throws InvalidParameter for any other name.
 ASRTTRACING_EXPORT AntialiasOptions renderingPreset(const std::string& name);
+
+/// The rays a pixel sampled by the n × n pattern takes: n² for odd n, whose middle sample is the
+/// centre ray; n² + 1 for even n, whose pattern cannot hold the centre and stay symmetric (the
+/// centre ray is traced for the record and not averaged in). 1 for n = 1.
+inline int patternRays(int n)
+{
+  return n <= 1 ? 1 : n * n + (n % 2 == 0 ? 1 : 0);
+}
+
+/// The side of the pattern adaptive sampling uses under a cap: the largest n whose patternRays
+/// fit in it (cap 9 gives 3 × 3, cap 16 gives 3 × 3, cap 17 gives 4 × 4).
+inline int adaptivePatternSide(int maxRaysPerPixel)
+{
+  int n = 1;
+  while (n < 32 && patternRays(n + 1) <= maxRaysPerPixel)
+    ++n;
+  return n;
+}
 
 /// Throws InvalidParameter naming the field ("rendering.maxRaysPerPixel: ...") unless the cap
 /// lies in [1, kMaxRaysPerPixel], the supersample in [1, 32], the threshold in [0, 1], and a frame

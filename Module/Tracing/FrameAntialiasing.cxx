@@ -45,8 +45,117 @@ double footprintMisfit(const RayRecord& r, const JacobianSample& s, int di, int 
   return std::hypot(x, y);
 }
 
+/// Where sample (a, b) of a pixel's n × n pattern lies, from the pixel's centre: the square grid
+/// rotated by atan(1/n), x = (n·a + b + ½)/n² − ½, y = (n·b + n − 1 − a + ½)/n² − ½. Each of the
+/// n × n cells of the pixel holds one sample, as in a stratified grid, and besides every one of
+/// the n² columns and the n² rows holds one at its middle ("n-rooks"): an edge along a pixel
+/// axis, which the plain grid resolves in steps of 1/n of the pixel, is resolved in steps of 1/n².
+/// For odd n, sample (⌊n/2⌋, ⌊n/2⌋) is the centre.
+std::pair<double, double> sampleOffset(int a, int b, int n)
+{
+  const double n2 = static_cast<double>(n) * n;
+  return { (n * a + b + 0.5) / n2 - 0.5, (n * b + (n - 1 - a) + 0.5) / n2 - 0.5 };
+}
+
+/// Whether two rays end alike: on the same object in the same image order, or the same way.
+bool endsAlike(const JacobianSample& a, const JacobianSample& b)
+{
+  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
+}
+
 /// A neighbour's screen-space misfit above this many pixels marks the footprint as non-linear.
-constexpr double kMaxFootprintMisfit = 0.25;
+constexpr double kMaxFootprintMisfit = 0.5;
+}
+
+void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
+                              const std::vector<JacobianSample>& neighbours, int adaptiveSide,
+                              std::vector<int>& side, std::vector<int>& midpointRays) const
+{
+  const AntialiasOptions& opts = this->Desc.rendering;
+  const PixelLookup lookup(records, neighbours);
+  // Colours lie in [0, 1]: at a threshold of 1 or more colour never decides, and the texture
+  // lookups of the pixel and its neighbours are skipped.
+  const bool byColor = opts.colorThreshold < 1.0;
+  // The 4 edge neighbours: an edge that only a diagonal neighbour sees clips a corner of the
+  // pixel, and sampling those pixels too costs a fifth more rays for a tenth of a dB
+  // (bench/REPORT.md).
+  static constexpr int kDirections[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
+
+  // 1. Each pixel against its neighbours. A pixel whose footprint is undefined or bends, or
+  // whose colour differs, is sampled outright ("hard"); a neighbour whose centre ray ends
+  // differently marks an edge between the two centres (bit d of `edges`).
+  std::vector<unsigned char> hard(records.size(), 0), edges(records.size(), 0);
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < static_cast<long>(records.size()); ++k)
+  {
+    const RayRecord& r = records[static_cast<std::size_t>(k)];
+    const JacobianSample self = jacobianSample(r);
+    const Color c = byColor ? this->pointColor(self) : Color::Zero();
+    const bool footprint = r.objectId >= 0 && hasFootprint(r);
+    bool h = r.objectId >= 0 && !footprint;
+    unsigned char e = 0;
+    for (int d = 0; d < 4; ++d)
+    {
+      const int di = kDirections[d][0], dj = kDirections[d][1];
+      const JacobianSample* s = lookup.at(r.i + di, r.j + dj);
+      if (!s || s->termination == Termination::Running)
+        continue;
+      if (!endsAlike(*s, self))
+        e |= static_cast<unsigned char>(1u << d);
+      else if (!h)
+        h = (byColor && (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold) ||
+            (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit);
+    }
+    hard[static_cast<std::size_t>(k)] = h;
+    edges[static_cast<std::size_t>(k)] = e;
+  }
+
+  // 2. The ray through the midpoint of every edge between disagreeing centres, in half-pixel
+  // coordinates (2i + di, 2j + dj). An edge's midpoint is traced whether or not its pixels are
+  // hard (which a piece cannot tell of a bordering pixel), and counted as a ray of its lower or
+  // left pixel: both are properties of the pair, the same in every piece.
+  std::vector<std::pair<int, int>> keys;
+  for (std::size_t k = 0; k < records.size(); ++k)
+    for (int d = 0; d < 4; ++d)
+      if (edges[k] & (1u << d))
+      {
+        keys.emplace_back(2 * records[k].i + kDirections[d][0],
+                          2 * records[k].j + kDirections[d][1]);
+        midpointRays[k] += kDirections[d][0] + kDirections[d][1] > 0;
+      }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<JacobianSample> midpoints(keys.size());
+#pragma omp parallel
+  {
+    std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
+#pragma omp for schedule(dynamic, 16)
+    for (long q = 0; q < static_cast<long>(keys.size()); ++q)
+    {
+      const auto [x2, y2] = keys[static_cast<std::size_t>(q)];
+      midpoints[static_cast<std::size_t>(q)] =
+        jacobianSample(this->traceThrough(*prop, 0.5 * x2, 0.5 * y2));
+    }
+  }
+
+  // 3. A straight edge crosses the segment between two centres once: where the midpoint ends as
+  // the pixel's centre does, the crossing lies in the neighbour's half, and the pixel need not be
+  // sampled for it. A midpoint unlike both (a third surface, a thin image) samples both.
+  for (std::size_t k = 0; k < records.size(); ++k)
+  {
+    bool sample = hard[k] != 0;
+    const JacobianSample self = jacobianSample(records[k]);
+    for (int d = 0; d < 4 && !sample; ++d)
+      if (edges[k] & (1u << d))
+      {
+        const std::pair<int, int> key(2 * self.i + kDirections[d][0],
+                                      2 * self.j + kDirections[d][1]);
+        const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+        sample = !endsAlike(midpoints[static_cast<std::size_t>(it - keys.begin())], self);
+      }
+    if (sample)
+      side[k] = adaptiveSide;
+  }
 }
 
 bool FrameTracer::antialias(std::vector<RayRecord>& records,
@@ -57,55 +166,24 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   const bool filter = opts.mode != AntialiasMode::None;
   const Scene& scene = *this->Desc.scene;
 
-  // Which pixels take more rays, and how many a side. The judgement reads only centre rays.
-  const int adaptiveSide =
-    static_cast<int>(std::floor(std::sqrt(static_cast<double>(opts.maxRaysPerPixel)) + 1e-9));
+  // Which pixels take more rays, and how many a side. The judgement reads only centre rays and
+  // the edge midpoints between them, so that it is a function of the frame, not of its pieces.
+  const int adaptiveSide = adaptivePatternSide(opts.maxRaysPerPixel);
   std::vector<int> side(records.size(), 1);
+  std::vector<int> midpointRays(records.size(), 0);
   if (opts.supersample > 1)
     std::fill(side.begin(), side.end(), opts.supersample);
   else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
-  {
-    const PixelLookup lookup(records, neighbours);
-#pragma omp parallel for schedule(static)
-    for (long k = 0; k < static_cast<long>(records.size()); ++k)
-    {
-      const RayRecord& r = records[static_cast<std::size_t>(k)];
-      const JacobianSample self = jacobianSample(r);
-      // Colours lie in [0, 1]: at a threshold of 1 or more colour never decides, and the texture
-      // lookups of the pixel and its neighbours are skipped.
-      const bool byColor = opts.colorThreshold < 1.0;
-      const Color c = byColor ? this->pointColor(self) : Color::Zero();
-      const bool footprint = r.objectId >= 0 && hasFootprint(r);
-      bool disagree = r.objectId >= 0 && !footprint;
-      // The 4 edge neighbours: an edge that only a diagonal neighbour sees clips a corner of the
-      // pixel, and sampling those pixels too costs a fifth more rays for a tenth of a dB
-      // (bench/REPORT.md).
-      for (const auto& [di, dj] :
-           { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
-        if (!disagree)
-        {
-          const JacobianSample* s = lookup.at(r.i + di, r.j + dj);
-          if (!s || s->termination == Termination::Running)
-            continue;
-          disagree =
-            s->objectId != r.objectId || s->imageOrder != r.imageOrder ||
-            s->termination != r.termination ||
-            (byColor && (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold) ||
-            (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit);
-        }
-      if (disagree)
-        side[static_cast<std::size_t>(k)] = adaptiveSide;
-    }
-  }
+    this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays);
 
   // Filtered centre colours (the colour of a pixel left at one ray).
-  if (filter)
-    for (std::size_t k = 0; k < records.size(); ++k)
-    {
-      RayRecord& r = records[k];
-      if (side[k] == 1 && r.objectId >= 0 && hasFootprint(r))
-        r.color = scene.shadeFootprint(r.objectId, r.u, r.v, footprintOf(r, 1));
-    }
+  for (std::size_t k = 0; k < records.size(); ++k)
+  {
+    RayRecord& r = records[k];
+    if (filter && side[k] == 1 && r.objectId >= 0 && hasFootprint(r))
+      r.color = scene.shadeFootprint(r.objectId, r.u, r.v, footprintOf(r, 1));
+    r.raysPerPixel = 1 + midpointRays[k];
+  }
 
   std::vector<std::size_t> sampled;
   for (std::size_t k = 0; k < records.size(); ++k)
@@ -114,11 +192,10 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   if (sampled.empty())
     return true;
 
-  // n × n cells, each traced through its centre and filtered over its own footprint (the centre
-  // ray's, scaled); the box reconstruction averages the cells. The cell (⌊n/2⌋, ⌊n/2⌋) holds the
-  // pixel's centre (at its middle for odd n, at its corner for even n) and takes the centre ray
-  // for its sample, so that a pixel takes exactly n² rays: any fixed point of a cell stratifies
-  // the pixel alike.
+  // n² samples on a rotated grid (sampleOffset), each filtered over its share of the footprint
+  // (the centre ray's, scaled by 1/n); the box reconstruction averages them. For odd n the middle
+  // sample is the pixel's centre and takes the centre ray; for even n the centre ray is not a
+  // sample (patternRays).
   const long count = static_cast<long>(sampled.size());
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
@@ -141,13 +218,14 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       for (int b = 0; b < n; ++b)
         for (int a = 0; a < n; ++a)
         {
-          const bool middle = a == n / 2 && b == n / 2;
+          const bool middle = n % 2 == 1 && a == n / 2 && b == n / 2;
           RayRecord s;
           if (middle)
             s = r;
           else
           {
-            s = this->traceThrough(*prop, r.i - 0.5 + (a + 0.5) / n, r.j - 0.5 + (b + 0.5) / n);
+            const auto [x, y] = sampleOffset(a, b, n);
+            s = this->traceThrough(*prop, r.i + x, r.j + y);
             ++rays;
           }
           if (cellFilter && s.objectId == r.objectId && s.imageOrder == r.imageOrder)
@@ -156,7 +234,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
             sum += s.color;
         }
       r.color = sum / static_cast<double>(n * n);
-      r.raysPerPixel = rays;
+      r.raysPerPixel = rays + midpointRays[sampled[static_cast<std::size_t>(q)]];
       const long d = ++done;
       if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)
       {

@@ -85,6 +85,11 @@ private:
   std::vector<RayRecord> traceKeeping(const std::vector<std::pair<int, int>>& pixels,
                                       std::size_t keep,
                                       const std::function<bool(double)>& progress) const;
+  /// The adaptive judgement of antialias(): sets side[k] to `adaptiveSide` for the records to
+  /// sample, and counts in midpointRays[k] the edge-midpoint rays it traced on their behalf.
+  void judgePixels(const std::vector<RayRecord>& records,
+                   const std::vector<JacobianSample>& neighbours, int adaptiveSide,
+                   std::vector<int>& side, std::vector<int>& midpointRays) const;
   /// The ray through screen position (x, y) with the given propagator (one per thread).
   RayRecord traceThrough(Propagator& prop, double x, double y) const;
   /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,
