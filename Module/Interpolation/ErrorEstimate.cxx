@@ -175,11 +175,8 @@ RetraceChoice chooseRetraceCount(std::size_t pixels, const std::vector<std::size
       return best;
     }
   }
-  // No probes are left to vouch for the rest: everything is re-traced.
-  best.estimatedMse = 0;
-  best.standardError = 0;
+  // No probes are left to vouch for the rest: everything is re-traced, exactly.
   best.estimatedPsnr = psnrOfMse(0);
-  best.probesLeft = 0;
   return best;
 }
 }

@@ -46,6 +46,23 @@ SceneDescription checkerWall(double mass, int w, int h)
   return d;
 }
 
+/// Where the head-on checkerWall(0, w, h) seen from (0, −30, 0) puts pixel edges, in checks
+/// from the wall's corner (u = 0 at x = −20): the pinhole projects screen position i onto the wall
+/// 40 units away, whose 40 units a side hold 12 checks.
+struct HeadOnWallChecks
+{
+  int w, h;
+  double x(double i) const
+  {
+    return ((2.0 * i + 1.0 - w) / w * tanHalf() * double(w) / h * 40.0 + 20.0) / 40.0 * 12.0;
+  }
+  double z(double j) const
+  {
+    return ((2.0 * j + 1.0 - h) / h * tanHalf() * 40.0 + 20.0) / 40.0 * 12.0;
+  }
+  static double tanHalf() { return std::tan(0.5 * 40.0 * M_PI / 180.0); }
+};
+
 double rmsDifference(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
 {
   double s = 0;
@@ -79,21 +96,15 @@ TEST(Antialiasing, HeadOnCheckerIsItsExactAreaAverageOverEachPixel)
   const int W = 48, H = 36;
   SceneDescription d = checkerWall(0.0, W, H);
   const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::Filter));
-  const double t = std::tan(0.5 * 40.0 * M_PI / 180.0), aspect = double(W) / H;
-  const double distance = 40.0, side = 40.0, checks = 12.0; // eye to wall, wall side, checks a side
+  const HeadOnWallChecks checks{ W, H };
   const Color a(0.9, 0.2, 0.1), b(0.1, 0.3, 0.9);
   double worst = 0;
   for (const RayRecord& r : frame)
   {
     ASSERT_EQ(r.objectId, 1) << "pixel " << r.i << ", " << r.j;
     EXPECT_EQ(r.raysPerPixel, 1);
-    // The pixel's edges on the wall, in checks from the wall's corner (u = 0 at x = −20).
-    auto checkX = [&](double i)
-    { return ((2.0 * i + 1.0 - W) / W * t * aspect * distance + 20.0) / side * checks; };
-    auto checkZ = [&](double j)
-    { return ((2.0 * j + 1.0 - H) / H * t * distance + 20.0) / side * checks; };
-    const double mean = squareWaveMean(checkX(r.i - 0.5), checkX(r.i + 0.5)) *
-                        squareWaveMean(checkZ(r.j - 0.5), checkZ(r.j + 0.5));
+    const double mean = squareWaveMean(checks.x(r.i - 0.5), checks.x(r.i + 0.5)) *
+                        squareWaveMean(checks.z(r.j - 0.5), checks.z(r.j + 0.5));
     const Color exact = 0.5 * (a + b) + 0.5 * (a - b) * mean;
     worst = std::max(worst, (r.color - exact).cwiseAbs().maxCoeff());
   }
@@ -112,10 +123,7 @@ TEST(Antialiasing, SamplePatternResolvesAnEdgeAlongAPixelAxisInNinthsOfThePixel)
   const int W = 48, H = 36;
   SceneDescription d = checkerWall(0.0, W, H);
   const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::None, 1, 3));
-  const double t = std::tan(0.5 * 40.0 * M_PI / 180.0), aspect = double(W) / H;
-  auto checkX = [&](double i)
-  { return ((2.0 * i + 1.0 - W) / W * t * aspect * 40.0 + 20.0) / 40.0 * 12.0; };
-  auto checkZ = [&](double j) { return ((2.0 * j + 1.0 - H) / H * t * 40.0 + 20.0) / 40.0 * 12.0; };
+  const HeadOnWallChecks checks{ W, H };
   auto crosses = [](double a, double b) { return std::floor(a) != std::floor(b); };
   const Color a(0.9, 0.2, 0.1), b(0.1, 0.3, 0.9);
   const double contrast = (a - b).cwiseAbs().maxCoeff();
@@ -124,8 +132,8 @@ TEST(Antialiasing, SamplePatternResolvesAnEdgeAlongAPixelAxisInNinthsOfThePixel)
   for (const RayRecord& r : frame)
   {
     EXPECT_EQ(r.raysPerPixel, 9);
-    const double x0 = checkX(r.i - 0.5), x1 = checkX(r.i + 0.5);
-    const double z0 = checkZ(r.j - 0.5), z1 = checkZ(r.j + 0.5);
+    const double x0 = checks.x(r.i - 0.5), x1 = checks.x(r.i + 0.5);
+    const double z0 = checks.z(r.j - 0.5), z1 = checks.z(r.j + 0.5);
     if (crosses(x0, x1) == crosses(z0, z1))
       continue; // no edge, or a corner of four checks
     ++edgePixels;
