@@ -53,5 +53,11 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # The run-time Depends come from the binaries' NEEDED libraries (dpkg-shlibdeps); building
 # against ASRT and its Python package need what the binaries do not say.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libvtk9-dev, libeigen3-dev, python3-vtk9, postgresql")
+# The Recommends name the VTK that the build used: ParaView's (paraview-dev, python3-paraview) or
+# Debian's own 9.1 (libvtk9-dev, python3-vtk9), whose Python packages conflict.
+if (ASRT_HAVE_PARAVIEW)
+  set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "paraview-dev, libeigen3-dev, python3-paraview, postgresql")
+else ()
+  set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libvtk9-dev, libeigen3-dev, python3-vtk9, postgresql")
+endif ()
 include(CPack)

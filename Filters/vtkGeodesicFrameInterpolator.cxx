@@ -1,5 +1,7 @@
 #include "vtkGeodesicFrameInterpolator.h"
 
+#include "AlgorithmAbort.h"
+
 #include "FrameInterpolation.h"
 #include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
@@ -392,6 +394,7 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     this->Impl->Prepare(this, hits);
     if (this->GetAbortExecute())
     {
+      asrt::reportAbort(this);
       image->Initialize();
       return 1;
     }

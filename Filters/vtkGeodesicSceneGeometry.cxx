@@ -73,9 +73,9 @@ int vtkGeodesicSceneGeometry::RequestData(vtkInformation*, vtkInformationVector*
   try
   {
     asrt::SceneDescription d = asrt::loadScene(this->SceneText, this->SceneFileName);
-    if (!std::isnan(this->Mass))
+    if (this->OverrideSpacetime && !std::isnan(this->Mass))
       d.spacetime.mass = this->Mass;
-    if (!std::isnan(this->Spin))
+    if (this->OverrideSpacetime && !std::isnan(this->Spin))
       d.spacetime.spin = this->Spin;
     const auto st = asrt::makeSpacetime(d.spacetime);
 
@@ -150,6 +150,7 @@ void vtkGeodesicSceneGeometry::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SceneFileName: " << (this->SceneFileName ? this->SceneFileName : "(none)")
      << "\n";
   os << indent << "SceneText: " << (this->SceneText ? "(set)" : "(none)") << "\n";
+  os << indent << "OverrideSpacetime: " << this->OverrideSpacetime << "\n";
   os << indent << "Mass: " << this->Mass << "\n";
   os << indent << "Spin: " << this->Spin << "\n";
   os << indent << "Resolution: " << this->Resolution << "\n";

@@ -31,6 +31,11 @@ public:
   vtkGetMacro(Mass, double);
   vtkSetMacro(Spin, double);
   vtkGetMacro(Spin, double);
+  /// Off: Mass and Spin are ignored, the scene's hole is drawn (for front ends whose properties
+  /// cannot hold NaN, as vtkGeodesicSource's OverrideSpacetime). On by default.
+  vtkSetMacro(OverrideSpacetime, bool);
+  vtkGetMacro(OverrideSpacetime, bool);
+  vtkBooleanMacro(OverrideSpacetime, bool);
   ///@}
 
   ///@{
@@ -60,6 +65,7 @@ protected:
   char* SceneText = nullptr;
   double Mass;
   double Spin;
+  bool OverrideSpacetime = true;
   int Resolution = 64;
   bool IncludeCelestialSphere = false;
   bool IncludeHorizon = true;

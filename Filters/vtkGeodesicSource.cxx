@@ -1,5 +1,7 @@
 #include "vtkGeodesicSource.h"
 
+#include "AlgorithmAbort.h"
+
 #include "FrameTracer.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
@@ -69,6 +71,22 @@ vtkIntArray* vtkGeodesicSource::GetPixelSubset()
 vtkIntArray* vtkGeodesicSource::GetPolylinePixels()
 {
   return this->PolylinePixels;
+}
+
+void vtkGeodesicSource::ClearPolylinePixels()
+{
+  this->SetPolylinePixels(nullptr);
+}
+
+void vtkGeodesicSource::AddPolylinePixel(int i, int j)
+{
+  vtkNew<vtkIntArray> pixels;
+  pixels->SetNumberOfComponents(2);
+  if (this->PolylinePixels)
+    pixels->DeepCopy(this->PolylinePixels);
+  const int ij[2] = { i, j };
+  pixels->InsertNextTypedTuple(ij);
+  this->SetPolylinePixels(pixels);
 }
 
 vtkGeodesicSource::vtkGeodesicSource()
@@ -252,22 +270,28 @@ struct vtkGeodesicSource::Internals
   {
     asrt::SceneDescription d =
       asrt::loadScene(self->SceneText, self->SceneFileName, self->TextureDirectory);
-    if (isSet(self->Mass))
-      d.spacetime.mass = self->Mass;
-    if (isSet(self->Spin))
-      d.spacetime.spin = self->Spin;
-    if (isSet(self->Charge))
-      d.spacetime.charge = self->Charge;
+    if (self->OverrideSpacetime)
+    {
+      if (isSet(self->Mass))
+        d.spacetime.mass = self->Mass;
+      if (isSet(self->Spin))
+        d.spacetime.spin = self->Spin;
+      if (isSet(self->Charge))
+        d.spacetime.charge = self->Charge;
+    }
     auto override3 = [](const double* v, asrt::Vec3& target)
     {
       if (isSet(v[0]) || isSet(v[1]) || isSet(v[2]))
         target = asrt::Vec3(v[0], v[1], v[2]);
     };
-    override3(self->CameraPosition, d.camera.position);
-    override3(self->FocalPoint, d.camera.focalPoint);
-    override3(self->ViewUp, d.camera.viewUp);
-    if (isSet(self->ViewAngle))
-      d.camera.viewAngle = self->ViewAngle;
+    if (self->OverrideCamera)
+    {
+      override3(self->CameraPosition, d.camera.position);
+      override3(self->FocalPoint, d.camera.focalPoint);
+      override3(self->ViewUp, d.camera.viewUp);
+      if (isSet(self->ViewAngle))
+        d.camera.viewAngle = self->ViewAngle;
+    }
     if (self->Resolution[0] != 0 || self->Resolution[1] != 0)
     {
       d.camera.width = self->Resolution[0];
@@ -287,7 +311,7 @@ struct vtkGeodesicSource::Internals
     }
     if (self->IntegrationMethod && *self->IntegrationMethod)
       d.integrator.method = self->IntegrationMethod;
-    if (isSet(self->IntegrationStep))
+    if (self->OverrideIntegrationStep && isSet(self->IntegrationStep))
       d.integrator.step = self->IntegrationStep;
     if (self->Antialias && *self->Antialias)
     {
@@ -522,6 +546,7 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
     requirePairs(this->PolylinePixels, "PolylinePixels");
     if (!Internals::Trace(this, tracer, rowBegin, rowEnd, image, hits))
     {
+      asrt::reportAbort(this);
       image->Initialize();
       hits->Initialize();
       lines->Initialize();
@@ -590,9 +615,11 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SceneText: " << (this->SceneText ? "(set)" : "(none)") << "\n";
   os << indent << "TextureDirectory: "
      << (this->TextureDirectory ? this->TextureDirectory : "(working directory)") << "\n";
+  os << indent << "OverrideSpacetime: " << this->OverrideSpacetime << "\n";
   os << indent << "Mass: " << this->Mass << "\n";
   os << indent << "Spin: " << this->Spin << "\n";
   os << indent << "Charge: " << this->Charge << "\n";
+  os << indent << "OverrideCamera: " << this->OverrideCamera << "\n";
   os << indent << "CameraPosition: " << this->CameraPosition[0] << " " << this->CameraPosition[1]
      << " " << this->CameraPosition[2] << "\n";
   os << indent << "FocalPoint: " << this->FocalPoint[0] << " " << this->FocalPoint[1] << " "
@@ -610,6 +637,7 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
      << indent << "Antialias: " << (this->Antialias ? this->Antialias : "(scene)") << "\n"
      << indent << "MaxRaysPerPixel: " << this->MaxRaysPerPixel << "\n"
      << indent << "Supersample: " << this->Supersample << "\n";
+  os << indent << "OverrideIntegrationStep: " << this->OverrideIntegrationStep << "\n";
   os << indent << "IntegrationStep: " << this->IntegrationStep << "\n";
   os << indent << "PixelSubset: " << (this->PixelSubset ? "set" : "(none)") << "\n";
   os << indent << "GeneratePolylines: " << this->GeneratePolylines << "\n";

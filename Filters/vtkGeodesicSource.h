@@ -88,6 +88,22 @@ public:
   ///@}
 
   ///@{
+  /// Switches over the overrides above, for front ends whose properties cannot hold NaN
+  /// (ParaView's): with OverrideSpacetime off, Mass, Spin and Charge are ignored and the scene's
+  /// hole is traced; OverrideCamera covers CameraPosition, FocalPoint, ViewUp and ViewAngle, and
+  /// OverrideIntegrationStep covers IntegrationStep. All on by default, so that NaN alone decides.
+  vtkSetMacro(OverrideSpacetime, bool);
+  vtkGetMacro(OverrideSpacetime, bool);
+  vtkBooleanMacro(OverrideSpacetime, bool);
+  vtkSetMacro(OverrideCamera, bool);
+  vtkGetMacro(OverrideCamera, bool);
+  vtkBooleanMacro(OverrideCamera, bool);
+  vtkSetMacro(OverrideIntegrationStep, bool);
+  vtkGetMacro(OverrideIntegrationStep, bool);
+  vtkBooleanMacro(OverrideIntegrationStep, bool);
+  ///@}
+
+  ///@{
   /// Resolution override; 0 keeps the scene's.
   vtkSetVector2Macro(Resolution, int);
   vtkGetVector2Macro(Resolution, int);
@@ -152,6 +168,11 @@ public:
   vtkGetMacro(PolylineStride, int);
   void SetPolylinePixels(vtkIntArray* ij);
   vtkIntArray* GetPolylinePixels();
+  /// The same list a pixel at a time (ParaView's repeated properties): ClearPolylinePixels unsets
+  /// it, back to the stride; AddPolylinePixel appends (i, j) to a copy, never to an array the
+  /// caller set.
+  void ClearPolylinePixels();
+  void AddPolylinePixel(int i, int j);
   ///@}
 
   ///@{
@@ -191,6 +212,9 @@ protected:
   double ViewUp[3];
   double ViewAngle;
   double IntegrationStep;
+  bool OverrideSpacetime = true;
+  bool OverrideCamera = true;
+  bool OverrideIntegrationStep = true;
   int Resolution[2] = { 0, 0 };
   char* IntegrationMethod = nullptr;
   char* IntegrationPreset = nullptr;

@@ -20,9 +20,14 @@
 #include "vtkXMLPolyDataWriter.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <ostream>
 #include <stdexcept>
+#include <streambuf>
 #include <vector>
 
 namespace asrt
@@ -84,6 +89,122 @@ std::vector<vtkSmartPointer<vtkAbstractArray>> arraysWithoutInformation(vtkDataO
   return arrays;
 }
 
+/// A stream buffer into a TemporaryFile that never tells its stream of a failed write. VTK's XML
+/// writers, in inline mode, free memory they never allocated when a write fails
+/// (vtkXMLUnstructuredDataWriter::WriteAPiece deletes appended mode's position arrays): so the
+/// first error is kept here, the rest of the output is dropped, and the error is thrown once the
+/// writer has returned.
+class TemporaryFileBuffer : public std::streambuf
+{
+public:
+  explicit TemporaryFileBuffer(TemporaryFile& file)
+    : File(file)
+  {
+    this->setp(this->Buffer, this->Buffer + sizeof(this->Buffer));
+  }
+  /// Writes what is buffered; the first error's message, or empty.
+  const std::string& finish()
+  {
+    this->flushBuffer();
+    return this->Error;
+  }
+
+protected:
+  int_type overflow(int_type c) override
+  {
+    this->flushBuffer();
+    if (!traits_type::eq_int_type(c, traits_type::eof()))
+    {
+      *this->pptr() = traits_type::to_char_type(c);
+      this->pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  std::streamsize xsputn(const char* data, std::streamsize n) override
+  {
+    if (n > this->epptr() - this->pptr())
+    {
+      this->flushBuffer();
+      if (n >= static_cast<std::streamsize>(sizeof(this->Buffer)))
+      {
+        this->writeThrough(data, static_cast<std::size_t>(n));
+        return n;
+      }
+    }
+    std::memcpy(this->pptr(), data, static_cast<std::size_t>(n));
+    this->pbump(static_cast<int>(n));
+    return n;
+  }
+  int sync() override
+  {
+    this->flushBuffer();
+    return 0;
+  }
+  // Positions: the writers rewind to 0 before they start, and go back to rewrite a compressed
+  // array's header once its blocks are written, then forward again.
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override
+  {
+    const off_type here = this->Position + (this->pptr() - this->pbase());
+    if (off == 0 && dir == std::ios_base::cur)
+      return pos_type(here);
+    if (dir != std::ios_base::beg || off < 0)
+      return pos_type(off_type(-1));
+    this->flushBuffer();
+    if (off != this->Position)
+    {
+      if (lseek(this->File.descriptor(), off, SEEK_SET) < 0 && this->Error.empty())
+        this->Error = "cannot write \"" + this->File.path() + "\": " + std::strerror(errno);
+      this->Position = off;
+    }
+    return pos_type(off);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override
+  {
+    return this->seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+
+private:
+  void flushBuffer()
+  {
+    this->writeThrough(this->pbase(), static_cast<std::size_t>(this->pptr() - this->pbase()));
+    this->setp(this->Buffer, this->Buffer + sizeof(this->Buffer));
+  }
+  void writeThrough(const char* data, std::size_t size)
+  {
+    this->Position += static_cast<off_type>(size);
+    if (!this->Error.empty() || size == 0)
+      return;
+    try
+    {
+      this->File.write(data, size);
+    }
+    catch (const std::exception& e)
+    {
+      this->Error = e.what();
+    }
+  }
+
+  TemporaryFile& File;
+  char Buffer[1 << 16];
+  off_type Position = 0; ///< the file offset that the buffer's first byte goes to
+  std::string Error;
+};
+
+/// A VTK XML writer that writes into a stream of ours (vtkXMLWriter's protected Stream, which its
+/// OpenStream uses instead of opening a file when it is set).
+template<class Base>
+class StreamXMLWriter : public Base
+{
+public:
+  static StreamXMLWriter* New()
+  {
+    auto* writer = new StreamXMLWriter;
+    writer->InitializeObjectBase();
+    return writer;
+  }
+  void SetOutputStream(std::ostream* stream) { this->Stream = stream; }
+};
+
 /// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
 /// its name) and checks that it wrote the whole file.
 template<class Writer>
@@ -96,17 +217,25 @@ void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
   messages.watchAlgorithm(writer);
   writer->SetInputData(data);
   const std::string name = file.openName();
+  // The name satisfies the writer's check that it has somewhere to write; the stream is used.
   writer->SetFileName(name.c_str());
+  TemporaryFileBuffer buffer(file);
+  std::ostream stream(&buffer);
+  writer->SetOutputStream(&stream);
   // VTK's XML writers cache each array's range in its information, and write an array with
   // information keys in a longer form (the same data, other bytes): the arrays leave as they came,
   // so that a file is the same whatever was written before from arrays it shares (a frame's image
   // and hit points share four).
   const auto untouched = arraysWithoutInformation(data);
   writer->Write();
+  writer->SetOutputStream(nullptr);
   for (vtkAbstractArray* a : untouched)
     if (a->HasInformation())
       a->GetInformation()->Clear();
   writer->SetFileName(nullptr);
+  const std::string error = buffer.finish();
+  if (!error.empty())
+    throw std::runtime_error(error);
   checkWriter(writer->GetErrorCode(), messages, name, path);
   struct stat st;
   if (fstat(file.descriptor(), &st) != 0 || st.st_size == 0)
@@ -169,16 +298,21 @@ void writePng(vtkImageData* image, TemporaryFile& file)
   file.finish();
 }
 
+// Inline binary (base64 in the XML), never VTK's default appended data: ParaView 5.11's bundled VTK
+// cannot parse appended data with the current libexpat (2.5.0-1+deb12u5 and later), so files with
+// it open with 0 points in Debian's ParaView. Inline data parses with every expat.
 void writeVti(vtkImageData* image, TemporaryFile& file)
 {
-  vtkNew<vtkXMLImageDataWriter> writer;
+  vtkNew<StreamXMLWriter<vtkXMLImageDataWriter>> writer;
+  writer->SetDataModeToBinary();
   writer->SetCompressorTypeToZLib();
   writeWith(writer.Get(), image, file);
 }
 
 void writeVtp(vtkPolyData* data, TemporaryFile& file)
 {
-  vtkNew<vtkXMLPolyDataWriter> writer;
+  vtkNew<StreamXMLWriter<vtkXMLPolyDataWriter>> writer;
+  writer->SetDataModeToBinary();
   writer->SetCompressorTypeToZLib();
   writeWith(writer.Get(), data, file);
 }

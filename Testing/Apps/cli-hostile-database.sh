@@ -114,8 +114,11 @@ test "$(sql -c "SELECT label FROM frames WHERE frame_hash = (SELECT frame_hash F
   WHERE id = 1000)")" = winner
 
 step "the private server's own database is ASRT's: reading it sets the schema up there"
-private="$work/private"
-trap '"$asrt" db --dir "$private" destroy > /dev/null 2>&1 || true' EXIT
+# In a fresh folder of /tmp that the server's user can enter, wherever the build folder lies.
+private_top=$(mktemp -d /tmp/asrt-db-XXXXXX)
+chmod 755 "$private_top"
+private="$private_top/private"
+trap '"$asrt" db --dir "$private" destroy > /dev/null 2>&1 || true; rm -rf "$private_top"' EXIT
 (
   unset PGHOST PGPORT PGDATABASE PGUSER
   export ASRT_DB_DIR="$private"

@@ -21,7 +21,15 @@ deb=${packages[0]}
 [ "$(dpkg-deb -f "$deb" Package)" = asrt ] || fail "$deb is not the package asrt"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
-grep -E '(^|, )libvtk9' <<< "$depends" > /dev/null || fail "the Depends do not name VTK"
+# The package that holds the VTK library the build linked (libvtk9.1 for Debian's VTK, paraview
+# for ParaView's), as dpkg knows it.
+vtk_library=$(readelf -d "$build/${ASRT_INSTALL_LIBDIR}/libasrtFilters.so" |
+  sed -n 's/.*Shared library: \[\(libvtkCommonCore[^]]*\)\].*/\1/p')
+[ -n "$vtk_library" ] || fail "libasrtFilters.so does not name VTK's CommonCore"
+vtk_package=$(dpkg -S "$vtk_library" | sed -n '1s/:.*//p')
+[ -n "$vtk_package" ] || fail "no package holds $vtk_library"
+grep -E "(^|, )$vtk_package( |,|$)" <<< "$depends" > /dev/null ||
+  fail "the Depends do not name $vtk_package, which holds $vtk_library"
 
 # The archive's paths, as ./usr/... (a symbolic link's name without its target).
 dpkg-deb -c "$deb" | awk '{ print $6 }' > "$work/contents.txt"
