@@ -3,13 +3,15 @@
 #  - the installed program traces an installed scene, loads the installed libraries through its
 #    RUNPATH (no LD_LIBRARY_PATH) and finds the installed data from its own path;
 #  - the installed Python package imports (when the build wraps Python);
+#  - the installed ParaView plugin loads in pvpython (when the build makes it);
 #  - a project outside ASRT's tree (downstream/) finds ASRT with find_package(ASRT), links
 #    ASRT::Filters to trace a scene into a PNG, and ASRT::Physics alone, without libpq, to check a
 #    fact of the Schwarzschild spacetime.
 # Usage: install-and-consume.sh CMAKE BUILD_DIR WORK_DIR CHECKER
 #   WORK_DIR is emptied and everything is written there; CHECKER is asrtCheckOutputs. The install
 #   directories (relative to the prefix) come from the environment: ASRT_INSTALL_BINDIR, _LIBDIR,
-#   _HEADERDIR, _DATADIR, and ASRT_INSTALL_PYTHONDIR (empty without the Python package).
+#   _HEADERDIR, _DATADIR, ASRT_INSTALL_PYTHONDIR (empty without the Python package) and
+#   ASRT_INSTALL_PLUGINDIR with ASRT_PVPYTHON (empty without the ParaView plugin).
 set -euo pipefail
 cmake=$1 build=$2 work=$3 checker=$4
 here=$(cd "$(dirname "$0")" && pwd)
@@ -51,6 +53,25 @@ assert asrt.__file__.startswith('$prefix/'), asrt.__file__
 source = asrt.vtkGeodesicSource()
 print(source.GetClassName())"
   grep -x vtkGeodesicSource "$work/python.log" > /dev/null || fail "the Python package did not load"
+fi
+
+# The installed ParaView plugin loads in pvpython from the prefix, its libraries through its
+# RUNPATH, and traces a frame.
+if [ -n "${ASRT_INSTALL_PLUGINDIR:-}" ]; then
+  plugin=$prefix/$ASRT_INSTALL_PLUGINDIR/ASRT.so
+  ldd "$plugin" > "$work/plugin.ldd"
+  if grep libasrt "$work/plugin.ldd" | grep -v -F "=> $prefix/" > /dev/null; then
+    cat "$work/plugin.ldd"
+    fail "$plugin loads ASRT libraries from outside the prefix"
+  fi
+  run "$work/plugin.log" "$ASRT_PVPYTHON" -c "
+from paraview.simple import LoadPlugin
+from paraview import servermanager
+LoadPlugin('$plugin', remote=False, ns=globals())
+source = ASRTGeodesicSource(SceneFileName='$scene', Resolution=[8, 6])
+print('plugin image points', servermanager.Fetch(source, idx=0).GetNumberOfPoints())"
+  grep -x "plugin image points 48" "$work/plugin.log" > /dev/null ||
+    fail "the installed plugin did not trace: $(tail -3 "$work/plugin.log")"
 fi
 
 # A downstream project, against this prefix only (no package registry).

@@ -40,6 +40,9 @@ installed_files()
   echo "$ASRT_INSTALL_DATADIR/asrt/scenes/kerr-disk.json"
   echo "$ASRT_INSTALL_DATADIR/asrt/textures/galaxy.png"
   echo "$ASRT_INSTALL_DATADIR/asrt/textures/checker.png"
+  if [ -n "${ASRT_INSTALL_PLUGINDIR:-}" ]; then
+    echo "$ASRT_INSTALL_PLUGINDIR/ASRT.so"
+  fi
 }
 
 # expect_files ROOT "FILES": each of the files exists under ROOT.
