@@ -78,6 +78,12 @@ read_only_folder() {
   if [ "$(id -u)" -eq 0 ]; then
     as_user=(setpriv --reuid=nobody --regid=nogroup --clear-groups --)
     chmod a+rwx "$work"
+    # nobody needs to reach the program, the scene and this folder: say so, rather than fail on
+    # an unrelated "Permission denied".
+    for needed in "$asrt" "$scene" "$work"; do
+      "${as_user[@]}" test -r "$needed" || fail "user nobody cannot reach $needed: the build and \
+source folders and their parents must be enterable by other users (chmod o+x)"
+    done
   fi
   "${as_user[@]}" "$asrt" trace "$scene" -r 16x16 -q -o out/
   snapshot out > before.txt

@@ -165,6 +165,29 @@ TEST(SceneGeometry, SchwarzschildHorizonIsTheSphereOfRadiusTwoM)
   }
 }
 
+// With OverrideSpacetime off, Mass is ignored (ParaView's panel always holds a number): the horizon
+// is the scene's, r₊ = 2M = 2; switched back on, the override's r₊ = 3.
+TEST(SceneGeometry, OverrideSpacetimeOffKeepsTheScenesHole)
+{
+  for (bool override : { false, true })
+  {
+    SCOPED_TRACE(override ? "override on" : "override off");
+    vtkNew<vtkGeodesicSceneGeometry> g;
+    g->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+    g->SetMass(1.5);
+    g->SetOverrideSpacetime(override);
+    g->Update();
+    const std::set<vtkIdType> horizon = pointsOfObject(g->GetOutput(), -1);
+    ASSERT_FALSE(horizon.empty());
+    double x[3];
+    for (vtkIdType k : horizon)
+    {
+      g->GetOutput()->GetPoint(k, x);
+      ASSERT_NEAR(std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), override ? 3.0 : 2.0, 1e-9);
+    }
+  }
+}
+
 TEST(SceneGeometry, FloorVertexColoursFollowTheCheckerImage)
 {
   // Fig. 1's floor is a rectangle centred at (0, 5, −10), 40 × 40 M, textured with checker.png:
