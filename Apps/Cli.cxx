@@ -12,10 +12,13 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 namespace asrt
 {
@@ -107,7 +110,7 @@ Options::Options(const std::vector<OptionSpec>& specs, const std::vector<std::st
     else
     {
       if (arg.size() != 2)
-        throw UsageError("unknown option '" + arg + "'");
+        throw UsageError("unknown option " + quotedArgument(arg));
       for (const OptionSpec& s : specs)
         if (s.shortName == arg[1])
           spec = &s;
@@ -115,7 +118,7 @@ Options::Options(const std::vector<OptionSpec>& specs, const std::vector<std::st
         name = spec->name;
     }
     if (!spec)
-      throw UsageError("unknown option '" + arg + "'");
+      throw UsageError("unknown option " + quotedArgument(arg));
     switch (spec->kind)
     {
       case OptionSpec::Flag:
@@ -149,17 +152,33 @@ void Options::expectPositional(std::size_t min, std::size_t max, const char* wha
   if (n < min)
     throw UsageError(std::string("missing ") + what);
   if (n > max)
-    throw UsageError("unexpected argument '" + this->Positional[max] + "'");
+    throw UsageError("unexpected argument " + quotedArgument(this->Positional[max]));
+}
+
+std::string quotedArgument(const std::string& text)
+{
+  if (text.size() <= kQuotedLength)
+    return "'" + text + "'";
+  std::size_t cut = kQuotedLength - 3;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80)
+    --cut; // not inside a UTF-8 character
+  return "'" + text.substr(0, cut) + "...' (" + std::to_string(text.size()) + " characters)";
 }
 
 double parseNumber(const std::string& option, const std::string& text)
 {
   char* end = nullptr;
+  errno = 0;
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || end != text.c_str() + text.size())
-    throw UsageError(option + ": '" + text + "' is not a number");
+    throw UsageError(option + ": " + quotedArgument(text) + " is not a number");
   if (!std::isfinite(v))
-    throw UsageError(option + ": must be finite, got '" + text + "'");
+    throw UsageError(option + ": must be finite, got " + quotedArgument(text));
+  // strtod reports ERANGE for results beyond a double's range and for those that underflow to
+  // zero or to a subnormal number (which keeps too few digits to be the number typed).
+  if (errno == ERANGE)
+    throw UsageError(option + ": " + quotedArgument(text) +
+                     " is out of a double's range (it would read as " + asrt::exactNumber(v) + ")");
   return v;
 }
 
@@ -168,7 +187,7 @@ int parsePositiveInteger(const std::string& option, const std::string& text)
   char* end = nullptr;
   const long v = std::strtol(text.c_str(), &end, 10);
   if (text.empty() || end != text.c_str() + text.size() || v < 1 || v > 1000000000)
-    throw UsageError(option + ": '" + text + "' is not a positive integer");
+    throw UsageError(option + ": " + quotedArgument(text) + " is not a positive integer");
   return static_cast<int>(v);
 }
 
@@ -187,7 +206,7 @@ std::vector<double> parseNumbers(const std::string& option, const std::string& t
   }
   if (values.size() != count)
     throw UsageError(option + ": expected " + std::to_string(count) + " numbers separated by '" +
-                     separator + "', got '" + text + "'");
+                     separator + "', got " + quotedArgument(text));
   return values;
 }
 
@@ -195,7 +214,7 @@ std::pair<int, int> parseSize(const std::string& option, const std::string& text
 {
   const std::size_t x = text.find_first_of("xX");
   if (x == std::string::npos)
-    throw UsageError(option + ": expected WIDTHxHEIGHT, e.g. 200x200, got '" + text + "'");
+    throw UsageError(option + ": expected WIDTHxHEIGHT, e.g. 200x200, got " + quotedArgument(text));
   const int w = parsePositiveInteger(option, text.substr(0, x));
   const int h = parsePositiveInteger(option, text.substr(x + 1));
   // The pixel budget of a scene file's frames, for every size given here.
@@ -334,8 +353,8 @@ double maxFailedShare(const Options& options)
 {
   const std::optional<double> share = options.number("max-failed-share");
   if (share && !(*share >= 0.0 && *share <= 1.0))
-    throw UsageError("--max-failed-share: must be a fraction in [0, 1], got '" +
-                     options.get("max-failed-share") + "'");
+    throw UsageError("--max-failed-share: must be a fraction in [0, 1], got " +
+                     quotedArgument(options.get("max-failed-share")));
   return share.value_or(kDefaultMaxFailedShare);
 }
 
@@ -400,14 +419,16 @@ std::string databaseConnection(const Options& options)
 
 std::int64_t parseFrameId(const std::string& text)
 {
-  try
-  {
-    return parsePositiveInteger("frame id", text);
-  }
-  catch (const UsageError&)
-  {
-    throw UsageError("'" + text + "' is not a frame id (a positive integer; see asrt list)");
-  }
+  // Digits only (strtoll would take a sign, spaces and "0x"), within the store's bigint ids.
+  char* end = nullptr;
+  errno = 0;
+  const long long v = std::strtoll(text.c_str(), &end, 10);
+  const bool digits = !text.empty() && std::all_of(text.begin(), text.end(),
+                                                   [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits || end != text.c_str() + text.size() || errno == ERANGE || v < 1)
+    throw UsageError(quotedArgument(text) + " is not a frame id (a positive integer up to " +
+                     std::to_string(std::numeric_limits<std::int64_t>::max()) + "; see asrt list)");
+  return static_cast<std::int64_t>(v);
 }
 
 std::string outputPath(const Options& options, const std::string& scenePath,

@@ -95,13 +95,22 @@ private:
 };
 
 /// Parsers for the typed values (also used for the parts of compound values).
+/// `text` in single quotes as error messages show an argument: whole when short, else its first
+/// kQuotedLength characters (cut at a character, not inside one) and its length, so that a huge
+/// value makes a line, not a page.
+constexpr std::size_t kQuotedLength = 60;
+std::string quotedArgument(const std::string& text);
+
+/// A number as typed: the whole text a decimal number, finite, and neither overflowing nor
+/// underflowing a double (1e-400 would read as 0); UsageError naming the option otherwise.
 double parseNumber(const std::string& option, const std::string& text);
 int parsePositiveInteger(const std::string& option, const std::string& text);
 std::vector<double> parseNumbers(const std::string& option, const std::string& text,
                                  std::size_t count, char separator);
 std::pair<int, int> parseSize(const std::string& option, const std::string& text);
 
-/// A stored frame's id as typed on the command line; UsageError unless a positive integer.
+/// A stored frame's id as typed on the command line, any positive bigint (the store's ids);
+/// UsageError otherwise.
 std::int64_t parseFrameId(const std::string& text);
 
 /// The options that change the traced scene, and how the help describes them.

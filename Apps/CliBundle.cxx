@@ -86,7 +86,7 @@ int runBundle(const std::vector<std::string>& args)
                      options.get("size"));
   const std::string rays = options.get("rays", "cross");
   if (rays != "cross" && rays != "grid")
-    throw UsageError("--rays: 'cross' or 'grid', got '" + rays + "'");
+    throw UsageError("--rays: 'cross' or 'grid', got " + quotedArgument(rays));
   const int step = options.positiveInteger("step").value_or(rays == "cross" ? 2 : 8);
   tools::RayBundleStyle style;
   try

@@ -125,11 +125,12 @@ std::vector<FrameSetting> sweepFrames(const std::string& spec)
   const std::string parameter = spec.substr(0, eq);
   if (eq == std::string::npos ||
       (parameter != "mass" && parameter != "spin" && parameter != "charge"))
-    throw UsageError("--sweep: expected mass=FROM:TO:N (or spin=, charge=), got '" + spec + "'");
+    throw UsageError("--sweep: expected mass=FROM:TO:N (or spin=, charge=), got " +
+                     quotedArgument(spec));
   const std::string range = spec.substr(eq + 1);
   const std::size_t c1 = range.find(':'), c2 = range.rfind(':');
   if (c1 == std::string::npos || c1 == c2)
-    throw UsageError("--sweep: expected " + parameter + "=FROM:TO:N, got '" + spec + "'");
+    throw UsageError("--sweep: expected " + parameter + "=FROM:TO:N, got " + quotedArgument(spec));
   const double from = parseNumber("--sweep", range.substr(0, c1));
   const double to = parseNumber("--sweep", range.substr(c1 + 1, c2 - c1 - 1));
   const int n = seriesCount("--sweep", range.substr(c2 + 1));
@@ -211,7 +212,7 @@ Formats parseFormats(const std::string& list)
     else if (item == "vtp")
       f.vtp = true;
     else
-      throw UsageError("--formats: unknown format '" + item + "' (png, vti, vtp)");
+      throw UsageError("--formats: unknown format " + quotedArgument(item) + " (png, vti, vtp)");
   }
   if (!f.png && !f.vti && !f.vtp)
     throw UsageError("--formats: the list is empty; name one or more of png, vti, vtp");
@@ -343,8 +344,8 @@ std::pair<int, int> parseSplit(const std::string& split)
   if (split.rfind("interleaved:", 0) == 0)
     return { vtkGeodesicDistributedSource::INTERLEAVED,
              parsePositiveInteger("--mpi-split", split.substr(12)) };
-  throw UsageError("--mpi-split: expected interleaved, interleaved:K or contiguous, got '" + split +
-                   "'");
+  throw UsageError("--mpi-split: expected interleaved, interleaved:K or contiguous, got " +
+                   quotedArgument(split));
 }
 
 /// Traces a frame on every process. The source agrees on any failure across the processes, so
@@ -559,6 +560,19 @@ int runTrace(const std::vector<std::string>& args)
   output.replace = options.has("replace");
   output.distributed = distributed;
   output.split = options.get("mpi-split", "interleaved");
+  // Every frame of a series is checked before the first is traced: one that would be refused
+  // (a camera sent to infinity by --orbit 3:1e308, a spin swept past the mass) must not leave the
+  // frames before it behind.
+  if (series)
+    for (const FrameSetting& frame : frames)
+    {
+      frame.apply(source);
+      tools::VtkMessageCatcher messages;
+      messages.watch(source);
+      source->GetFrameSceneText();
+      if (messages.failed())
+        throw InputError(frame.describe + ": " + messages.firstError());
+    }
   for (std::size_t k = 0; k < frames.size(); ++k)
   {
     frames[k].apply(source);

@@ -1,5 +1,6 @@
 #include "AsrtTypes.h"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -25,12 +26,19 @@ const char* toString(Termination t)
   return "unknown";
 }
 
+std::string exactNumber(double v)
+{
+  char text[64];
+  const auto [end, error] = std::to_chars(text, text + sizeof(text), v);
+  return error == std::errc() ? std::string(text, end) : std::to_string(v);
+}
+
 void requireFinite(double v, const char* what)
 {
   if (!std::isfinite(v))
   {
     std::ostringstream os;
-    os << what << " must be finite, got " << v;
+    os << what << " must be finite, got " << exactNumber(v);
     throw InvalidParameter(os.str());
   }
 }

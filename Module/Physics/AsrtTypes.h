@@ -44,6 +44,10 @@ const char* toString(Termination t);
 
 /// Throws InvalidParameter("<what> must be finite, got <v>") for NaN or infinity.
 void requireFinite(double v, const char* what);
+
+/// `v` in the fewest digits that read back as exactly `v` (std::to_chars' shortest form): two
+/// different numbers in a message never print alike (1.000000000000001 is not "1").
+std::string exactNumber(double v);
 }
 
 #endif

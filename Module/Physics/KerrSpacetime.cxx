@@ -54,7 +54,8 @@ KerrSpacetime::KerrSpacetime(double mass, double spin)
   if (std::abs(spin) > mass)
   {
     std::ostringstream os;
-    os << "spin |a| = " << std::abs(spin) << " exceeds the mass M = " << mass
+    os << "spin |a| = " << exactNumber(std::abs(spin))
+       << " exceeds the mass M = " << exactNumber(mass)
        << ": a naked singularity, not a black hole";
     throw InvalidParameter(os.str());
   }

@@ -21,7 +21,8 @@ ReissnerNordstromSpacetime::ReissnerNordstromSpacetime(double mass, double charg
   if (std::abs(charge) > mass)
   {
     std::ostringstream os;
-    os << "charge |Q| = " << std::abs(charge) << " exceeds the mass M = " << mass
+    os << "charge |Q| = " << exactNumber(std::abs(charge))
+       << " exceeds the mass M = " << exactNumber(mass)
        << ": a naked singularity, not a black hole";
     throw InvalidParameter(os.str());
   }

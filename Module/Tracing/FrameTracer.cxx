@@ -248,6 +248,10 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
       }
     }
   }
+  // The whole set is done: say so from the calling thread, whichever threads traced the last rays
+  // (the master's own reports above depend on how the rays were shared out).
+  if (progress && !stop && n > 0)
+    progress(1.0);
   computeJacobians(out);
   return out;
 }

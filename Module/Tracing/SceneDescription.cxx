@@ -205,7 +205,18 @@ void validateTracing(const TraceOptions& t)
   if (t.maxSteps < 1)
     refuse("tracing.maxSteps", "must be a positive integer, got " + std::to_string(t.maxSteps));
   requirePositive(t.horizonEpsilon, "tracing.horizonEpsilon");
+  // A ray is captured within (1 + horizonEpsilon) r+: a margin beyond the horizon's own radius
+  // would call rays captured that pass far outside it (1e300 makes every ray captured).
+  if (!(t.horizonEpsilon <= 1.0))
+    refuse("tracing.horizonEpsilon",
+           "must lie in (0, 1] (the capture margin, a fraction of the horizon's radius), got " +
+             shown(t.horizonEpsilon));
   requirePositive(t.maxHamiltonianError, "tracing.maxHamiltonianError");
+  // |H| is relative to the ray's energy scale: 1 or more accepts a ray that is no longer null.
+  if (!(t.maxHamiltonianError < 1.0))
+    refuse("tracing.maxHamiltonianError",
+           "must lie in (0, 1) (the largest |H| a ray may reach, relative to its energy), got " +
+             shown(t.maxHamiltonianError));
 }
 
 void validateCelestialSphere(double radius, const Vec3& eye, const std::string& field)

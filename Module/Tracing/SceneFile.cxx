@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -311,6 +314,45 @@ Color color(const json& v, const std::string& path)
   return c;
 }
 
+/// For each number of `text` written with a fraction or an exponent whose value is zero or
+/// subnormal, in the order of the document: whether strtod reports it out of range (ERANGE), as
+/// 1e-400 is. nlohmann reads such a number as 0 without a word; StructureCheck matches these, one
+/// by one, to the zero and subnormal values it sees, and so names the field.
+std::vector<bool> tinyNumbersUnderflowing(const std::string& text)
+{
+  std::vector<bool> underflows;
+  for (std::size_t k = 0; k < text.size(); ++k)
+  {
+    const char c = text[k];
+    if (c == '"')
+    {
+      for (++k; k < text.size() && text[k] != '"'; ++k)
+        if (text[k] == '\\')
+          ++k;
+      continue;
+    }
+    if (c != '-' && !std::isdigit(static_cast<unsigned char>(c)))
+      continue;
+    std::size_t end = k;
+    bool isFloat = false;
+    while (end < text.size() && std::strchr("0123456789+-.eE", text[end]) && text[end] != '\0')
+    {
+      isFloat = isFloat || text[end] == '.' || text[end] == 'e' || text[end] == 'E';
+      ++end;
+    }
+    if (isFloat)
+    {
+      const std::string lexeme = text.substr(k, end - k);
+      errno = 0;
+      const double v = std::strtod(lexeme.c_str(), nullptr);
+      if (v == 0.0 || std::fpclassify(v) == FP_SUBNORMAL)
+        underflows.push_back(errno == ERANGE);
+    }
+    k = end - 1;
+  }
+  return underflows;
+}
+
 // ---- the sections ---------------------------------------------------------------------------
 /// Checks the document while nlohmann parses it: rejects duplicate keys, which nlohmann would
 /// otherwise resolve silently (the last one wins), and nesting deeper than kMaxSceneNesting,
@@ -346,11 +388,15 @@ public:
         this->valueDone();
         break;
       case json::parse_event_t::value:
+        this->checkTinyNumber(parsed);
         this->valueDone();
         break;
     }
     return true;
   }
+
+  /// The result of tinyNumbersUnderflowing for the document being parsed.
+  std::vector<bool> TinyNumbersUnderflow;
 
   /// Where the parser is: the path of the value being read.
   std::string path() const
@@ -374,6 +420,20 @@ private:
     std::string key;
     std::set<std::string> keys;
   };
+  void checkTinyNumber(const json& parsed)
+  {
+    if (!parsed.is_number_float())
+      return;
+    const double v = parsed.get<double>();
+    if (v != 0.0 && std::fpclassify(v) != FP_SUBNORMAL)
+      return;
+    const std::size_t k = this->TinyNumbers++;
+    if (k < this->TinyNumbersUnderflow.size() && this->TinyNumbersUnderflow[k])
+      fail(clipped(this->path(), 4 * kShownLength),
+           "a number too small for a double (it underflows, and would be read as " +
+             exactNumber(v) + ")");
+  }
+  std::size_t TinyNumbers = 0;
   void valueDone()
   {
     if (!this->Frames.empty() && this->Frames.back().isArray)
@@ -407,6 +467,7 @@ public:
                            std::to_string(kMaxSceneBytes >> 20) + " MiB a scene may have");
     json doc;
     StructureCheck check;
+    check.TinyNumbersUnderflow = tinyNumbersUnderflowing(text);
     try
     {
       doc = json::parse(text, std::ref(check));

@@ -127,3 +127,30 @@ asrt_hostile_input_test(Polylines.TraceCap 4
   trace "${scenes}/fig2-no-hole.json" -r 400x400 --polylines=1 -o out)
 asrt_hostile_input_test(Polylines.BundleGridCap 4 "at most 100000 are drawn"
   bundle "${scenes}/fig2-no-hole.json" -r 400x400 --rays grid --step 1 -o out.png)
+
+# Numbers that do not survive parsing: strtod's ERANGE (1e-400 would read as 0, flat space) is a
+# usage error naming the option, in the scene file an error naming the field.
+asrt_hostile_input_test(Numbers.UnderflowingMass 2
+  "--mass: '1e-400' is out of a double's range \\(it would read as 0\\)"
+  trace "${scenes}/fig1-cylinders.json" --mass 1e-400 -r 8x8 -o out)
+asrt_hostile_input_test(Numbers.UnderflowingMassInTheScene 4
+  "spacetime.mass: a number too small for a double"
+  SETUP "sed 's/\"mass\": 1,/\"mass\": 1e-400,/' '${scenes}/fig1-cylinders.json' > s.json"
+  trace s.json -r 8x8 -o out)
+asrt_hostile_input_test(Numbers.CaptureMarginBeyondTheHorizon 4
+  "tracing.horizonEpsilon: must lie in \\(0, 1\\]"
+  SETUP "sed -e 's/\"horizonEpsilon\": 0.001/\"horizonEpsilon\": 1e300/' -e 's|\\.\\./textures|${scenes}/../textures|' '${scenes}/fig1-cylinders.json' > s.json"
+  trace s.json -r 8x8 -o out)
+# A series is checked whole before its first frame: an orbit sent to infinity writes nothing.
+add_test(NAME CLI.Hostile.Inputs.Series.OrbitToInfinityWritesNothing
+  COMMAND ${run_and_check} "${work}/Hostile.Inputs.OrbitToInfinity" ${check}
+    "!out-000.png" "!out-001.png" "!out-000.vti" "!out.pvd" --
+    ${expect} 4 "orbit inf deg: camera.position: must be finite" --
+      ${asrt} trace "${scenes}/kerr-disk.json" --orbit 3:1e308 -r 8x8 -o out)
+add_test(NAME CLI.Hostile.Inputs.Series.SpinSweptPastTheMassWritesNothing
+  COMMAND ${run_and_check} "${work}/Hostile.Inputs.SpinPastTheMass" ${check}
+    "!out-000.png" "!out-001.png" "!out.pvd" --
+    ${expect} 4 "spin = 1.5: spacetime: spin \\|a\\| = 1.5 exceeds the mass M = 1" --
+      ${asrt} trace "${scenes}/kerr-disk.json" --sweep spin=0.5:1.5:3 -r 8x8 -o out)
+set_tests_properties(CLI.Hostile.Inputs.Series.OrbitToInfinityWritesNothing
+  CLI.Hostile.Inputs.Series.SpinSweptPastTheMassWritesNothing PROPERTIES LABELS cli TIMEOUT 120)

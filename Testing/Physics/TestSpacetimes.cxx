@@ -6,6 +6,10 @@
 #include <unsupported/Eigen/AutoDiff>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 #include <utility>
@@ -177,6 +181,59 @@ TEST(Spacetime, RejectsUnphysicalParameters)
   {
     EXPECT_NE(std::string(e.what()).find("spin"), std::string::npos) << e.what();
   }
+}
+
+// A refusal prints the two values so that they differ: a = 1.000000000000001 against M = 1.
+TEST(Spacetime, RefusalsPrintValuesThatDiffer)
+{
+  const double a = 1.000000000000001; // prints as 1 in the stream's default 6 digits
+  for (const bool charged : { false, true })
+  {
+    SCOPED_TRACE(charged ? "charge" : "spin");
+    std::string message;
+    try
+    {
+      asrt::SpacetimeParameters p;
+      p.mass = 1.0;
+      (charged ? p.charge : p.spin) = a;
+      asrt::makeSpacetime(p);
+    }
+    catch (const asrt::InvalidParameter& e)
+    {
+      message = e.what();
+    }
+    // Both numbers as printed read back as the values given.
+    const std::string value = asrt::exactNumber(a);
+    EXPECT_EQ(std::stod(value), a);
+    EXPECT_NE(message.find("= " + value + " exceeds the mass M = 1:"), std::string::npos)
+      << message;
+  }
+}
+
+// exactNumber reads back as the very double it printed, for doubles of every magnitude, and
+// as few digits as %.17g would need at most.
+TEST(Spacetime, ExactNumberReadsBackExactly)
+{
+  std::mt19937_64 random(7);
+  std::uniform_int_distribution<std::uint64_t> bits;
+  int checked = 0;
+  for (int k = 0; k < 20000; ++k)
+  {
+    const std::uint64_t b = bits(random);
+    double v;
+    std::memcpy(&v, &b, sizeof v);
+    if (!std::isfinite(v))
+      continue;
+    const std::string text = asrt::exactNumber(v);
+    ASSERT_EQ(std::strtod(text.c_str(), nullptr), v) << text;
+    char longest[64];
+    std::snprintf(longest, sizeof longest, "%.17g", v);
+    ASSERT_LE(text.size(), std::string(longest).size() + 4) << text << " vs " << longest;
+    ++checked;
+  }
+  EXPECT_GT(checked, 19000);
+  EXPECT_EQ(asrt::exactNumber(1.0), "1");
+  EXPECT_EQ(asrt::exactNumber(0.1), "0.1");
 }
 
 TEST(Spacetime, FactoryPicksTheCheapestModel)

@@ -164,8 +164,8 @@ TEST(RowBands, ProgressGrowsToOneAndStoppingEndsTheTrace)
   for (std::size_t k = 1; k < seen.size(); ++k)
     EXPECT_GE(seen[k], seen[k - 1]) << "progress went back at " << k;
   EXPECT_GT(seen.front(), 0.0);
-  EXPECT_LE(seen.back(), 1.0);
-  EXPECT_GT(seen.back(), 0.9);
+  // The end is reported as 1 by the calling thread, whichever threads traced the last rays.
+  EXPECT_EQ(seen.back(), 1.0);
 
   // Stopped at the first report: the sink has had at most the rows before that band, and those
   // as traced together.

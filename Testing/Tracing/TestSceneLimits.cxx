@@ -10,8 +10,10 @@
 #include <sys/stat.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <new>
 #include <thread>
@@ -220,4 +222,48 @@ TEST(AddressSpaceLimit, StopsAnAllocationBeyondIt)
   // The guard the endless-input tests rely on.
   const asrt::testing::AddressSpaceLimit bound(1e9);
   EXPECT_THROW(std::vector<char>(std::size_t(4) << 30, 'x'), std::bad_alloc);
+}
+
+// A number that underflows a double is refused naming its field (nlohmann would read 1e-400 as 0:
+// flat space for a mass), while zeros written as such and normal small numbers are taken as they
+// are; strtod's ERANGE is the truth each case is judged by.
+TEST(SceneNumbers, UnderflowingNumbersAreRefusedNamingTheirField)
+{
+  const std::string tiny = "1e-400";
+  errno = 0;
+  std::strtod(tiny.c_str(), nullptr);
+  ASSERT_EQ(errno, ERANGE) << "the case must underflow";
+  EXPECT_EQ(errorOf(sceneWith(", \"spin\": " + tiny)).find("spacetime.spin: a number too small"),
+            0u)
+    << errorOf(sceneWith(", \"spin\": " + tiny));
+  // After legal zeros and tiny normal numbers elsewhere, the underflowing one is still the one
+  // named: zeros written "0.0" and "-0e5" come first in the document.
+  const std::string objects =
+    R"([{"type": "sphere", "id": 1, "center": [0.0, -0e5, 1e-300], "radius": 1,
+        "texture": {"color": [0.0, 0.5, 1e-320]}}])";
+  const std::string message = errorOf(sceneWith(", \"spin\": 0.0", objects));
+  EXPECT_EQ(message.find("objects[0].texture.color[2]: a number too small"), 0u) << message;
+  // The same scene with a normal number there parses, every zero and 1e-300 kept.
+  const std::string fine =
+    R"([{"type": "sphere", "id": 1, "center": [0.0, -0e5, 1e-300], "radius": 1,
+        "texture": {"color": [0.0, 0.5, 0.25]}}])";
+  const SceneDescription d = parseScene(sceneWith(", \"spin\": 0.0", fine), "", nullptr);
+  EXPECT_EQ(d.spacetime.spin, 0.0);
+  // A zero in a string, a key or a name is text, not a number.
+  EXPECT_NO_THROW(parseScene(R"({"name": "1e-400", "spacetime": {"mass": 1},
+    "camera": {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "resolution": [8, 8]},
+    "objects": []})",
+                             "", nullptr));
+}
+
+// The tracing margins are bounded: a capture margin of 1e300 would call every ray captured.
+TEST(SceneNumbers, TracingMarginsAreBounded)
+{
+  const auto tracing = [](const std::string& fields)
+  { return errorOf(sceneWith("", "[]", ", \"tracing\": {" + fields + "}")); };
+  EXPECT_EQ(tracing("\"horizonEpsilon\": 1e300").find("tracing.horizonEpsilon: must lie in (0, 1]"),
+            0u);
+  EXPECT_EQ(tracing("\"maxHamiltonianError\": 1").find("tracing.maxHamiltonianError: must lie"),
+            0u);
+  EXPECT_EQ(tracing("\"horizonEpsilon\": 1, \"maxHamiltonianError\": 0.5"), "(no error)");
 }
