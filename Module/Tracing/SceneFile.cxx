@@ -459,6 +459,7 @@ public:
     , Loader(loader)
   {
   }
+  SceneOrigin Origin = SceneOrigin::User;
 
   SceneDescription parse(const std::string& text)
   {
@@ -513,7 +514,12 @@ public:
       this->rendering(*v, d);
     validateRendering(d.rendering, static_cast<long long>(d.camera.width) * d.camera.height);
     if (const json* v = root.get("subset"))
+    {
+      if (this->Origin != SceneOrigin::Program)
+        fail("subset", "is written by the program for the pixels it traces alone, never given "
+                       "in a scene (trace a subset with vtkGeodesicSource's PixelSubset)");
       d.subset = subset(*v);
+    }
     d.sourceText = doc.dump();
     return d;
   }
@@ -874,9 +880,11 @@ private:
 }
 
 SceneDescription parseScene(const std::string& jsonText, const std::string& baseDir,
-                            const ImageLoader& loader)
+                            const ImageLoader& loader, SceneOrigin origin)
 {
-  return Parser(baseDir, loader).parse(jsonText);
+  Parser parser(baseDir, loader);
+  parser.Origin = origin;
+  return parser.parse(jsonText);
 }
 
 SceneDescription loadSceneFile(const std::string& path, const ImageLoader& loader)
@@ -954,6 +962,6 @@ SceneDescription parseSceneWithoutImages(const std::string& jsonText)
     px.rgb = { 128, 128, 128 };
     return px;
   };
-  return parseScene(jsonText, ".", neutral);
+  return parseScene(jsonText, ".", neutral, SceneOrigin::Program);
 }
 }

@@ -51,9 +51,19 @@ using ImageLoader = std::function<ImagePixels(const std::string& path)>;
 /// the spacetime (asrt::makeSpacetime's), the integration method against it (makePropagator's),
 /// the camera outside the horizon and, for a static observer, outside any ergosphere, celestial
 /// spheres enclosing the camera, frames of at most kMaxFramePixels pixels.
+///
+/// `origin` says whose text it is: a user's scene (a file, a string handed to a filter) may not
+/// name a pixel subset, which only the program writes (effectiveSceneText of a subset frame);
+/// the program's own texts, read back from the store, may.
+enum class SceneOrigin
+{
+  User,
+  Program
+};
 ASRTTRACING_EXPORT SceneDescription parseScene(const std::string& jsonText,
                                                const std::string& baseDir,
-                                               const ImageLoader& loader);
+                                               const ImageLoader& loader,
+                                               SceneOrigin origin = SceneOrigin::User);
 /// The description as JSON, with its current spacetime, camera and integrator values (which may
 /// have been changed since parsing, e.g. per movie frame) written over the parsed text: the scene
 /// exactly as it is traced, for storage, hashing and re-tracing.
@@ -61,7 +71,7 @@ ASRTTRACING_EXPORT std::string effectiveSceneText(const SceneDescription& d);
 
 /// Parses a scene for what identifies and parameterises its frames (storage, hashing, re-reading),
 /// without reading image textures: they become a neutral grey. Everything else is validated as by
-/// parseScene. Not for rendering.
+/// parseScene, for a text of the program's (SceneOrigin::Program). Not for rendering.
 ASRTTRACING_EXPORT SceneDescription parseSceneWithoutImages(const std::string& jsonText);
 
 /// Reads and parses a scene file; its directory is the base for relative texture paths. Error

@@ -154,3 +154,8 @@ add_test(NAME CLI.Hostile.Inputs.Series.SpinSweptPastTheMassWritesNothing
       ${asrt} trace "${scenes}/kerr-disk.json" --sweep spin=0.5:1.5:3 -r 8x8 -o out)
 set_tests_properties(CLI.Hostile.Inputs.Series.OrbitToInfinityWritesNothing
   CLI.Hostile.Inputs.Series.SpinSweptPastTheMassWritesNothing PROPERTIES LABELS cli TIMEOUT 120)
+# Which pixel subset a frame holds is the program's to say: a scene file claiming 3 pixels would
+# be traced whole and stored as that subset.
+asrt_hostile_input_test(Scene.HandWrittenSubset 4 "subset: is written by the program"
+  SETUP "sed -e '1s/^{/{\"subset\": {\"pixels\": 3, \"digest\": \"0123456789abcdef\"},/' -e 's|\\.\\./textures|${scenes}/../textures|' '${scenes}/fig2-no-hole.json' > s.json"
+  trace s.json -r 8x8 -o out)

@@ -702,13 +702,26 @@ TEST(SceneFile, SubsetFramesHaveAnIdentityOfTheirOwn)
   part.subset = id;
   const std::string partText = effectiveSceneText(part);
   EXPECT_NE(partText, wholeText);
-  const SceneDescription back = parseScene(partText, ".", none);
+  const SceneDescription back = parseScene(partText, ".", none, SceneOrigin::Program);
   EXPECT_EQ(back.subset, id);
   EXPECT_EQ(effectiveSceneText(back), partText);
   // Clearing it gives the whole frame's text back.
   SceneDescription cleared = back;
   cleared.subset = PixelSubsetId();
   EXPECT_EQ(effectiveSceneText(cleared), wholeText);
+
+  // A user's scene may not say it is a subset: a scene claiming 3 pixels that traces the whole
+  // frame would be stored as that subset (the program's own text, read back, may).
+  try
+  {
+    parseScene(partText, ".", none);
+    ADD_FAILURE() << "a hand-written subset was accepted";
+  }
+  catch (const InvalidParameter& e)
+  {
+    EXPECT_EQ(std::string(e.what()).find("subset: is written by the program"), 0u) << e.what();
+  }
+  EXPECT_EQ(parseSceneWithoutImages(partText).subset, id);
 
   for (const char* bad : { R"({"pixels": 0, "digest": "0123456789abcdef"})",
                            R"({"pixels": 3, "digest": "xyz"})", R"({"pixels": 3})" })
@@ -717,7 +730,7 @@ TEST(SceneFile, SubsetFramesHaveAnIdentityOfTheirOwn)
     doc["subset"] = json::parse(bad);
     try
     {
-      parseScene(doc.dump(), ".", none);
+      parseScene(doc.dump(), ".", none, SceneOrigin::Program);
       ADD_FAILURE() << bad;
     }
     catch (const InvalidParameter& e)
