@@ -719,6 +719,9 @@ private:
     {
       const std::string p = f.sub("image");
       const std::string file = str(f.require("image"), p, true);
+      // No file name holds a NUL; left in, it would also end every message that quotes the name.
+      if (file.find('\0') != std::string::npos)
+        fail(p, "a file name cannot hold a NUL character, got " + show(f.require("image")));
       t = this->image(file, p);
     }
     return t;

@@ -267,3 +267,15 @@ TEST(SceneNumbers, TracingMarginsAreBounded)
             0u);
   EXPECT_EQ(tracing("\"horizonEpsilon\": 1, \"maxHamiltonianError\": 0.5"), "(no error)");
 }
+
+// A NUL in a texture's file name is refused, and the message shows it escaped and goes on past it.
+TEST(SceneMessages, NulInATextureNameIsShownAndRefused)
+{
+  const std::string message =
+    errorOf(sceneWith("", R"([{"type": "sphere", "id": 1, "center": [0, 5, 0], "radius": 1,
+                              "texture": {"image": "galaxy.png\u0000/etc/passwd"}}])"));
+  EXPECT_EQ(message.find("objects[0].texture.image: a file name cannot hold a NUL character"), 0u)
+    << message;
+  EXPECT_EQ(message.find('\0'), std::string::npos) << "the message holds the NUL itself";
+  EXPECT_NE(message.find("\\u0000/etc/passwd"), std::string::npos) << message;
+}
