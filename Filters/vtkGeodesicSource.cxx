@@ -250,6 +250,13 @@ void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int
   asrt::ImagePixels px;
   try
   {
+    // PNG and JPEG only: each is one file whose decoder fails on short data and whose size is
+    // read from its header before any pixel is. Other formats VTK reads do not all do so (a
+    // truncated PNM reads as black, a MetaImage names a second file that may be a FIFO).
+    if (ext != ".png" && ext != ".jpg" && ext != ".jpeg")
+      throw asrt::InvalidParameter(
+        "is not a PNG or JPEG file (extension \"" + ext +
+        "\"): image textures are PNG (.png) or JPEG (.jpg, .jpeg); convert other images first");
     asrt::requireTextureFile(path);
     // PNG through libpng, never vtkPNGReader (which crashes on a truncated file).
     px = ext == ".png" ? asrt::readPngTexture(path) : readWithVtk(path, ext);

@@ -187,9 +187,9 @@ public:
   vtkPolyData* GetPolylinesOutput();
 
   /// Reads an image file into RGB bytes, bottom row first (the scene's texture loader): PNG with
-  /// libpng (asrt::readPngTexture), other formats with VTK's readers. The declared size is checked
-  /// against asrt::TextureLimits before decoding. Throws asrt::InvalidParameter naming the file
-  /// if it cannot.
+  /// libpng (asrt::readPngTexture), JPEG with VTK's reader (libjpeg); other formats are refused by
+  /// name. The declared size is checked against asrt::TextureLimits before decoding. Throws
+  /// asrt::InvalidParameter naming the file if it cannot.
   static void LoadImagePixels(const std::string& path, int& width, int& height,
                               std::vector<unsigned char>& rgb);
 

@@ -10,6 +10,9 @@
 #   png-huge-header.png  a valid IHDR of 60000 x 60000 RGB pixels, then 1000 deflated zero bytes
 #   texture-NAME.json    an 8 x 8 scene whose celestial sphere shows png-NAME.png
 #   texture-truncated-galaxy.json  the same for truncated-galaxy.png, made at test time below
+#   ppm-short.ppm        100 bytes: a binary PPM header declaring 16384 x 16384 pixels, then 81
+#   mhd-fifo.mhd         a 64 x 64 MetaImage header whose data file is a FIFO made at test time
+#   texture-ppm-short.json, texture-mhd-fifo.json  scenes showing them
 # Bigger inputs are made here (deep and long JSON) or at test time (/dev/zero, an endless pipe,
 # the first third of galaxy.png).
 
@@ -55,6 +58,19 @@ foreach (command trace bundle)
     "texture\\.image: cannot read \"truncated-galaxy\\.png\".*\\(libpng: Read Error\\)"
     SETUP "head -c ${galaxy_third} '${PROJECT_SOURCE_DIR}/Data/textures/galaxy.png' > truncated-galaxy.png && cp '${hostile}/texture-truncated-galaxy.json' ."
     ${command} texture-truncated-galaxy.json -o out.png)
+endforeach ()
+
+# Textures other than PNG and JPEG are refused by name before they are opened: a 100-byte PPM
+# declaring 16384 x 16384 pixels (VTK's reader took 1 GB and gave black for the rest), and a
+# MetaImage whose data file is a FIFO nobody writes to (VTK's reader waited for ever).
+foreach (command trace bundle)
+  asrt_hostile_input_test(Texture.ShortPpm.${command} 4
+    "texture\\.image: cannot read \"ppm-short\\.ppm\".*is not a PNG or JPEG file \\(extension \"\\.ppm\"\\)"
+    ${command} "${hostile}/texture-ppm-short.json" -o out.png)
+  asrt_hostile_input_test(Texture.MetaImageWithAFifo.${command} 4
+    "texture\\.image: cannot read \"mhd-fifo\\.mhd\".*is not a PNG or JPEG file \\(extension \"\\.mhd\"\\)"
+    SETUP "cp '${hostile}/mhd-fifo.mhd' '${hostile}/texture-mhd-fifo.json' . && mkfifo mhd-fifo.raw"
+    ${command} texture-mhd-fifo.json -o out.png)
 endforeach ()
 
 # JSON nested 100000 deep, as the document and where a number belongs: refused while parsing

@@ -20,6 +20,9 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <utility>
+
+#include <sys/stat.h>
 
 using asrt::testing::MessageCatcher;
 using asrt::testing::readFile;
@@ -173,12 +176,28 @@ TEST(TextureLoading, HostilePngsAreRefused)
       << name;
 }
 
-TEST(TextureLoading, OtherFormatsHaveTheirDeclaredSizeCheckedFirst)
+TEST(TextureLoading, JpegsHaveTheirDeclaredSizeCheckedFirst)
 {
-  // A binary PPM header of 60000 × 60000 RGB pixels and a few bytes: VTK's PNM reader would
-  // allocate 10 GB for it.
-  const std::string path = tempPath("huge.ppm");
-  std::ofstream(path, std::ios::binary) << "P6\n60000 60000\n255\n" << std::string(30, '\x7f');
+  // A JPEG that vtkJPEGWriter wrote, its frame header (SOFn: FF Cn, length, precision, height,
+  // width) edited to declare 60000 × 60000 pixels: decoding it would allocate 10 GB.
+  const std::string path = tempPath("huge.jpg");
+  vtkNew<vtkJPEGWriter> writer;
+  writer->SetInputData(randomImage<vtkUnsignedCharArray>(16, 16, 3, 4));
+  writer->SetFileName(path.c_str());
+  writer->Write();
+  std::string bytes = readFile(path);
+  std::size_t sof = 0; // the first start-of-frame marker: baseline, extended or progressive
+  while (sof + 9 < bytes.size() && !(static_cast<unsigned char>(bytes[sof]) == 0xFF &&
+                                     (static_cast<unsigned char>(bytes[sof + 1]) & 0xFC) == 0xC0 &&
+                                     static_cast<unsigned char>(bytes[sof + 1]) != 0xC3))
+    ++sof;
+  ASSERT_LT(sof + 9, bytes.size()) << "no frame header";
+  for (std::size_t at : { sof + 5, sof + 7 }) // height, then width, big-endian
+  {
+    bytes[at] = static_cast<char>(60000 >> 8);
+    bytes[at + 1] = static_cast<char>(60000 & 0xFF);
+  }
+  std::ofstream(path, std::ios::binary) << bytes;
   const asrt::testing::AddressSpaceLimit bound(2e9);
   EXPECT_EQ(errorOf(path), "image file \"" + path +
                              "\" declares 60000 x 60000 pixels; image textures may have at most "
@@ -186,18 +205,26 @@ TEST(TextureLoading, OtherFormatsHaveTheirDeclaredSizeCheckedFirst)
   std::remove(path.c_str());
 }
 
-TEST(TextureLoading, ThreeDimensionalImagesAreRefused)
+TEST(TextureLoading, FormatsOtherThanPngAndJpegAreRefusedByName)
 {
-  // A MetaImage of 2 × 2 × 3 voxels: a texture is one 2D image, not the first slice of a volume.
-  const std::string header = tempPath("volume.mhd"), raw = tempPath("volume.raw");
-  std::ofstream(header) << "ObjectType = Image\nNDims = 3\nDimSize = 2 2 3\n"
+  // A truncated PPM (VTK's reader gives black for the missing pixels) and a MetaImage whose data
+  // file is a FIFO (VTK's reader would wait for a writer): neither is opened.
+  const std::string ppm = tempPath("short.ppm");
+  std::ofstream(ppm, std::ios::binary) << "P6\n4 4\n255\n" << std::string(5, '\x7f');
+  const std::string header = tempPath("fifo.mhd"), fifo = tempPath("fifo.raw");
+  std::ofstream(header) << "ObjectType = Image\nNDims = 2\nDimSize = 2 2\n"
                            "ElementType = MET_UCHAR\nElementDataFile = "
-                        << raw << "\n";
-  std::ofstream(raw, std::ios::binary) << std::string(12, '\x40');
-  EXPECT_EQ(errorOf(header), "image file \"" + header +
-                               "\" declares 3 slices; an image texture is a single 2D image");
+                        << fifo << "\n";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& [path, ext] : { std::pair<std::string, std::string>{ ppm, ".ppm" },
+                                   { header, ".mhd" },
+                                   { tempPath("picture.tiff"), ".tiff" } })
+    EXPECT_EQ(errorOf(path), "image file \"" + path + "\" is not a PNG or JPEG file (extension \"" +
+                               ext + "\"): image textures are PNG (.png) or JPEG (.jpg, .jpeg); " +
+                               "convert other images first");
+  std::remove(ppm.c_str());
   std::remove(header.c_str());
-  std::remove(raw.c_str());
+  std::remove(fifo.c_str());
 }
 
 TEST(TextureLoading, VtkReaderErrorsReachTheExceptionNotTheOutputWindow)
