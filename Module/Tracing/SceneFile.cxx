@@ -764,6 +764,10 @@ private:
   void objects(const json& j, SceneDescription& d)
   {
     array(j, "objects", 0, "an array of objects");
+    if (j.size() > kMaxSceneObjects)
+      fail("objects", "holds " + std::to_string(j.size()) + " objects; a scene may have at most " +
+                        std::to_string(kMaxSceneObjects) +
+                        " (every integration step tests each one)");
     std::map<long long, std::size_t> ids;
     for (std::size_t i = 0; i < j.size(); ++i)
     {

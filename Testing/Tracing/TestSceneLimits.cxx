@@ -279,3 +279,24 @@ TEST(SceneMessages, NulInATextureNameIsShownAndRefused)
   EXPECT_EQ(message.find('\0'), std::string::npos) << "the message holds the NUL itself";
   EXPECT_NE(message.find("\\u0000/etc/passwd"), std::string::npos) << message;
 }
+
+// The object count is bounded, and the bound is exact: kMaxSceneObjects spheres parse, one more
+// is refused naming the field, before any object is built.
+TEST(SceneSize, ObjectCountIsBounded)
+{
+  auto spheres = [](std::size_t n)
+  {
+    std::string objects = "[";
+    for (std::size_t k = 0; k < n; ++k)
+      objects += (k ? "," : "") + std::string(R"({"type": "sphere", "id": )") +
+                 std::to_string(k + 1) + R"(, "center": [0, 20, 0], "radius": 0.5,
+                  "texture": {"color": [1, 1, 1]}})";
+    return objects + "]";
+  };
+  EXPECT_EQ(
+    parseScene(sceneWith("", spheres(kMaxSceneObjects)), "", nullptr).scene->objects().size(),
+    kMaxSceneObjects);
+  EXPECT_EQ(errorOf(sceneWith("", spheres(kMaxSceneObjects + 1))),
+            "objects: holds 1025 objects; a scene may have at most 1024 (every integration step "
+            "tests each one)");
+}
