@@ -140,7 +140,7 @@ int runInterpolate(const std::vector<std::string>& args)
     throw UsageError("--frames: at most " +
                      std::to_string(vtkGeodesicFrameInterpolator::kMaxIntermediateFrames));
   const int fps = options.positiveInteger("fps").value_or(10);
-  const std::string prefix = outputPath(options, "interpolated", "");
+  const std::string prefix = outputPrefix(options, "interpolated");
   const std::string moviePath = options.get("movie", prefix + ".ogv");
   // The movie's format and rate are checked before any work is done.
   std::unique_ptr<tools::MovieWriter> movie;
