@@ -327,7 +327,8 @@ int runInterpolate(const std::vector<std::string>& args)
   movie->close();
   // Frames of an earlier, longer sequence would look like part of this one: they go in the
   // same commit.
-  const std::vector<std::string> stale = staleFrames(prefix, count);
+  std::vector<std::string> stale = staleFrames(prefix, count);
+  stale.erase(std::remove(stale.begin(), stale.end(), moviePath), stale.end());
   for (const std::string& path : stale)
     files.remove(path);
   check();
