@@ -32,9 +32,10 @@ public:
 
   /// Creates the cluster (marked as ASRT's, see destroy) if the directory is empty or missing,
   /// marks a cluster an older ASRT made, starts the server if it is not running, creates the
-  /// database "asrt" if missing, and returns the libpq conninfo of that database. Throws InvalidParameter for a directory that cannot hold a cluster (not empty and
-  /// not a cluster, a file, a cluster of another PostgreSQL version) and std::runtime_error, with
-  /// the server's log, when PostgreSQL fails.
+  /// database "asrt" if missing, and returns the libpq conninfo of that database. Throws
+  /// InvalidParameter for a directory that cannot hold a cluster (not empty and not a cluster, a
+  /// file, a cluster of another PostgreSQL version) and std::runtime_error, with the server's log,
+  /// when PostgreSQL fails.
   std::string ensureRunning();
 
   /// Stops the server if it runs (fast shutdown, or immediate: no checkpoint, crash recovery at the
