@@ -14,7 +14,8 @@ chmod 755 "$top"
 trap '"$asrt" db --dir "$top/real" stop > /dev/null 2>&1 || true; rm -rf "$top"' EXIT
 # The names and checksums of a folder's files, hidden ones included.
 snapshot() {
-  (cd "$1" && find . -print0 | LC_ALL=C sort -z | xargs -0 ls -ld --time-style=+ | awk '{print $1, $NF}' &&
+  (cd "$1" &&
+    find . -print0 | LC_ALL=C sort -z | xargs -0 ls -ld --time-style=+ | awk '{print $1, $NF}' &&
     find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum)
 }
 
@@ -30,7 +31,8 @@ snapshot "$fake" | diff "$top/fake-before.txt" - || fail "the folder changed"
 
 step "a marked folder that is no whole cluster is refused"
 touch "$fake/ASRT_CLUSTER"
-"$expect" 4 "refusing to destroy $fake: it has no postgresql.conf" -- "$asrt" db --dir "$fake" destroy
+"$expect" 4 "refusing to destroy $fake: it has no postgresql.conf" -- \
+  "$asrt" db --dir "$fake" destroy
 test -f "$fake/thesis.tex" || fail "the folder lost a file"
 
 step "a cluster made by asrt db start carries the marker"

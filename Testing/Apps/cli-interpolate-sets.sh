@@ -22,11 +22,13 @@ wait_until() {
 stopped() { ! kill -0 "$1" 2> /dev/null; }
 # The names in the folder, hidden ones included, and every regular file's checksum.
 snapshot() {
-  (cd "$1" && ls -A | LC_ALL=C sort && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum)
+  (cd "$1" && ls -A | LC_ALL=C sort &&
+    find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum)
 }
 unchanged() {
   snapshot seq > after.txt
-  diff before.txt after.txt > /dev/null || fail "the previous sequence changed: $(diff before.txt after.txt | head)"
+  diff before.txt after.txt > /dev/null ||
+    fail "the previous sequence changed: $(diff before.txt after.txt | head)"
 }
 
 step "the scenes and their textures copied here, two frames of the mass ramp stored from them"
@@ -45,7 +47,8 @@ previous_sequence() {
 
 step "a shorter sequence over a longer one: exactly its own frames remain, other files are kept"
 previous_sequence
-for other in interpolated-notes.png interpolated-0031.png other-031.png interpolated-031-hits.vtp; do
+others=(interpolated-notes.png interpolated-0031.png other-031.png interpolated-031-hits.vtp)
+for other in "${others[@]}"; do
   echo "not a frame" > "seq/$other"
 done
 "$expect" 0 "removed 54 files of an earlier, longer sequence" -- \
@@ -53,11 +56,12 @@ done
 "$check" seq/interpolated-000.png=48x48 seq/interpolated-004.png=48x48 \
   seq/interpolated-004.vti=48x48 seq/interpolated.pvd=5 seq/interpolated.ogv=5
 for k in 005 017 031; do
-  test ! -e "seq/interpolated-$k.png" || fail "seq/interpolated-$k.png of the older sequence is left"
-  test ! -e "seq/interpolated-$k.vti" || fail "seq/interpolated-$k.vti of the older sequence is left"
+  for ext in png vti; do
+    test ! -e "seq/interpolated-$k.$ext" || fail "seq/interpolated-$k.$ext of the older run is left"
+  done
 done
 test "$(ls -A seq | wc -l)" -eq $((5 * 2 + 2 + 4)) || fail "unexpected files: $(ls -A seq)"
-for other in interpolated-notes.png interpolated-0031.png other-031.png interpolated-031-hits.vtp; do
+for other in "${others[@]}"; do
   test "$(cat "seq/$other")" = "not a frame" || fail "seq/$other was touched"
 done
 "$asrt" show 1 --png a-stored.png > /dev/null
