@@ -12,6 +12,8 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -445,6 +447,23 @@ std::string outputPath(const Options& options, const std::string& scenePath,
   if (!dir.empty() && !fs::SystemTools::MakeDirectory(dir).IsSuccess())
     throw std::runtime_error("cannot create the directory \"" + dir + "\"");
   return out;
+}
+
+std::string outputPrefix(const Options& options, const std::string& scenePath)
+{
+  const std::string prefix = outputPath(options, scenePath, "");
+  struct stat st;
+  // Followed: a link to /dev/null names /dev/null as much as the device's own name does.
+  if (stat(prefix.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))
+    throw UsageError("--output: \"" + prefix + "\" is " +
+                     (S_ISCHR(st.st_mode)    ? "a character device"
+                      : S_ISFIFO(st.st_mode) ? "a FIFO"
+                      : S_ISBLK(st.st_mode)  ? "a block device"
+                      : S_ISSOCK(st.st_mode) ? "a socket"
+                                             : "not a regular file") +
+                     ": give a folder or a file-name prefix (the files are PREFIX.png, "
+                     "PREFIX.vti, ...)");
+  return prefix;
 }
 
 std::string readSceneFile(const std::string& path)

@@ -146,6 +146,10 @@ std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<O
 /// scene file's name without its extension and `suffix`. Creates missing parent directories.
 std::string outputPath(const Options& options, const std::string& scenePath,
                        const std::string& suffix);
+/// outputPath for a prefix of several files (PREFIX.png, PREFIX-000.vti, ...): throws UsageError
+/// naming --output when the prefix itself is a device, a FIFO or a socket, which several files
+/// cannot be written through one by one (-o /dev/null would otherwise make /dev/null.png).
+std::string outputPrefix(const Options& options, const std::string& scenePath);
 
 /// Scene files are read whole by the program itself, at most kMaxSceneBytes (SceneFile.h).
 /// The scene file's text, read so that Ctrl-C or SIGTERM stops even a read that blocks (a FIFO).

@@ -26,7 +26,10 @@ Commands:
            its libpq conninfo (usable with psql "CONNINFO" and --db)
   status   print whether the server runs (exit code 0 if it does, 3 if not)
   stop     stop the server (the data stay)
-  destroy  stop the server and delete the cluster with all its data
+  destroy  stop the server and delete the cluster with all its data; only a cluster ASRT
+           made (its marker file ASRT_CLUSTER, PG_VERSION, postgresql.conf and base/, and
+           nothing else at the top): anything else is refused and left as it is. A cluster
+           made by an older asrt, unmarked, is marked by "start"
   init     create the ASRT schema in a database, or migrate it to this version (the
            database of --db, $ASRT_DB or the PG* variables, else the private server's).
            Commands that only read (list, show, interpolate) create none; storing a
@@ -75,7 +78,8 @@ int runDb(const std::vector<std::string>& args)
   const std::string command = options.positional()[0];
   if (command != "start" && command != "status" && command != "stop" && command != "destroy" &&
       command != "init")
-    throw UsageError("unknown command '" + command + "' (start, status, stop, destroy or init)");
+    throw UsageError("unknown command " + quotedArgument(command) +
+                     " (start, status, stop, destroy or init)");
   if (options.has("dir") && options.get("dir").empty())
     throw UsageError("--dir needs a non-empty path");
   if (options.has("db") && command != "init")

@@ -21,9 +21,14 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <dirent.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 
@@ -47,7 +52,12 @@ Writes, for the N + 2 frames (t = 0 is A, t = 1 is B):
   PREFIX.pvd          a ParaView time series of the .vti files (time = t)
   PREFIX.ogv          the movie (or the file --movie names)
 and prints, per frame, the shares of its pixels that were matched, seen by one frame only,
-filled as holes, ambiguous, or re-traced (--exact).
+filled as holes, ambiguous, or re-traced (--exact). The sequence is one set of files: everything
+is checked (the frames, their sizes, in exact mode the scene's textures) before the first frame
+is made, the files are written beside the previous ones under hidden temporary names, and they
+all replace them in one last step; an error or Ctrl-C before it leaves the previous sequence as
+it was. In that step the frames PREFIX-NNN.png and .vti of an earlier, longer sequence, numbered
+beyond this one, are removed (no other file is touched).
 
 More than two frames are key frames of one movie: N frames are made between each consecutive
 pair and the sequence runs through every key frame (time k at key frame k). Interpolation is good
@@ -102,6 +112,121 @@ double fieldValue(vtkImageData* frame, const char* name)
   vtkDataArray* a = frame->GetFieldData()->GetArray(name);
   return a && a->GetNumberOfTuples() > 0 ? a->GetComponent(0, 0) : 0.0;
 }
+
+/// The key frames: traced from their scene files, or read from the store.
+std::vector<vtkSmartPointer<vtkAlgorithm>> readKeyFrames(const Options& options,
+                                                         const std::vector<std::string>& names,
+                                                         bool fromScenes, bool quiet)
+{
+  const std::string conninfo = fromScenes ? std::string() : databaseConnection(options);
+  std::vector<vtkSmartPointer<vtkAlgorithm>> ends(names.size());
+  for (std::size_t k = 0; k < names.size(); ++k)
+  {
+    if (fromScenes)
+    {
+      auto source = vtkSmartPointer<vtkGeodesicSource>::New();
+      setSceneFile(source, names[k]);
+      if (const auto size = options.size("resolution"))
+        source->SetResolution(size->first, size->second);
+      traceFrame(source, "trace " + names[k], quiet);
+      checkRayEnds(source->GetImageOutput(), maxFailedShare(options), names[k]);
+      ends[k] = source;
+      continue;
+    }
+    auto reader = vtkSmartPointer<vtkGeodesicPostgreSQLReader>::New();
+    tools::VtkMessageCatcher messages;
+    messages.watchAlgorithm(reader);
+    reader->SetConnectionString(conninfo.c_str());
+    reader->SetFrameId(static_cast<vtkIdType>(std::stoll(names[k])));
+    reader->Update();
+    if (messages.failed())
+      throw DatabaseError(messages.firstError());
+    ends[k] = reader;
+  }
+  return ends;
+}
+
+/// The frames of an earlier sequence at `prefix` beyond a new one of `count` frames: regular
+/// files named as this command names its frames, PREFIX-NNN.png and PREFIX-NNN.vti (NNN the
+/// frame's number, "%03d"), numbered `count` or more. Nothing else is ever taken.
+std::vector<std::string> staleFrames(const std::string& prefix, int count)
+{
+  const std::filesystem::path p(prefix);
+  const std::string dir = p.parent_path().string();
+  const std::string base = p.filename().string() + "-";
+  std::vector<std::string> stale;
+  DIR* listing = opendir(dir.empty() ? "." : dir.c_str());
+  if (!listing)
+    return stale;
+  while (const dirent* entry = readdir(listing))
+  {
+    const std::string name = entry->d_name;
+    const std::size_t dot = name.rfind('.');
+    if (name.compare(0, base.size(), base) != 0 || dot == std::string::npos || dot <= base.size() ||
+        (name.substr(dot) != ".png" && name.substr(dot) != ".vti"))
+      continue;
+    const std::string digits = name.substr(base.size(), dot - base.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    const int number = std::stoi(digits);
+    char canonical[32];
+    std::snprintf(canonical, sizeof canonical, "%03d", number);
+    const std::string path = (dir.empty() ? std::string() : dir + "/") + name;
+    struct stat st;
+    if (digits == canonical && number >= count && lstat(path.c_str(), &st) == 0 &&
+        S_ISREG(st.st_mode))
+      stale.push_back(path);
+  }
+  closedir(listing);
+  std::sort(stale.begin(), stale.end());
+  return stale;
+}
+
+/// Where and how the sequence is written.
+struct Sequence
+{
+  std::string prefix;
+  int intermediate = 0;
+  tools::AtomicFileSet* files = nullptr;
+  tools::MovieWriter* movie = nullptr;
+  tools::PvdCollection series;
+  std::vector<std::string> lines; ///< each frame's shares of pixel classes
+};
+
+/// Writes every frame of the sequence into its set (nothing is in place before the set's
+/// commit). `check` throws on an interrupt or a failed interpolation.
+void writeFrames(const std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>>& pairs,
+                 Sequence& out, tools::ProgressBar& bar, const std::function<void()>& check)
+{
+  const int intermediate = out.intermediate;
+  // Key frame k is frame k (N + 1) of the sequence; a key frame between two pairs is written once.
+  const int count = static_cast<int>(pairs.size()) * (intermediate + 1) + 1;
+  for (int k = 0; k < count; ++k)
+  {
+    const int pair = std::min(k / (intermediate + 1), static_cast<int>(pairs.size()) - 1);
+    const double t = static_cast<double>(k - pair * (intermediate + 1)) / (intermediate + 1);
+    const double time = pair + t;
+    vtkGeodesicFrameInterpolator* interpolator = pairs[static_cast<std::size_t>(pair)];
+    interpolator->UpdateTimeStep(t);
+    check();
+    vtkImageData* frame = interpolator->GetOutput();
+    char number[32];
+    std::snprintf(number, sizeof number, "-%03d", k);
+    tools::writePng(frame, out.files->add(out.prefix + number + ".png"));
+    tools::writeVti(frame, out.files->add(out.prefix + number + ".vti"));
+    out.series.add(time, out.prefix + number + ".vti");
+    out.movie->addFrame(frame);
+    check();
+
+    const std::array<double, 5> shares = fractions(frame);
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, time,
+                  fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
+                  100 * shares[3], 100 * shares[4]);
+    out.lines.push_back(line);
+    bar.update(static_cast<double>(k + 1) / count);
+  }
+}
 }
 
 int runInterpolate(const std::vector<std::string>& args)
@@ -140,48 +265,28 @@ int runInterpolate(const std::vector<std::string>& args)
     throw UsageError("--frames: at most " +
                      std::to_string(vtkGeodesicFrameInterpolator::kMaxIntermediateFrames));
   const int fps = options.positiveInteger("fps").value_or(10);
-  const std::string prefix = outputPath(options, "interpolated", "");
+  const std::string prefix = outputPrefix(options, "interpolated");
   const std::string moviePath = options.get("movie", prefix + ".ogv");
+  // The whole sequence is one set of files: its frames, .pvd and movie appear together when it
+  // is committed, or not at all (an error or Ctrl-C before leaves the previous sequence as it
+  // was). Declared before the movie, which is a member of it.
+  tools::AtomicFileSet files;
   // The movie's format and rate are checked before any work is done.
   std::unique_ptr<tools::MovieWriter> movie;
   try
   {
-    movie = std::make_unique<tools::MovieWriter>(moviePath, fps);
+    movie = std::make_unique<tools::MovieWriter>(moviePath, fps, &files);
   }
   catch (const std::invalid_argument& e)
   {
     throw UsageError(std::string("--movie/--fps: ") + e.what());
   }
   const bool quiet = options.has("quiet");
-  // The two ends: traced from their scene files, or read from the store.
-  const std::string conninfo = fromScenes ? std::string() : databaseConnection(options);
-  std::vector<vtkSmartPointer<vtkAlgorithm>> ends(keys);
-  for (std::size_t k = 0; k < keys; ++k)
-  {
-    if (fromScenes)
-    {
-      auto source = vtkSmartPointer<vtkGeodesicSource>::New();
-      setSceneFile(source, names[k]);
-      if (const auto size = options.size("resolution"))
-        source->SetResolution(size->first, size->second);
-      traceFrame(source, "trace " + names[k], quiet);
-      checkRayEnds(source->GetImageOutput(), maxFailedShare(options), names[k]);
-      ends[k] = source;
-      continue;
-    }
-    auto reader = vtkSmartPointer<vtkGeodesicPostgreSQLReader>::New();
-    tools::VtkMessageCatcher messages;
-    messages.watchAlgorithm(reader);
-    reader->SetConnectionString(conninfo.c_str());
-    reader->SetFrameId(static_cast<vtkIdType>(std::stoll(names[k])));
-    reader->Update();
-    if (messages.failed())
-      throw DatabaseError(messages.firstError());
-    ends[k] = reader;
-  }
+  const std::vector<vtkSmartPointer<vtkAlgorithm>> ends =
+    readKeyFrames(options, names, fromScenes, quiet);
 
-  // One interpolator per consecutive pair, each checked (same scene, same size) before any
-  // frame is written.
+  // One interpolator per consecutive pair, each checked (same scene, same size, in exact mode the
+  // scene's textures) before any frame is written.
   tools::VtkMessageCatcher messages;
   // Everything the readers returned is valid; what fails here is a pair itself (different
   // scenes or resolutions) or, in exact mode, the re-tracing of the scene.
@@ -209,42 +314,25 @@ int runInterpolate(const std::vector<std::string>& args)
     chain += " -> " + names[k + 1];
   }
 
-  // Key frame k is frame k (N + 1) of the sequence; a key frame between two pairs is written once.
   const int count = static_cast<int>(pairs.size()) * (intermediate + 1) + 1;
   tools::ProgressBar bar("interpolate " + chain, quiet ? tools::ProgressBar::Style::Silent
                                                        : tools::ProgressBar::Style::Automatic);
-  tools::PvdCollection series;
-  std::vector<std::string> lines;
-  for (int k = 0; k < count; ++k)
-  {
-    const int pair = std::min(k / (intermediate + 1), static_cast<int>(pairs.size()) - 1);
-    const double t = static_cast<double>(k - pair * (intermediate + 1)) / (intermediate + 1);
-    const double time = pair + t;
-    vtkGeodesicFrameInterpolator* interpolator = pairs[static_cast<std::size_t>(pair)];
-    interpolator->UpdateTimeStep(t);
-    check();
-    vtkImageData* frame = interpolator->GetOutput();
-    char number[32];
-    std::snprintf(number, sizeof number, "-%03d", k);
-    tools::AtomicFileSet files; // the frame's picture and dataset appear together
-    tools::writePng(frame, files.add(prefix + number + ".png"));
-    tools::writeVti(frame, files.add(prefix + number + ".vti"));
-    check();
-    files.commit();
-    series.add(time, prefix + number + ".vti");
-    movie->addFrame(frame);
-
-    const std::array<double, 5> shares = fractions(frame);
-    char line[160];
-    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, time,
-                  fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
-                  100 * shares[3], 100 * shares[4]);
-    lines.push_back(line);
-    bar.update(static_cast<double>(k + 1) / count);
-  }
-  check();
-  series.write(prefix + ".pvd");
+  Sequence sequence;
+  sequence.prefix = prefix;
+  sequence.intermediate = intermediate;
+  sequence.files = &files;
+  sequence.movie = movie.get();
+  writeFrames(pairs, sequence, bar, check);
+  sequence.series.write(files.add(prefix + ".pvd"));
   movie->close();
+  // Frames of an earlier, longer sequence would look like part of this one: they go in the
+  // same commit.
+  std::vector<std::string> stale = staleFrames(prefix, count);
+  stale.erase(std::remove(stale.begin(), stale.end(), moviePath), stale.end());
+  for (const std::string& path : stale)
+    files.remove(path);
+  check();
+  files.commit();
   bar.finish("-> " + prefix + "-*.png");
 
   std::printf("%s %s: %d frames (%d intermediate%s)%s\n", fromScenes ? "scenes" : "frames",
@@ -254,12 +342,15 @@ int runInterpolate(const std::vector<std::string>& args)
   for (const char* name : kClassNames)
     std::printf(" %8s%%", name);
   std::printf("\n");
-  for (const std::string& line : lines)
+  for (const std::string& line : sequence.lines)
     std::printf("%s\n", line.c_str());
   std::printf("  wrote %s-%03d.png ... %s-%03d.png (and .vti)\n", prefix.c_str(), 0, prefix.c_str(),
               count - 1);
   std::printf("  wrote %s (ParaView time series of %d frames)\n", (prefix + ".pvd").c_str(), count);
   std::printf("  wrote %s (%d frames at %d per second)\n", moviePath.c_str(), count, fps);
+  if (!stale.empty())
+    std::printf("  removed %zu files of an earlier, longer sequence (%s-%03d.* on)\n", stale.size(),
+                prefix.c_str(), count);
   return kOk;
 }
 }

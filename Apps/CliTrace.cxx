@@ -549,7 +549,7 @@ int runTrace(const std::vector<std::string>& args)
   }
 
   const double maxShare = maxFailedShare(options);
-  const std::string prefix = outputPath(options, scenePath, "");
+  const std::string prefix = outputPrefix(options, scenePath);
   const std::string name = vtksys::SystemTools::GetFilenameWithoutLastExtension(scenePath);
   FrameOutput output;
   output.formats = formats;

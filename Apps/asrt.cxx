@@ -4,6 +4,7 @@
 #include "Cli.h"
 
 #include "AsrtTypes.h"
+#include "AtomicFile.h"
 #include "Progress.h"
 #include "RayStore.h"
 #include "VtkMessages.h"
@@ -134,6 +135,11 @@ int main(int argc, char* argv[])
   }
   catch (const Interrupted&)
   {
+    return report(command->name, "", "interrupted; nothing half-written was left", kInterrupted);
+  }
+  catch (const asrt::tools::WriteInterrupted&)
+  {
+    // Stopped while writing through a FIFO or device, before any file was renamed into place.
     return report(command->name, "", "interrupted; nothing half-written was left", kInterrupted);
   }
   catch (const std::exception& e)

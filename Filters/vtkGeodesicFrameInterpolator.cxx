@@ -5,6 +5,7 @@
 #include "FrameInterpolation.h"
 #include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
+#include "GeodesicSceneLoading.h"
 #include "RayStore.h"
 #include "SceneFile.h"
 #include "StoreConnection.h"
@@ -41,15 +42,24 @@ namespace
 {
 const char* const kFrameName[2] = { "frame A", "frame B" };
 
-/// Collects the error messages of the internal source, which are this filter's errors.
+/// Keeps the first error of the internal source, which is this filter's error: its message
+/// alone, without VTK's "ERROR: In <file>, line <n>" framing and "<Class> (<address>): " prefix,
+/// and without the executive's report of the failed request that follows it.
 class ErrorCollector : public vtkCommand
 {
 public:
   static ErrorCollector* New() { return new ErrorCollector; }
   void Execute(vtkObject*, unsigned long, void* data) override
   {
-    this->Text += (this->Text.empty() ? "" : "; ") +
-                  std::string(data ? static_cast<const char*>(data) : "unknown error");
+    if (!this->Text.empty())
+      return;
+    std::string text = data ? static_cast<const char*>(data) : "";
+    const std::size_t prefix = text.find("): ");
+    if (prefix != std::string::npos)
+      text = text.substr(prefix + 3);
+    this->Text = text.substr(0, text.find('\n'));
+    if (this->Text.empty())
+      this->Text = "unknown error";
   }
   std::string Text;
 };
@@ -132,6 +142,19 @@ struct vtkGeodesicFrameInterpolator::Internals
          << n;
       throw asrt::InvalidParameter(os.str());
     }
+    // Exact mode re-traces the scene at every frame: its textures must load before the first.
+    if (self->ExactMode)
+      try
+      {
+        asrt::loadScene(asrt::effectiveSceneText(this->Scene[0]).c_str(), nullptr,
+                        self->TextureDirectory);
+      }
+      catch (const std::exception& e)
+      {
+        throw asrt::InvalidParameter(std::string("exact mode cannot load the frames' scene to "
+                                                 "re-trace it: ") +
+                                     e.what());
+      }
     // Every declared frame must be a valid frame: no eye inside a horizon, |a| ≤ M, ...
     for (int k = 1; k <= n; ++k)
     {

@@ -27,36 +27,35 @@ struct Descriptor
       close(this->fd);
   }
 };
+}
 
-/// Waits until `fd` can be read; false if an interrupt was requested before or during the wait.
-bool waitReadable(int fd)
+bool waitForDescriptor(int fd, short events)
 {
   sigset_t interrupts, previous;
   sigemptyset(&interrupts);
   sigaddset(&interrupts, SIGINT);
   sigaddset(&interrupts, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
-  bool readable = false;
+  bool ready = false;
   while (!interruptRequested())
   {
-    pollfd p = { fd, POLLIN, 0 };
+    pollfd p = { fd, events, 0 };
     // ppoll unblocks the signals only while it waits: one that comes after the check above
     // interrupts the wait instead of being lost.
     const int n = ppoll(&p, 1, nullptr, &previous);
     if (n > 0)
     {
-      readable = true;
+      ready = true;
       break;
     }
     if (n < 0 && errno != EINTR)
     {
-      readable = true; // let read() report the error
+      ready = true; // let the read or write report the error
       break;
     }
   }
   pthread_sigmask(SIG_SETMASK, &previous, nullptr);
-  return readable;
-}
+  return ready;
 }
 
 std::string readWholeFile(const std::string& path, std::size_t limit, const std::string& what)
@@ -88,7 +87,7 @@ std::string readWholeFile(const std::string& path, std::size_t limit, const std:
   char chunk[1 << 16];
   while (true)
   {
-    if (!waitReadable(file.fd))
+    if (!waitForDescriptor(file.fd, POLLIN))
       throw ReadInterrupted();
     const ssize_t n = read(file.fd, chunk, sizeof chunk);
     if (n < 0 && (errno == EINTR || errno == EAGAIN))

@@ -22,6 +22,10 @@ struct ReadInterrupted : std::runtime_error
   }
 };
 
+/// Waits until `fd` is ready for `events` (POLLIN, POLLOUT) or reports an error; false if an
+/// interrupt was requested before or during the wait.
+bool waitForDescriptor(int fd, short events);
+
 /// The content of `path`, at most `limit` bytes. Throws std::runtime_error: "cannot read <what>
 /// \"<path>\": <reason>" (no such file, a directory, ...), or "<what> \"<path>\" is larger than
 /// N MiB ..." past the limit; ReadInterrupted when interruptRequested() is or becomes true before

@@ -58,7 +58,9 @@ vtkSmartPointer<vtkImageData> rgbFrame(vtkImageData* frame)
 struct MovieWriter::Backend
 {
   std::string Path;
-  /// The movie's temporary, created with the first frame.
+  /// The set the movie is a member of, when the caller gave one.
+  AtomicFileSet* External = nullptr;
+  /// The movie's temporary, created with the first frame (in a set of its own, or External).
   std::unique_ptr<AtomicFileSet> Files;
   TemporaryFile* File = nullptr;
   int Rate = 24;
@@ -73,10 +75,11 @@ struct MovieWriter::Backend
   }
   void create()
   {
-    this->Files = std::make_unique<AtomicFileSet>();
-    this->File = &this->Files->add(this->Path);
+    if (!this->External)
+      this->Files = std::make_unique<AtomicFileSet>();
+    this->File = &(this->External ? *this->External : *this->Files).add(this->Path);
   }
-  /// Removes the temporary, if any.
+  /// Removes the temporary, if any (an External set removes it unless it is committed).
   void discard()
   {
     this->File = nullptr;
@@ -277,7 +280,7 @@ bool MovieWriter::mp4Available()
   return !found.empty();
 }
 
-MovieWriter::MovieWriter(const std::string& path, int framesPerSecond)
+MovieWriter::MovieWriter(const std::string& path, int framesPerSecond, AtomicFileSet* files)
 {
   if (framesPerSecond < 1 || framesPerSecond > 240)
     throw std::invalid_argument("frame rate must be 1 to 240 frames/s, got " +
@@ -292,6 +295,7 @@ MovieWriter::MovieWriter(const std::string& path, int framesPerSecond)
   }
   else
     this->Impl = std::make_unique<OggBackend>(path, framesPerSecond);
+  this->Impl->External = files;
   this->Impl->start();
 }
 
@@ -332,7 +336,10 @@ void MovieWriter::close()
   if (b.Frames == 0)
     throw std::runtime_error("movie \"" + b.Path + "\" has no frames");
   b.finish();
-  b.Files->commit();
+  if (b.Files)
+    b.Files->commit();
+  else
+    b.File->finish();
   b.Closed = true;
 }
 

@@ -1,6 +1,7 @@
 // Movies from a sequence of frames: Ogg Theora (.ogv, .ogg) through VTK's vtkOggTheoraWriter,
 // always available with Debian's VTK, or H.264 MP4 (.mp4) through the ffmpeg program when it is
-// installed (Debian's VTK has no FFMPEG module). The file appears when close() succeeds, whole.
+// installed (Debian's VTK has no FFMPEG module). The file appears when close() succeeds, whole, or,
+// as a member of a set of files, when the set is committed.
 #ifndef asrt_tools_MovieWriter_h
 #define asrt_tools_MovieWriter_h
 
@@ -13,6 +14,8 @@ namespace asrt
 {
 namespace tools
 {
+class AtomicFileSet;
+
 class MovieWriter
 {
 public:
@@ -28,9 +31,11 @@ public:
   static bool mp4Available();
 
   /// Nothing is written until the first frame. Throws std::invalid_argument for an unknown
-  /// extension, a frame rate outside [1, 240], or MP4 without ffmpeg.
-  MovieWriter(const std::string& path, int framesPerSecond = 24);
-  /// Without close(), the partial movie is deleted.
+  /// extension, a frame rate outside [1, 240], or MP4 without ffmpeg. With `files`, the movie is
+  /// a member of that set (added at the first frame), which must outlive the writer: close()
+  /// finishes it, and it appears when the set is committed.
+  MovieWriter(const std::string& path, int framesPerSecond = 24, AtomicFileSet* files = nullptr);
+  /// Without close(), the partial movie is deleted (by its set, for a member of one).
   ~MovieWriter();
   MovieWriter(const MovieWriter&) = delete;
   MovieWriter& operator=(const MovieWriter&) = delete;
@@ -39,8 +44,9 @@ public:
   /// frame must have the size of the first. Throws std::runtime_error on a bad frame or a failed
   /// encoder.
   void addFrame(vtkImageData* frame);
-  /// Finishes the movie and moves it into place. Throws std::runtime_error if there is no frame or
-  /// the encoder failed (nothing is left behind then).
+  /// Finishes the movie and moves it into place (a member of a set: ready for the set's commit).
+  /// Throws std::runtime_error if there is no frame or the encoder failed (nothing is left behind
+  /// then).
   void close();
 
   int frameCount() const;

@@ -285,6 +285,112 @@ std::string notAClusterMessage(const std::string& dir)
          "directory with --dir or ASRT_DB_DIR)";
 }
 
+/// The file that says ASRT made a cluster (initdb through ensureRunning): destroy() deletes no
+/// other cluster.
+constexpr const char* kMarkerName = "ASRT_CLUSTER";
+constexpr const char* kMarkerText =
+  "This PostgreSQL cluster was made by ASRT (asrt db start, or the first asrt command that\n"
+  "needed its private server). asrt db destroy deletes it with all its data.\n";
+/// What ensureRunning appends to postgresql.conf after initdb; clusters made by versions of ASRT
+/// without the marker carry it too.
+constexpr const char* kAsrtInclude =
+  "\n# Written once by ASRT: settings that follow the directory, rewritten at each start.\n"
+  "include_if_exists = 'asrt.conf'\n";
+
+bool isEntry(const std::string& path, mode_t type)
+{
+  struct stat st
+  {
+  };
+  return lstat(path.c_str(), &st) == 0 && (st.st_mode & S_IFMT) == type;
+}
+
+/// Whether postgresql.conf holds the lines ASRT appends to it when it makes a cluster.
+bool hasAsrtInclude(const std::string& dir)
+{
+  return readTail(dir + "/postgresql.conf", 1 << 20).find(kAsrtInclude) != std::string::npos;
+}
+
+/// Whether `name`, at the top of a cluster's directory, is something PostgreSQL 15 or ASRT puts
+/// there: the cluster's own folders and files, the server's socket and its lock (when the socket
+/// lives in the directory), ASRT's marker, settings and log.
+bool belongsToCluster(const std::string& name)
+{
+  static const char* const kNames[] = { "PG_VERSION",       "base",
+                                        "global",           "pg_commit_ts",
+                                        "pg_dynshmem",      "pg_logical",
+                                        "pg_multixact",     "pg_notify",
+                                        "pg_replslot",      "pg_serial",
+                                        "pg_snapshots",     "pg_stat",
+                                        "pg_stat_tmp",      "pg_subtrans",
+                                        "pg_tblspc",        "pg_twophase",
+                                        "pg_wal",           "pg_xact",
+                                        "postgresql.conf",  "postgresql.auto.conf",
+                                        "pg_hba.conf",      "pg_ident.conf",
+                                        "postmaster.opts",  "postmaster.pid",
+                                        "current_logfiles", "log",
+                                        "backup_label",     "backup_label.old",
+                                        "tablespace_map",   "tablespace_map.old",
+                                        "backup_manifest",  "recovery.signal",
+                                        "standby.signal",   "postgresql.auto.conf.tmp",
+                                        kMarkerName,        "asrt.conf",
+                                        "server.log" };
+  for (const char* known : kNames)
+    if (name == known)
+      return true;
+  // .s.PGSQL.<port> and .s.PGSQL.<port>.lock
+  const std::string socket = ".s.PGSQL.";
+  if (name.compare(0, socket.size(), socket) != 0)
+    return false;
+  std::string port = name.substr(socket.size());
+  if (port.size() > 5 && port.compare(port.size() - 5, 5, ".lock") == 0)
+    port.resize(port.size() - 5);
+  return !port.empty() && port.size() <= 5 &&
+         port.find_first_not_of("0123456789") == std::string::npos;
+}
+
+/// A name from a directory listing, quoted, with control characters shown as '?'.
+std::string quotedName(const std::string& name)
+{
+  std::string out = "'";
+  for (unsigned char c : name)
+    out += c < 0x20 || c == 0x7f ? '?' : static_cast<char>(c);
+  return out + "'";
+}
+
+/// Why the non-empty directory `dir` is not a cluster that ASRT made, or "" if it is one: ASRT's
+/// marker, PG_VERSION, postgresql.conf and base/, and nothing at the top that neither PostgreSQL
+/// nor ASRT put there.
+std::string whyNotAsrtCluster(const std::string& dir)
+{
+  if (!isEntry(dir + "/" + kMarkerName, S_IFREG))
+  {
+    if (isEntry(dir + "/PG_VERSION", S_IFREG) && hasAsrtInclude(dir))
+      return std::string("it has no ") + kMarkerName +
+             " marker: it looks like a cluster made by an older ASRT, which did not mark its "
+             "clusters; start it once with this version (asrt db start, with the same --dir), "
+             "which marks it, then destroy it";
+    return std::string("it has no ") + kMarkerName +
+           " marker, so ASRT did not make it (delete it yourself if it is to go)";
+  }
+  if (!isEntry(dir + "/PG_VERSION", S_IFREG))
+    return "it has no PG_VERSION file: it is not a PostgreSQL cluster";
+  if (!isEntry(dir + "/postgresql.conf", S_IFREG))
+    return "it has no postgresql.conf: it is not a whole PostgreSQL cluster";
+  if (!isEntry(dir + "/base", S_IFDIR))
+    return "it has no base/ folder: it is not a whole PostgreSQL cluster";
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+  {
+    const std::string name = it->path().filename().string();
+    if (!belongsToCluster(name))
+      return quotedName(name) + " in it is not part of a PostgreSQL cluster";
+  }
+  if (ec)
+    return "it cannot be listed: " + ec.message();
+  return std::string();
+}
+
 /// Writes a file in the (server-owned) data directory without following a symlink there, and
 /// gives it to the server user.
 void writeServerFile(const ServerUser& su, const std::string& path, const std::string& text,
@@ -556,6 +662,9 @@ std::string EmbeddedPostgres::ensureRunning()
       throw InvalidParameter("the cluster in " + DataDir + " belongs to uid " +
                              std::to_string(st.st_uid) + ", but its server would run as " +
                              su.Name + " (uid " + std::to_string(su.Uid) + ")");
+    // A cluster an older ASRT made (its line in postgresql.conf, no marker) is marked now.
+    if (!isEntry(DataDir + "/" + kMarkerName, S_IFREG) && hasAsrtInclude(DataDir))
+      writeServerFile(su, DataDir + "/" + kMarkerName, kMarkerText, false);
   }
   else
   {
@@ -576,10 +685,8 @@ std::string EmbeddedPostgres::ensureRunning()
     if (out.ExitCode != 0)
       throw std::runtime_error("initdb failed for " + DataDir + " (exit code " +
                                std::to_string(out.ExitCode) + "):\n" + lastLines(out.Output, 30));
-    writeServerFile(su, DataDir + "/postgresql.conf",
-                    "\n# Written once by ASRT: settings that follow the directory, rewritten at "
-                    "each start.\ninclude_if_exists = 'asrt.conf'\n",
-                    true);
+    writeServerFile(su, DataDir + "/" + kMarkerName, kMarkerText, false);
+    writeServerFile(su, DataDir + "/postgresql.conf", kAsrtInclude, true);
   }
 
   PidFile pf;
@@ -695,6 +802,14 @@ void EmbeddedPostgres::destroy()
   if (state == DirState::Foreign)
     throw InvalidParameter("refusing to destroy " + DataDir +
                            ": it is not a PostgreSQL cluster and not empty");
+  // Only a cluster ASRT made goes, with all that is in it: a folder that merely holds a
+  // PG_VERSION, or another program's cluster, is left as it is.
+  if (state == DirState::Cluster)
+  {
+    const std::string why = whyNotAsrtCluster(DataDir);
+    if (!why.empty())
+      throw InvalidParameter("refusing to destroy " + DataDir + ": " + why);
+  }
   if (state == DirState::Cluster && running())
     stopServer(DataDir, true);
   const std::string socketDir = socketDirectory();

@@ -30,11 +30,12 @@ public:
   void setDurable(bool durable) { Durable = durable; }
   bool durable() const { return Durable; }
 
-  /// Creates the cluster if the directory is empty or missing, starts the server if it is not
-  /// running, creates the database "asrt" if missing, and returns the libpq conninfo of that
-  /// database. Throws InvalidParameter for a directory that cannot hold a cluster (not empty and
-  /// not a cluster, a file, a cluster of another PostgreSQL version) and std::runtime_error, with
-  /// the server's log, when PostgreSQL fails.
+  /// Creates the cluster (marked as ASRT's, see destroy) if the directory is empty or missing,
+  /// marks a cluster an older ASRT made, starts the server if it is not running, creates the
+  /// database "asrt" if missing, and returns the libpq conninfo of that database. Throws
+  /// InvalidParameter for a directory that cannot hold a cluster (not empty and not a cluster, a
+  /// file, a cluster of another PostgreSQL version) and std::runtime_error, with the server's log,
+  /// when PostgreSQL fails.
   std::string ensureRunning();
 
   /// Stops the server if it runs (fast shutdown, or immediate: no checkpoint, crash recovery at the
@@ -45,7 +46,11 @@ public:
   bool running() const;
 
   /// Stops the server and deletes the cluster directory, its lock file and its socket directory.
-  /// Refuses (InvalidParameter) to delete a non-empty directory that is not a PostgreSQL cluster.
+  /// Refuses (InvalidParameter, naming what looks wrong) to delete a non-empty directory that is
+  /// not a cluster ASRT made: one without the marker file ASRT_CLUSTER that ensureRunning writes
+  /// after initdb, without PG_VERSION, postgresql.conf or base/, or with anything at the top that
+  /// neither PostgreSQL nor ASRT put there. A cluster made by an older ASRT, unmarked, is refused
+  /// too; ensureRunning marks it (it recognises the lines ASRT added to its postgresql.conf).
   void destroy();
 
   /// Creates the database if it does not exist yet. The server must be running.

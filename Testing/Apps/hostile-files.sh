@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Output files and interrupts under hostile conditions: links planted in the output folder, a
 # file-size limit, a read-only folder, a directory where a file of the set goes, stale
-# temporaries, a scene that is a FIFO, and Ctrl-C while a frame is being stored (that case under
+# temporaries, a scene that is a FIFO, outputs that are FIFOs, devices, sockets and links to
+# devices, and Ctrl-C while a frame is being stored (the cases that need a database run under
 # asrtWithThrowawayPostgres). Every case checks that the previous run's files are untouched and
-# that no new file or temporary (".NAME.PID.XXXXXX.part") remains.
+# that no new file or temporary (".NAME.PID.XXXXXX.part") remains. The only system files used are
+# /dev/null and /dev/full, written through, and checked to be character devices afterwards.
 # Usage: hostile-files.sh CASE ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
 case_name="$1"; asrt="$2"; check="$3"; expect="$4"; scenes="$5"; work="$6/$1"
@@ -170,6 +172,113 @@ scene_fifo() {
 
   step "an endless scene file is cut at the limit"
   "$expect" 4 "larger than 64 MiB" -- "$asrt" trace /dev/zero -r 8x8 -q -o out/
+}
+
+fifo_outputs() {
+  step "a FIFO named as an output is written through, and stays a FIFO"
+  "$asrt" trace "$scene" -r 64x64 -q --formats png -o ref/
+  mkdir out
+  mkfifo out/$name.png
+  cat out/$name.png > captured &
+  reader=$!
+  "$expect" 0 "wrote out/$name.png" -- "$asrt" trace "$scene" -r 64x64 -q --formats png,vti -o out/
+  test -p out/$name.png || { kill "$reader"; fail "the FIFO was replaced"; }
+  wait_until stopped "$reader" || { kill "$reader"; fail "the FIFO's reader got no end of file"; }
+  cmp captured ref/$name.png || fail "the FIFO's reader did not get the picture"
+  "$check" out/$name.vti=64x64
+
+  step "a FIFO that no process reads is refused at once; nothing of the set is written"
+  snapshot out > before.txt
+  "$expect" 1 "cannot write \"out/$name.png\": it is a FIFO that no process is reading" -- \
+    "$asrt" trace "$scene" -r 64x64 -q --formats png,vti --mass 0.5 -o out/
+  test -p out/$name.png || fail "the FIFO was replaced"
+  unchanged
+
+  step "Ctrl-C while a FIFO's reader reads nothing: exit 130, no file of the set renamed"
+  # This shell holds the FIFO open to read, and never reads: the picture (larger than a pipe
+  # holds) waits to be written.
+  exec 3<> out/$name.png
+  "$asrt" trace "$scene" -r 400x400 -q --formats png,vti --mass 0.5 -o out/ > out.txt 2>&1 &
+  pid=$!
+  # asrt waits to write to the FIFO: in ppoll (syscall 271), its picture's descriptor open.
+  writing_to_fifo() {
+    local syscall
+    syscall=$(cut -d' ' -f1 "/proc/$pid/syscall" 2> /dev/null) || return 1
+    test "$syscall" = 271 && ls -l "/proc/$pid/fd" 2> /dev/null | grep -qF "out/$name.png"
+  }
+  wait_until writing_to_fifo || { kill -KILL "$pid"; fail "asrt never waited to write the FIFO"; }
+  kill -INT "$pid"
+  if ! wait_until stopped "$pid"; then
+    kill -KILL "$pid"
+    fail "asrt did not stop on Ctrl-C while writing to the FIFO"
+  fi
+  exec 3>&-
+  rc=0
+  wait "$pid" || rc=$?
+  cat out.txt
+  test "$rc" -eq 130 || fail "exit code $rc, expected 130"
+  grep -q interrupted out.txt || fail "no word of the interrupt"
+  test -p out/$name.png || fail "the FIFO was replaced"
+  unchanged
+}
+
+refused_outputs() {
+  step "a socket where a file of the set goes: refused, nothing of the set changes"
+  previous_run
+  rm out/$name.vti
+  python3 -c 'import socket, sys; socket.socket(socket.AF_UNIX).bind(sys.argv[1])' out/$name.vti
+  snapshot out > before.txt
+  "$expect" 1 "cannot write \"out/$name.vti\": it is a socket" -- \
+    "$asrt" trace "$scene" -r 16x16 -q --mass 0.5 -o out/
+  test -S out/$name.vti || fail "the socket was replaced"
+  unchanged
+
+  step "a link to a device where a file goes: refused, not followed and not replaced"
+  rm out/$name.vti
+  ln -s /dev/null out/$name.vti
+  snapshot out > before.txt
+  "$expect" 1 "\"out/$name.vti\": it is a symbolic link to a character device" -- \
+    "$asrt" trace "$scene" -r 16x16 -q --mass 0.5 -o out/
+  test -L out/$name.vti || fail "the link was replaced"
+  unchanged
+
+  step "a prefix that is a device (-o /dev/null) is a usage error; nothing is made beside it"
+  "$expect" 2 "--output: \"/dev/null\" is a character device" -- \
+    "$asrt" trace "$scene" -r 16x16 -q -o /dev/null
+  test -c /dev/null || fail "/dev/null is no longer a character device"
+  for made in /dev/null.png /dev/null.vti /dev/null-hits.vtp; do
+    test ! -e "$made" || fail "$made was made"
+  done
+  mkfifo prefix
+  "$expect" 2 "--output: \"prefix\" is a FIFO" -- "$asrt" trace "$scene" -r 16x16 -q -o prefix
+  test -p prefix || fail "the FIFO was replaced"
+  test ! -e prefix.png || fail "prefix.png was made"
+}
+
+# Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
+show_through_devices() {
+  step "a stored frame, exported to a regular file for reference"
+  "$expect" 0 "stored as frame 1" -- "$asrt" trace "$scene" -r 32x32 -q --store -o traced
+  "$asrt" show 1 --png ref.png > /dev/null
+  step "show writes through a FIFO, which stays a FIFO"
+  mkfifo picture.png
+  cat picture.png > captured &
+  reader=$!
+  "$expect" 0 "wrote picture.png" -- "$asrt" show 1 --png picture.png --vti frame.vti
+  test -p picture.png || { kill "$reader"; fail "the FIFO was replaced"; }
+  wait_until stopped "$reader" || { kill "$reader"; fail "the FIFO's reader got no end of file"; }
+  cmp captured ref.png || fail "the FIFO's reader did not get the picture"
+  "$check" frame.vti=32x32
+  step "show writes through /dev/null, which stays a character device"
+  "$expect" 0 "wrote /dev/null" -- "$asrt" show 1 --png /dev/null
+  test -c /dev/null || fail "/dev/null is no longer a character device"
+  step "a device that refuses the bytes (/dev/full): exit 1, the other file of the set unchanged"
+  md5sum frame.vti > before.txt
+  "$expect" 1 "cannot write \"/dev/full\": No space left on device" -- \
+    "$asrt" show 1 --where "image_order >= 1" --png /dev/full --vti frame.vti
+  test -c /dev/full || fail "/dev/full is no longer a character device"
+  md5sum -c before.txt || fail "frame.vti changed"
+  test -z "$(ls -A | grep '\.part$')" || fail "a temporary was left: $(ls -A)"
 }
 
 # Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).

@@ -669,6 +669,31 @@ TEST(FrameInterpolator, BadInputGivesClearErrors)
   EXPECT_TRUE(catcher->Mentions("connections")) << catcher->AllErrors();
 }
 
+TEST(FrameInterpolator, ExactModeWithoutTheScenesTexturesFailsBeforeAnyFrameInOneLine)
+{
+  vtkPolyData* a = rampFrame(0.1, 24).hits;
+  vtkPolyData* b = rampFrame(0.3, 24).hits;
+  // The frames' scene names its textures by relative paths ("../textures/galaxy.png"): resolved
+  // against a folder without them, exact mode cannot re-trace, and says so before any frame.
+  const Interpolated r = runInterpolator(a, b, 0.5,
+                                         [](vtkGeodesicFrameInterpolator* f)
+                                         {
+                                           f->ExactModeOn();
+                                           f->SetTextureDirectory("/nonexistent-asrt/scenes");
+                                         });
+  // The filter's error first; the executive's report of the failed request follows it.
+  ASSERT_FALSE(r.errors.empty());
+  std::string message = r.errors.front();
+  message = message.substr(message.find("): ") + 3);
+  while (!message.empty() && message.back() == '\n')
+    message.pop_back();
+  EXPECT_EQ(message.rfind("exact mode cannot load the frames' scene to re-trace it: ", 0), 0u)
+    << message;
+  EXPECT_NE(message.find("galaxy.png"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << "more than one line: " << message;
+  EXPECT_EQ(r.image->GetNumberOfPoints(), 0);
+}
+
 TEST(FrameInterpolator, SpinAndItsIntegratorMayDiffer)
 {
   // A spin ramp: Schwarzschild at one end, Kerr at the other, so that "auto" resolved to a
