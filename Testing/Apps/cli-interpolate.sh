@@ -7,37 +7,45 @@ set -euo pipefail
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 step() { echo "== $*"; }
+# Stores with COMMAND and sets `stored` to the id it reports: ids come from the server's sequence,
+# which may skip values, so they are read, never assumed.
+store() {
+  local out
+  out="$("$expect" 0 "stored as frame [0-9]+" -- "$@")" || { echo "$out"; return 1; }
+  echo "$out"
+  stored="$(sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' <<< "$out" | tail -n 1)"
+}
 
-step "store two ends of a short mass ramp (frames 1, 2), another size (3), the Kerr disk (4)"
-"$expect" 0 "stored as frame 1" -- "$asrt" trace "$scenes/fig4-mass-start.json" -r 48x48 -q \
-  --mass 0.4 --store=ramp -o a
-"$expect" 0 "stored as frame 2" -- "$asrt" trace "$scenes/fig5-mass-end.json" -r 48x48 -q \
-  --mass 0.6 --store=ramp -o b
-"$expect" 0 "stored as frame 3" -- "$asrt" trace "$scenes/fig5-mass-end.json" -r 32x32 -q \
-  --mass 0.6 --store=small -o small
-"$expect" 0 "stored as frame 4" -- "$asrt" trace "$scenes/kerr-disk.json" -r 48x48 -q \
-  --store=other -o other
+step "store two ends of a short mass ramp (A, B), another size (SMALL), the Kerr disk (OTHER)"
+store "$asrt" trace "$scenes/fig4-mass-start.json" -r 48x48 -q --mass 0.4 --store=ramp -o a
+A="$stored"
+store "$asrt" trace "$scenes/fig5-mass-end.json" -r 48x48 -q --mass 0.6 --store=ramp -o b
+B="$stored"
+store "$asrt" trace "$scenes/fig5-mass-end.json" -r 32x32 -q --mass 0.6 --store=small -o small
+SMALL="$stored"
+store "$asrt" trace "$scenes/kerr-disk.json" -r 48x48 -q --store=other -o other
+OTHER="$stored"
 
 step "interpolate 3 frames between them: PNG and VTI per frame, a .pvd series, an Ogg movie"
-"$expect" 0 "matched%.*re-traced%" -- "$asrt" interpolate 1 2 -n 3 -o movie/ -q
+"$expect" 0 "matched%.*re-traced%" -- "$asrt" interpolate "$A" "$B" -n 3 -o movie/ -q
 "$check" movie/interpolated-000.png=48x48 movie/interpolated-002.png=48x48 \
   movie/interpolated-004.png=48x48 movie/interpolated-004.vti=48x48 '!movie/interpolated-005.png' \
   movie/interpolated.pvd=5 movie/interpolated.ogv=5
-step "the ends are the stored frames, shaded again: t = 0 is frame 1 as traced"
-"$asrt" show 1 --png a-stored.png > /dev/null
+step "the ends are the stored frames, shaded again: t = 0 is frame A as traced"
+"$asrt" show "$A" --png a-stored.png > /dev/null
 cmp movie/interpolated-000.png a-stored.png
-"$asrt" show 2 --png b-stored.png > /dev/null
+"$asrt" show "$B" --png b-stored.png > /dev/null
 cmp movie/interpolated-004.png b-stored.png
 step "the mass at each frame runs linearly from 0.4 to 0.6"
-"$asrt" interpolate 1 2 -n 3 -o movie/ -q | grep -E "^ +2 +0\.5000 +0\.5 " > /dev/null
+"$asrt" interpolate "$A" "$B" -n 3 -o movie/ -q | grep -E "^ +2 +0\.5000 +0\.5 " > /dev/null
 
 step "exact mode, a prefix and a movie named on the command line"
-"$expect" 0 "exact mode" -- "$asrt" interpolate 1 2 -n 1 --exact -o exact/ramp --movie exact-movie.ogv \
+"$expect" 0 "exact mode" -- "$asrt" interpolate "$A" "$B" -n 1 --exact -o exact/ramp --movie exact-movie.ogv \
   --fps 5
 "$check" exact/ramp-001.png=48x48 exact/ramp.pvd=3 exact-movie.ogv=3 '!exact/ramp.ogv'
 if command -v ffmpeg > /dev/null; then
   step "MP4 through ffmpeg"
-  "$expect" 0 "wrote mp4/m.mp4" -- "$asrt" interpolate 1 2 -n 1 -o mp4/ --movie mp4/m.mp4 -q
+  "$expect" 0 "wrote mp4/m.mp4" -- "$asrt" interpolate "$A" "$B" -n 1 -o mp4/ --movie mp4/m.mp4 -q
   test -s mp4/m.mp4
 fi
 
@@ -47,32 +55,32 @@ step "two scene files, traced first, nothing stored"
 "$check" scenes/interpolated-003.png=24x24 scenes/interpolated.ogv=4
 test "$("$asrt" list | tail -n +2 | wc -l)" -eq 4
 
-step "a chain of key frames 1 (M = 0.4), 5 (M = 0.5), 2 (M = 0.6): the sequence runs through each"
-"$expect" 0 "stored as frame 5" -- "$asrt" trace "$scenes/fig4-mass-start.json" -r 48x48 -q \
-  --mass 0.5 --store=ramp -o mid
-"$expect" 0 "frames 1 -> 5 -> 2: 5 frames" -- "$asrt" interpolate 1 5 2 -n 1 -o chain/ -q
+step "a chain of key frames A (M = 0.4), MID (M = 0.5), B (M = 0.6): the sequence runs through each"
+store "$asrt" trace "$scenes/fig4-mass-start.json" -r 48x48 -q --mass 0.5 --store=ramp -o mid
+MID="$stored"
+"$expect" 0 "frames $A -> $MID -> $B: 5 frames" -- "$asrt" interpolate "$A" "$MID" "$B" -n 1 -o chain/ -q
 "$check" chain/interpolated-004.png=48x48 '!chain/interpolated-005.png' chain/interpolated.pvd=5 \
   chain/interpolated.ogv=5
-"$asrt" show 5 --png mid-stored.png > /dev/null
+"$asrt" show "$MID" --png mid-stored.png > /dev/null
 cmp chain/interpolated-000.png a-stored.png
 cmp chain/interpolated-002.png mid-stored.png
 cmp chain/interpolated-004.png b-stored.png
-"$asrt" interpolate 1 5 2 -n 1 -o chain/ -q > chain.txt
+"$asrt" interpolate "$A" "$MID" "$B" -n 1 -o chain/ -q > chain.txt
 grep -E "^ +1 +0\.5000 +0\.45 " chain.txt > /dev/null
 grep -E "^ +3 +1\.5000 +0\.55 " chain.txt > /dev/null
 
 step "errors: usage (2), the database (3), a pair that cannot be interpolated (4); nothing written"
-"$expect" 2 "two frame ids" -- "$asrt" interpolate 1
-"$expect" 2 "not a frame id" -- "$asrt" interpolate 1 two
-"$expect" 2 "--frames" -- "$asrt" interpolate 1 2 -n 0
-"$expect" 2 "--movie" -- "$asrt" interpolate 1 2 --movie x.avi
-"$expect" 3 "no stored frame 9999" -- "$asrt" interpolate 1 9999 -o bad/
-"$expect" 3 "cannot connect" -- "$asrt" interpolate 1 2 -o bad/ \
+"$expect" 2 "two frame ids" -- "$asrt" interpolate "$A"
+"$expect" 2 "not a frame id" -- "$asrt" interpolate "$A" two
+"$expect" 2 "--frames" -- "$asrt" interpolate "$A" "$B" -n 0
+"$expect" 2 "--movie" -- "$asrt" interpolate "$A" "$B" --movie x.avi
+"$expect" 3 "no stored frame 999999999999" -- "$asrt" interpolate "$A" 999999999999 -o bad/
+"$expect" 3 "cannot connect" -- "$asrt" interpolate "$A" "$B" -o bad/ \
   --db "host=/nonexistent port=1 connect_timeout=2"
-"$expect" 4 "different resolutions" -- "$asrt" interpolate 1 3 -o bad/
-"$expect" 4 "different scenes" -- "$asrt" interpolate 1 4 -o bad/
-"$expect" 4 "different resolutions" -- "$asrt" interpolate 1 2 3 -o bad/
-"$expect" 2 "--resolution only" -- "$asrt" interpolate 1 2 -r 8x8 -o bad/
+"$expect" 4 "different resolutions" -- "$asrt" interpolate "$A" "$SMALL" -o bad/
+"$expect" 4 "different scenes" -- "$asrt" interpolate "$A" "$OTHER" -o bad/
+"$expect" 4 "different resolutions" -- "$asrt" interpolate "$A" "$B" "$SMALL" -o bad/
+"$expect" 2 "--resolution only" -- "$asrt" interpolate "$A" "$B" -r 8x8 -o bad/
 "$expect" 4 "cannot read scene file" -- "$asrt" interpolate --scenes no-such.json \
   "$scenes/fig5-mass-end.json" -r 8x8 -o bad/
 "$check" '!bad/interpolated-000.png' '!bad/interpolated.ogv' '!bad/interpolated.pvd'
