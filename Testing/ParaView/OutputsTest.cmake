@@ -3,7 +3,7 @@
 # The series, show and interpolate steps need the store, so it runs against a throwaway server.
 # Expects ASRT_PVPYTHON (find_program(ASRT_PVPYTHON pvpython)).
 add_test(NAME ParaView.OutputsOpen
-  COMMAND $<TARGET_FILE:asrtWithThrowawayPostgres>
+  COMMAND $<TARGET_FILE:asrtWithThrowawayPostgres> "${CMAKE_CURRENT_LIST_DIR}/with-own-display.sh"
     "${CMAKE_CURRENT_LIST_DIR}/outputs-open-in-paraview.sh" $<TARGET_FILE:asrt> "${ASRT_PVPYTHON}"
     "${PROJECT_SOURCE_DIR}/Data/scenes" "${CMAKE_CURRENT_BINARY_DIR}/outputs")
 set_tests_properties(ParaView.OutputsOpen PROPERTIES
