@@ -51,6 +51,15 @@ public:
   vtkGetStringMacro(Predicate);
   ///@}
 
+  ///@{
+  /// Memory the frame's outputs may use, in bytes; 0 (default) allows 80 % of this machine's
+  /// memory, as vtkGeodesicSource does. A stored frame whose size (as its row in frames says)
+  /// would need more, or that asrt::checkFrameSize refuses, is an error before anything is
+  /// allocated.
+  vtkSetMacro(MemoryLimit, double);
+  vtkGetMacro(MemoryLimit, double);
+  ///@}
+
   /// The frames listed by the last RequestInformation (call UpdateInformation()).
   int GetNumberOfFrames() const { return static_cast<int>(this->FrameIds.size()); }
   vtkIdType GetFrameIdAt(int k) const { return this->FrameIds.at(k); }
@@ -72,6 +81,7 @@ protected:
   vtkIdType FrameId = -1;
   std::vector<vtkIdType> FrameIds;
   std::vector<std::string> FrameDescriptions;
+  double MemoryLimit = 0.0;
   vtkIdType ResolvedFrame = -1;
   int Width = 0, Height = 0;
 

@@ -933,9 +933,15 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
     conn, pg::ReadBegin,
     [&]
     {
-      pg::Result r =
-        storage::completeFrameColumn(conn, id, "ray_count", "reading the frame failed");
-      const std::int64_t rayCount = pg::getI64(r.get(), 0, 0);
+      pg::Result r = storage::completeFrameColumn(conn, id, "width, height, ray_count",
+                                                  "reading the frame failed");
+      const std::int64_t rayCount = pg::getI64(r.get(), 0, 2);
+      // The records are allocated from these numbers: a row edited by hand must not decide that.
+      checkFrameSize(id, pg::getI32(r.get(), 0, 0), pg::getI32(r.get(), 0, 1), rayCount);
+      if (predicate.empty())
+      {
+        storage::requireReadMemory(id, rayCount, this->MemoryLimit);
+      }
       std::vector<RayRecord> records =
         predicate.empty() ? this->P->readAllRays(id, rayCount)
                           : readSelectedRays(conn, id, rayCount, predicate, this->PredicateTimeout);

@@ -113,6 +113,16 @@ struct FrameInfo
   std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
 
+/// Refuses, with a StoreError naming the frame and the field, a frame row from which a read
+/// cannot size its buffers (a row edited by hand, or a damaged database): frames.width or
+/// frames.height below 1, more than kMaxFramePixels pixels in all (the tracer's own limit), or
+/// frames.ray_count outside [0, kMaxFramePixels] (the most rays a frame may trace).
+ASRTSTORE_EXPORT void checkFrameSize(std::int64_t id, int width, int height, std::int64_t rayCount);
+inline void checkFrameSize(const FrameInfo& f)
+{
+  checkFrameSize(f.id, f.key.width, f.key.height, f.rayCount);
+}
+
 /// How writeFrame() stores a frame, besides its scene, label and records.
 struct FrameWriteOptions
 {
@@ -282,6 +292,8 @@ public:
   /// throws StoreError "the ray predicate failed: " with the first line of the server's message,
   /// cut short. Refused (StoreError, before the predicate runs) when the role is not set up
   /// safely: missing, or granted more than the views (migrate() sets up again what it can).
+  /// A frame whose row fails checkFrameSize(), or whose whole read would take more than the
+  /// memory limit (setMemoryLimit), is refused (StoreError) before anything is allocated.
   std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
   /// The paths stored with frame `id`, in the order written, bit-exact (empty if none).
   std::vector<RayPath> readPaths(std::int64_t id);
@@ -296,6 +308,10 @@ public:
   std::optional<std::int64_t> findFrame(const SceneDescription& scene);
 
   void setPredicateTimeout(std::chrono::milliseconds t) { this->PredicateTimeout = t; }
+  /// The bytes that readFrame() may allocate for the records of a whole frame; 0 (default):
+  /// defaultMemoryLimit(). A frame that would need more is refused (StoreError) before anything
+  /// is allocated.
+  void setMemoryLimit(double bytes) { this->MemoryLimit = bytes; }
   /// The server process of this connection (for tests that break it).
   int backendPid() const;
 
@@ -303,6 +319,7 @@ private:
   struct Impl;
   Impl* P;
   std::chrono::milliseconds PredicateTimeout{ 60000 };
+  double MemoryLimit = 0;
 };
 }
 

@@ -2,8 +2,9 @@
 # asrt against a database used in the ways that must not hurt it, on a throwaway server that
 # asrtWithThrowawayPostgres started and named in the PG* variables (a superuser, as on the private
 # server): reading commands pointed at a database that is not ASRT's, a frame already stored
-# (refused before its trace), the hostile --where predicates of Testing/Data/hostile, a role
-# without CREATEROLE, and two --replace stores of one frame at once.
+# (refused before its trace), the hostile --where predicates of Testing/Data/hostile, a frame row
+# edited to an impossible size, a role without CREATEROLE, and two --replace stores of one frame
+# at once.
 # Usage: cli-hostile-database.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR HOSTILE_DIR
 set -euo pipefail
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"; hostile="$6"
@@ -75,6 +76,19 @@ step "ordinary predicates still select rays"
 "$expect" 0 "wrote picked.png" -- "$asrt" show 1 --png picked.png \
   --where "i < 4 AND current_user = 'asrt_predicate'"
 "$check" '~picked.png=8x8'
+
+step "a frame row edited to a size no read can allocate is one line and exit code 3"
+oneLine="$(dirname "$0")/expect-one-line-error.sh"
+for size in "width = 100000, height = 100000" "width = 2147483647, height = 1"; do
+  sql -c "UPDATE frames SET $size WHERE id = 1"
+  "$oneLine" 3 "frame 1 is inconsistent: frames.width x frames.height = [0-9]+ x [0-9]+ is more than the 268435456 pixels \(2\^28\)" \
+    -- "$asrt" show 1 --png edited.png
+  "$oneLine" 3 "frame 1 is inconsistent: frames.width x frames.height" \
+    -- "$asrt" interpolate 1 2 -q -o edited/
+done
+sql -c "UPDATE frames SET width = 8, height = 8 WHERE id = 1"
+"$check" '!edited.png'
+"$expect" 0 "wrote edited.png" -- "$asrt" show 1 --png edited.png
 
 step "a role without CREATEROLE is told what to do, and doing it is enough"
 sql -c "CREATE ROLE asrt_plain LOGIN" -c "CREATE DATABASE plain OWNER asrt_plain"
