@@ -4,6 +4,7 @@
 #include "RayStore.h"
 
 #include "PgSession.h"
+#include "RayPredicate.h"
 #include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
@@ -924,6 +925,8 @@ struct PredicateLocksRelease
 
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
 {
+  // Checked before anything reaches the server: only what the grammar allows is sent.
+  const std::string predicateSql = predicate.empty() ? predicate : rayPredicateSql(predicate);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   const PredicateLocksRelease release{ conn, !predicate.empty() };
@@ -943,8 +946,9 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
         storage::requireReadMemory(id, rayCount, this->MemoryLimit);
       }
       std::vector<RayRecord> records =
-        predicate.empty() ? this->P->readAllRays(id, rayCount)
-                          : readSelectedRays(conn, id, rayCount, predicate, this->PredicateTimeout);
+        predicate.empty()
+          ? this->P->readAllRays(id, rayCount)
+          : readSelectedRays(conn, id, rayCount, predicateSql, this->PredicateTimeout);
       pg::exec(conn, "ROLLBACK", "ending the read failed");
       return records;
     });
