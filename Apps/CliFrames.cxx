@@ -37,11 +37,17 @@ database through vtkGeodesicPostgreSQLReader and writes it:
   --png FILE       the picture, shaded again from the stored rays
   --vti FILE       the frame as VTK image data
   --vtp FILE       the hit points with every ray's record
-  --where SQL      read only the rays matching an SQL condition over the columns of the
-                   view rays_v, e.g. "object_id = 2 AND image_order = 1" (the other pixels
-                   stay black); the condition runs in a read-only transaction, with the
-                   rights of the role asrt_predicate alone: it may read the views rays_v
-                   and path_points_v, and nothing else (no table, file or other session)
+  --where SQL      read only the rays matching a condition over the columns of the view
+                   rays_v, e.g. "object_id = 2 AND image_order = 1" (the other pixels stay
+                   black). It may use the columns, numbers, 'strings', TRUE, FALSE, NULL,
+                   + - * / % ^, = <> != < <= > >=, AND, OR, NOT, parentheses, IS [NOT]
+                   NULL, [NOT] BETWEEN, [NOT] IN (a list of constants) and the functions
+                   abs, sign, sqrt, cbrt, exp, ln, log, log10, power, mod, floor, ceil,
+                   ceiling, round, trunc, pi, degrees, radians, sin, cos, tan, asin, acos,
+                   atan, atan2, sinh, cosh, tanh, greatest, least; anything else (other
+                   names, SELECT, casts, comments, ';') is refused before it reaches the
+                   server. It runs in a read-only transaction, as the role asrt_predicate,
+                   which may read the rays and nothing else
   --scene          print the frame's scene as JSON (what re-traces it exactly)
 )";
 

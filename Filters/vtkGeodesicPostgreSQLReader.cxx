@@ -19,6 +19,32 @@
 
 vtkStandardNewMacro(vtkGeodesicPostgreSQLReader);
 
+namespace
+{
+/// Bytes a pixel of the image takes (RGB colours, object id, image order, path length,
+/// termination, rays a pixel), and a ray once read (its record, then its hit point with every
+/// field as point data and its vertex), rounded up.
+constexpr double kImageBytesPerPixel = 28.0;
+constexpr double kBytesPerRay = sizeof(asrt::RayRecord) + 280.0;
+
+/// Refuses a frame whose outputs, sized from its row, would need more than `limit` bytes (0: the
+/// store's default limit).
+void requireMemory(const asrt::FrameInfo& f, double limit)
+{
+  const double bytes = static_cast<double>(f.key.width) * f.key.height * kImageBytesPerPixel +
+                       static_cast<double>(f.rayCount) * kBytesPerRay;
+  const double allowed = limit > 0.0 ? limit : asrt::defaultMemoryLimit();
+  if (bytes > allowed)
+  {
+    std::ostringstream os;
+    os << "frame " << f.id << " (" << f.key.width << " x " << f.key.height << " pixels, "
+       << f.rayCount << " rays) needs about " << bytes / 1e9 << " GB to read, more than the "
+       << allowed / 1e9 << " GB allowed";
+    throw asrt::InvalidParameter(os.str());
+  }
+}
+}
+
 vtkGeodesicPostgreSQLReader::vtkGeodesicPostgreSQLReader()
 {
   this->SetNumberOfInputPorts(0);
@@ -89,6 +115,9 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
         throw asrt::InvalidParameter(os.str());
       }
     }
+    // The extents below, and RequestData's arrays, are sized from the frame's row.
+    asrt::checkFrameSize(*chosen);
+    requireMemory(*chosen, this->MemoryLimit);
     this->ResolvedFrame = static_cast<vtkIdType>(chosen->id);
     this->Width = chosen->key.width;
     this->Height = chosen->key.height;
@@ -120,6 +149,7 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    store.setMemoryLimit(this->MemoryLimit);
     const std::vector<asrt::RayRecord> records =
       store.readFrame(this->ResolvedFrame, this->Predicate ? this->Predicate : "");
     this->UpdateProgress(0.7);
@@ -160,6 +190,7 @@ void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ConnectionString: "
      << (this->ConnectionString && *this->ConnectionString ? "(set)" : "(default)") << "\n";
   os << indent << "FrameId: " << this->FrameId << "\n";
+  os << indent << "MemoryLimit: " << this->MemoryLimit << "\n";
   os << indent << "Predicate: " << (this->Predicate ? this->Predicate : "") << "\n";
   os << indent << "Frames listed: " << this->FrameIds.size() << "\n";
 }

@@ -7,10 +7,12 @@
  * port 0 the image, shaded again from the stored colours (with "RaysPerPixel" among its arrays),
  * port 1 the hit points with every record field, bit-exact for doubles, and the frame's scene as
  * field data, port 2 the polylines stored with the frame (empty if none), bit-exact. An optional
- * SQL Predicate over the columns of the view rays_v (e.g. "object_id = 2 AND image_order = 1")
- * selects a subset of rays, evaluated by the server in a read-only transaction with the rights of
- * the role asrt_predicate alone (it reads the rays views and nothing else:
- * asrt::RayStore::readFrame); port 2 then holds the polylines of the selected rays' pixels only.
+ * Predicate over the columns of the view rays_v (e.g. "object_id = 2 AND image_order = 1")
+ * selects a subset of rays: an expression of the grammar in RayPredicate.h (columns, constants,
+ * arithmetic, comparisons, AND/OR/NOT and a few math functions; anything else is refused before
+ * it reaches the server), evaluated by the server in a read-only transaction with the rights of
+ * the role asrt_predicate alone (asrt::RayStore::readFrame); port 2 then holds the polylines of
+ * the selected rays' pixels only.
  * Connection as for vtkGeodesicPostgreSQLWriter; a database without an ASRT schema is an error
  * (the reader creates none), an older schema is upgraded.
  */
@@ -46,9 +48,19 @@ public:
   ///@}
 
   ///@{
-  /// SQL boolean expression over rays_v selecting the rays to read; empty reads them all.
+  /// Boolean expression over rays_v selecting the rays to read (asrt::rayPredicateSql's
+  /// grammar); empty reads them all.
   vtkSetStringMacro(Predicate);
   vtkGetStringMacro(Predicate);
+  ///@}
+
+  ///@{
+  /// Memory the frame's outputs may use, in bytes; 0 (default) allows 80 % of this machine's
+  /// memory, as vtkGeodesicSource does. A stored frame whose size (as its row in frames says)
+  /// would need more, or that asrt::checkFrameSize refuses, is an error before anything is
+  /// allocated.
+  vtkSetMacro(MemoryLimit, double);
+  vtkGetMacro(MemoryLimit, double);
   ///@}
 
   /// The frames listed by the last RequestInformation (call UpdateInformation()).
@@ -72,6 +84,7 @@ protected:
   vtkIdType FrameId = -1;
   std::vector<vtkIdType> FrameIds;
   std::vector<std::string> FrameDescriptions;
+  double MemoryLimit = 0.0;
   vtkIdType ResolvedFrame = -1;
   int Width = 0, Height = 0;
 

@@ -4,6 +4,7 @@
 #include "RayStore.h"
 
 #include "PgSession.h"
+#include "RayPredicate.h"
 #include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
@@ -924,6 +925,8 @@ struct PredicateLocksRelease
 
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
 {
+  // Checked before anything reaches the server: only what the grammar allows is sent.
+  const std::string predicateSql = predicate.empty() ? predicate : rayPredicateSql(predicate);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   const PredicateLocksRelease release{ conn, !predicate.empty() };
@@ -933,12 +936,19 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
     conn, pg::ReadBegin,
     [&]
     {
-      pg::Result r =
-        storage::completeFrameColumn(conn, id, "ray_count", "reading the frame failed");
-      const std::int64_t rayCount = pg::getI64(r.get(), 0, 0);
+      pg::Result r = storage::completeFrameColumn(conn, id, "width, height, ray_count",
+                                                  "reading the frame failed");
+      const std::int64_t rayCount = pg::getI64(r.get(), 0, 2);
+      // The records are allocated from these numbers: a row edited by hand must not decide that.
+      checkFrameSize(id, pg::getI32(r.get(), 0, 0), pg::getI32(r.get(), 0, 1), rayCount);
+      if (predicate.empty())
+      {
+        storage::requireReadMemory(id, rayCount, this->MemoryLimit);
+      }
       std::vector<RayRecord> records =
-        predicate.empty() ? this->P->readAllRays(id, rayCount)
-                          : readSelectedRays(conn, id, rayCount, predicate, this->PredicateTimeout);
+        predicate.empty()
+          ? this->P->readAllRays(id, rayCount)
+          : readSelectedRays(conn, id, rayCount, predicateSql, this->PredicateTimeout);
       pg::exec(conn, "ROLLBACK", "ending the read failed");
       return records;
     });

@@ -23,7 +23,11 @@
 // SECURITY DEFINER function, asrt_selected_rays, that evaluates the predicate as dynamic SQL:
 // inside such a function PostgreSQL refuses to change "role" or "session_authorization", so a
 // predicate cannot take back the caller's rights. Roles belong to the whole server: every ASRT
-// database of a server shares this one.
+// database of a server shares this one. No role can be kept from the system catalogs and
+// information functions, though, so a predicate is also held to a grammar of its own
+// (RayPredicate.h: the ray's columns, constants, arithmetic, comparisons and pure math
+// functions), checked by readFrame before anything is sent and, token by token, by the function
+// again (schema version 6).
 //
 // Tiled frames: several processes (ranks) write the tiles of one frame concurrently,
 // each tile in a transaction of its own. The frame row exists, committed, from beginTiledFrame()
@@ -113,6 +117,16 @@ struct FrameInfo
   std::int64_t pathCount = 0; ///< polylines stored with it (RayPath)
 };
 
+/// Refuses, with a StoreError naming the frame and the field, a frame row from which a read
+/// cannot size its buffers (a row edited by hand, or a damaged database): frames.width or
+/// frames.height below 1, more than kMaxFramePixels pixels in all (the tracer's own limit), or
+/// frames.ray_count outside [0, kMaxFramePixels] (the most rays a frame may trace).
+ASRTSTORE_EXPORT void checkFrameSize(std::int64_t id, int width, int height, std::int64_t rayCount);
+inline void checkFrameSize(const FrameInfo& f)
+{
+  checkFrameSize(f.id, f.key.width, f.key.height, f.rayCount);
+}
+
 /// How writeFrame() stores a frame, besides its scene, label and records.
 struct FrameWriteOptions
 {
@@ -166,7 +180,7 @@ class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 5;
+  static constexpr int kSchemaVersion = 6;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
   /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5).
@@ -272,16 +286,22 @@ public:
   /// Throws StoreError if there is no complete frame `id`.
   FrameInfo frameInfo(std::int64_t id);
   /// The records of frame `id` in the order written (a tiled frame's tiles in tile order),
-  /// bit-exact. `predicate`, if not empty, is an
-  /// SQL boolean expression over the columns of the view rays_v (e.g. "object_id = 2 AND
-  /// image_order = 1"). It is the one piece of caller text that becomes SQL, deliberately: it is
-  /// evaluated on the server as the role kPredicateRole (which reads the rays views and nothing
-  /// else), in a READ ONLY transaction that is rolled back, with predicateTimeout as
-  /// statement_timeout, restricted to the frame's rays, so it can select but not write; only the
-  /// selected records are sent back. A predicate that fails (a syntax error, a refused function)
-  /// throws StoreError "the ray predicate failed: " with the first line of the server's message,
-  /// cut short. Refused (StoreError, before the predicate runs) when the role is not set up
-  /// safely: missing, or granted more than the views (migrate() sets up again what it can).
+  /// bit-exact. `predicate`, if not empty, is a boolean expression over the columns of the view
+  /// rays_v (e.g. "object_id = 2 AND image_order = 1") in the grammar of RayPredicate.h. It is
+  /// the one piece of caller text that becomes SQL, deliberately: anything outside the grammar
+  /// (a subquery, another name or function, a cast, a comment, ...) throws StoreError "the ray
+  /// predicate was refused: " before anything is sent; what the grammar allows is sent token by
+  /// token, checked again by the server's function, and evaluated there as the role
+  /// kPredicateRole (which reads the rays views and nothing else), in a READ ONLY transaction
+  /// that is rolled back, with predicateTimeout as statement_timeout, restricted to the frame's
+  /// rays; only the selected records are sent back. A predicate that fails on the server (a
+  /// division by zero, a string that is no number) throws StoreError "the ray predicate failed: "
+  /// with the first line of the server's message, cut short. Refused (StoreError, before the
+  /// predicate runs) when the role or its function is not set up safely: missing, granted more
+  /// than the views, or a function that does not check the tokens (migrate() sets up again what
+  /// it can).
+  /// A frame whose row fails checkFrameSize(), or whose whole read would take more than the
+  /// memory limit (setMemoryLimit), is refused (StoreError) before anything is allocated.
   std::vector<RayRecord> readFrame(std::int64_t id, const std::string& predicate = std::string());
   /// The paths stored with frame `id`, in the order written, bit-exact (empty if none).
   std::vector<RayPath> readPaths(std::int64_t id);
@@ -296,6 +316,10 @@ public:
   std::optional<std::int64_t> findFrame(const SceneDescription& scene);
 
   void setPredicateTimeout(std::chrono::milliseconds t) { this->PredicateTimeout = t; }
+  /// The bytes that readFrame() may allocate for the records of a whole frame; 0 (default):
+  /// defaultMemoryLimit(). A frame that would need more is refused (StoreError) before anything
+  /// is allocated.
+  void setMemoryLimit(double bytes) { this->MemoryLimit = bytes; }
   /// The server process of this connection (for tests that break it).
   int backendPid() const;
 
@@ -303,6 +327,7 @@ private:
   struct Impl;
   Impl* P;
   std::chrono::milliseconds PredicateTimeout{ 60000 };
+  double MemoryLimit = 0;
 };
 }
 

@@ -52,4 +52,10 @@ std::vector<RayRecord> allocateRecords(std::size_t count, int threads)
   records.resize(count);
   return records;
 }
+
+double defaultMemoryLimit()
+{
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+  return 0.8 * (pages > 0 && size > 0 ? static_cast<double>(pages) * size : 8e9);
+}
 }

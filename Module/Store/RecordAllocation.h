@@ -16,6 +16,11 @@ namespace asrt
 /// (MADV_POPULATE_WRITE, Linux 5.14) shares it out between threads; on other kernels the records
 /// are simply constructed. RayStore::readFrame() returns its records in such a vector.
 ASRTSTORE_EXPORT std::vector<RayRecord> allocateRecords(std::size_t count, int threads = 0);
+
+/// The bytes a read may allocate when its caller sets no limit: 80 % of this machine's physical
+/// memory (of 8 GB when the system does not say), as vtkGeodesicSource allows a trace. Beyond
+/// it the kernel would rather kill the process than fail the allocation.
+ASRTSTORE_EXPORT double defaultMemoryLimit();
 }
 
 #endif

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <exception>
 #include <set>
 #include <utility>
@@ -354,5 +355,49 @@ std::vector<RayPath> readPathRows(PGconn* conn, std::int64_t id)
     });
   return paths;
 }
+
+void requireReadMemory(std::int64_t id, std::int64_t rayCount, double limit)
+{
+  const double bytes = static_cast<double>(rayCount) * sizeof(RayRecord);
+  const double allowed = limit > 0 ? limit : defaultMemoryLimit();
+  if (bytes > allowed)
+  {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "reading frame %lld needs %.3g GB for its %lld rays (frames.ray_count), more "
+                  "than the %.3g GB allowed",
+                  static_cast<long long>(id), bytes / 1e9, static_cast<long long>(rayCount),
+                  allowed / 1e9);
+    throw StoreError(text);
+  }
+}
+}
+
+void checkFrameSize(std::int64_t id, int width, int height, std::int64_t rayCount)
+{
+  const std::string frame = "frame " + std::to_string(id) + " is inconsistent: ";
+  if (width < 1 || height < 1)
+  {
+    throw StoreError(frame +
+                     (width < 1 ? "frames.width = " + std::to_string(width)
+                                : "frames.height = " + std::to_string(height)) +
+                     " is no size (at least 1)");
+  }
+  const long long pixels = static_cast<long long>(width) * height;
+  const std::string size = std::to_string(width) + " x " + std::to_string(height);
+  if (pixels > kMaxFramePixels)
+  {
+    throw StoreError(frame + "frames.width x frames.height = " + size + " is more than the " +
+                     std::to_string(kMaxFramePixels) + " pixels (2^28) a frame may have");
+  }
+  // Not tied to the pixels: the store keeps whatever records it is given (a subset of the
+  // pixels, or synthetic rays), but never more than a frame may trace.
+  if (rayCount < 0 || rayCount > kMaxFramePixels)
+  {
+    throw StoreError(frame + "frames.ray_count = " + std::to_string(rayCount) +
+                     (rayCount < 0 ? " is negative"
+                                   : " is more than the " + std::to_string(kMaxFramePixels) +
+                                       " rays (2^28) a frame may trace"));
+  }
 }
 }

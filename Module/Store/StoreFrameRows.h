@@ -88,6 +88,10 @@ std::vector<FrameInfo> selectFrames(PGconn* conn, const pg::Params& params,
 pg::Result completeFrameColumn(PGconn* conn, std::int64_t id, const std::string& column,
                                const std::string& what);
 
+/// Refuses (StoreError naming the frame and its ray_count) a read of all `rayCount` records of
+/// frame `id` that would allocate more than `limit` bytes (0: defaultMemoryLimit()).
+void requireReadMemory(std::int64_t id, std::int64_t rayCount, double limit);
+
 /// Refuses paths that the frame cannot hold: a pixel outside it, two paths of one pixel, more
 /// points than a bytea holds.
 void checkPaths(const SceneDescription& scene, const std::vector<RayPath>& paths);

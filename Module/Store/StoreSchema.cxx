@@ -113,20 +113,26 @@ struct RoleProblem
   bool fixable;
 };
 
-std::optional<RoleProblem> findRoleProblem(PGconn* conn)
+/// At schema `version` (4 or later).
+std::optional<RoleProblem> findRoleProblem(PGconn* conn, int version)
 {
-  pg::Result r = pg::exec(
-    conn,
-    "SELECT r.oid IS NOT NULL, concat_ws(', ', CASE WHEN r.rolsuper THEN 'SUPERUSER' END, "
-    "CASE WHEN r.rolcreaterole THEN 'CREATEROLE' END, CASE WHEN r.rolcreatedb THEN 'CREATEDB' "
-    "END, CASE WHEN r.rolreplication THEN 'REPLICATION' END, CASE WHEN r.rolbypassrls THEN "
-    "'BYPASSRLS' END), coalesce((SELECT string_agg(m.roleid::regrole::text, ', ' ORDER BY "
-    "m.roleid::regrole::text) FROM pg_auth_members m WHERE m.member = r.oid), ''), p.oid IS NOT "
-    "NULL, coalesce(o.rolname::text, ''), coalesce(p.prosecdef, false) FROM (SELECT "
-    "to_regprocedure('asrt_selected_rays(bigint,text)') AS f) x LEFT JOIN pg_proc p ON p.oid = "
-    "x.f LEFT JOIN pg_roles o ON o.oid = p.proowner LEFT JOIN pg_roles r ON r.rolname = "
-    "'asrt_predicate'",
-    "checking the role that evaluates predicates failed");
+  const bool checksTokens = version >= 6;
+  pg::Result r =
+    pg::Params()
+      .text(checksTokens ? SelectedRaysBodyV6 : "")
+      .exec(
+        conn,
+        "SELECT r.oid IS NOT NULL, concat_ws(', ', CASE WHEN r.rolsuper THEN 'SUPERUSER' END, "
+        "CASE WHEN r.rolcreaterole THEN 'CREATEROLE' END, CASE WHEN r.rolcreatedb THEN 'CREATEDB' "
+        "END, CASE WHEN r.rolreplication THEN 'REPLICATION' END, CASE WHEN r.rolbypassrls THEN "
+        "'BYPASSRLS' END), coalesce((SELECT string_agg(m.roleid::regrole::text, ', ' ORDER BY "
+        "m.roleid::regrole::text) FROM pg_auth_members m WHERE m.member = r.oid), ''), "
+        "p.oid IS NOT NULL, coalesce(o.rolname::text, ''), coalesce(p.prosecdef, false), "
+        "coalesce(p.prosrc = $1, false) FROM (SELECT "
+        "to_regprocedure('asrt_selected_rays(bigint,text)') AS f) x LEFT JOIN pg_proc p ON p.oid = "
+        "x.f LEFT JOIN pg_roles o ON o.oid = p.proowner LEFT JOIN pg_roles r ON r.rolname = "
+        "'asrt_predicate'",
+        "checking the role that evaluates predicates failed");
   const std::string role =
     std::string("the role ") + PredicateRoleV4 + ", which evaluates ray predicates,";
   const std::string redo = " (migrating the database sets it up again: asrt db init)";
@@ -156,6 +162,11 @@ std::optional<RoleProblem> findRoleProblem(PGconn* conn)
   if (owner != PredicateRoleV4 || !pg::getBool(r.get(), 0, 5))
   {
     return RoleProblem{ function + " would run as " + owner + ", not as " + PredicateRoleV4 + redo,
+                        true };
+  }
+  if (checksTokens && !pg::getBool(r.get(), 0, 6))
+  {
+    return RoleProblem{ function + " is not the one that checks the predicate's tokens" + redo,
                         true };
   }
   return std::nullopt;
@@ -190,8 +201,9 @@ void runRoleStatement(PGconn* conn, const std::string& sql, const std::string& w
 
 /// Creates the role that evaluates predicates if it is missing, lets the migrating role act as it,
 /// refuses a role that may do more than read the rays, then gives it the views and the function
-/// (SchemaV4). Idempotent: migration 4, and the repair of what something undid since.
-void setUpPredicateRole(PGconn* conn, const std::string& what)
+/// of schema `version` (SchemaV4, then SchemaV6's from version 6 on). Idempotent: migrations 4
+/// and 6, and the repair of what something undid since.
+void setUpPredicateRole(PGconn* conn, const std::string& what, int version)
 {
   pg::Result me = pg::exec(conn,
                            "SELECT current_user::text, coalesce(current_schema()::text, ''), "
@@ -228,17 +240,20 @@ void setUpPredicateRole(PGconn* conn, const std::string& what)
     runRoleStatement(conn, std::string("GRANT ") + PredicateRoleV4 + " TO " + quotedUser, what,
                      refused);
   }
-  if (const std::optional<RoleProblem> problem = findRoleProblem(conn))
+  if (const std::optional<RoleProblem> problem = findRoleProblem(conn, version))
   {
     if (!problem->fixable)
     {
       throw StoreError(what + ": " + problem->text);
     }
   }
-  pg::execScript(conn,
-                 filled(SchemaV4, { { "{schema}", pg::quoteIdentifier(conn, schema, what) },
-                                    { "{user}", quotedUser } }),
+  const std::string quotedSchema = pg::quoteIdentifier(conn, schema, what);
+  pg::execScript(conn, filled(SchemaV4, { { "{schema}", quotedSchema }, { "{user}", quotedUser } }),
                  what);
+  if (version >= 6)
+  {
+    pg::execScript(conn, filled(SchemaV6, { { "{schema}", quotedSchema } }), what);
+  }
 }
 
 /// Migration `version` takes version − 1 to `version`, inside migrateSchema()'s transaction.
@@ -257,9 +272,9 @@ void runMigration(PGconn* conn, int version)
   {
     migrateToVersion3(conn, what);
   }
-  else if (version == 4)
+  else if (version == 4 || version == 6)
   {
-    setUpPredicateRole(conn, what);
+    setUpPredicateRole(conn, what, version);
   }
   else
   {
@@ -324,7 +339,7 @@ void requireCurrentSchema(PGconn* conn)
 
 std::optional<std::string> predicateRoleProblem(PGconn* conn)
 {
-  const std::optional<RoleProblem> problem = findRoleProblem(conn);
+  const std::optional<RoleProblem> problem = findRoleProblem(conn, RayStore::kSchemaVersion);
   return problem ? std::optional<std::string>(problem->text) : std::nullopt;
 }
 
@@ -361,14 +376,14 @@ void migrateSchema(PGconn* conn, int targetVersion, bool createSchema)
       // again; a role granted more than the views is the administrator's to put right, and
       // until then readFrame() refuses predicates while everything else goes on.
       const std::optional<RoleProblem> problem =
-        targetVersion >= 4 ? findRoleProblem(conn) : std::nullopt;
+        targetVersion >= 4 ? findRoleProblem(conn, targetVersion) : std::nullopt;
       if (problem && problem->fixable)
       {
         const std::string what = "setting up the role that evaluates predicates failed";
-        setUpPredicateRole(conn, what);
-        if (const std::optional<std::string> still = predicateRoleProblem(conn))
+        setUpPredicateRole(conn, what, targetVersion);
+        if (const std::optional<RoleProblem> still = findRoleProblem(conn, targetVersion))
         {
-          throw StoreError(what + ": " + *still);
+          throw StoreError(what + ": " + still->text);
         }
       }
       if (v != targetVersion)

@@ -43,9 +43,10 @@ void requireCurrentSchema(PGconn* conn);
 /// granted more than the views is left to the administrator.
 void migrateSchema(PGconn* conn, int targetVersion, bool createSchema = true);
 
-/// What keeps predicates from being evaluated with the rights of the role asrt_predicate alone
-/// (schema version 4 and later): the role or the function asrt_selected_rays missing, the
-/// function running as another role, or the role holding more than its grants on the views (an
+/// What keeps predicates from being evaluated with the rights of the role asrt_predicate alone,
+/// their tokens checked by the server (the current schema version): the role or the function
+/// asrt_selected_rays missing, the function running as another role or not the one of schema
+/// version 6 (which checks the tokens), or the role holding more than its grants on the views (an
 /// attribute such as SUPERUSER, or membership in any role). Empty when all is well. One catalog
 /// query, cheap enough to run before every predicate.
 std::optional<std::string> predicateRoleProblem(PGconn* conn);

@@ -464,5 +464,55 @@ CROSS JOIN LATERAL generate_series(0, b.n - 1) AS k;
 // textures; what every frame before version 5 was traced with).
 const char* const RenderingSectionV5 =
   R"JSON({"antialias":"none","colorThreshold":1.0,"maxRaysPerPixel":1,"supersample":1})JSON";
+
+// Version 6: asrt_selected_rays checks the predicate's tokens before it runs it, a second check
+// behind the client's parser (RayPredicate.h), since PostgreSQL lets every role read its catalogs
+// and call its information functions. Every token must be a string constant, a number, one of the
+// names below (the columns of rays_v, the grammar's keywords, the pure functions a predicate may
+// call) or one of the operators below; the client sends them separated by spaces. Comments are
+// refused outside strings, backslashes and the other characters everywhere, so that this
+// tokenizer and PostgreSQL's lexer split the text alike (no escapes, no dollar quotes, no quoted
+// identifiers). The regular expressions hold no backslash, so that they read the same whatever
+// standard_conforming_strings says. The body is also what predicateRoleProblem() compares the
+// installed function with.
+const char* const SelectedRaysBodyV6 = R"SQL(
+DECLARE
+  token text;
+BEGIN
+  IF strpos(predicate, chr(92)) > 0 OR regexp_replace(predicate, '''[^'']*(?:''''[^'']*)*''', '''''', 'g') ~ '--|/[*]' THEN
+    RAISE EXCEPTION 'the predicate may not hold a backslash or a comment' USING ERRCODE = '42501';
+  END IF;
+  FOR token IN SELECT m[1] FROM regexp_matches(predicate, '(''[^'']*(?:''''[^'']*)*''|(?:[0-9]+(?:[.][0-9]*)?|[.][0-9]+)(?:[eE][-+]?[0-9]+)?|[A-Za-z_][A-Za-z0-9_$]*|<=|>=|<>|!=|[^ ])', 'g') AS m
+  LOOP
+    IF NOT (token ~ '^''' OR token ~ '^(?:[0-9]+(?:[.][0-9]*)?|[.][0-9]+)(?:[eE][-+]?[0-9]+)?$'
+        OR token = ANY (ARRAY['(', ')', ',', '+', '-', '*', '/', '%', '^', '=', '<', '>', '<=', '>=', '<>', '!='])
+        OR lower(token) = ANY (ARRAY[
+          'frame_id', 'tile', 'block', 'ray', 'tile_ray', 'i', 'j', 'origin_x', 'origin_y', 'origin_z',
+          'dir_x', 'dir_y', 'dir_z', 'p_t', 'p_x', 'p_y', 'p_z', 'termination', 'object_id', 'hit_x',
+          'hit_y', 'hit_z', 'normal_x', 'normal_y', 'normal_z', 'u', 'v', 'chord_error', 'path_length',
+          'winding', 'image_order', 'steps', 'max_abs_h', 'color_r', 'color_g', 'color_b',
+          'rays_per_pixel', 'dudi', 'dudj', 'dvdi', 'dvdj', 'record_bytes',
+          'and', 'or', 'not', 'is', 'null', 'true', 'false', 'between', 'in',
+          'abs', 'acos', 'asin', 'atan', 'atan2', 'cbrt', 'ceil', 'ceiling', 'cos', 'cosh', 'degrees',
+          'exp', 'floor', 'greatest', 'least', 'ln', 'log', 'log10', 'mod', 'pi', 'power', 'radians',
+          'round', 'sign', 'sin', 'sinh', 'sqrt', 'tan', 'tanh', 'trunc']))
+    THEN
+      RAISE EXCEPTION 'the predicate may not use %', left(token, 40) USING ERRCODE = '42501';
+    END IF;
+  END LOOP;
+  RETURN QUERY EXECUTE 'SELECT r.ray::bigint, r.record_bytes FROM (SELECT * FROM rays_v WHERE frame_id = $1) r WHERE (' || predicate || E'\n)' USING frame;
+END
+)SQL";
+
+// Version 6's function, replacing version 4's in place (its owner, asrt_predicate, and its grants
+// stay), {schema} being the store's schema (a quoted identifier). The migrating role must act as
+// asrt_predicate to replace it: setUpPredicateRole() sees to that first.
+const std::string SchemaV6Text = std::string(R"SQL(
+CREATE OR REPLACE FUNCTION asrt_selected_rays(frame bigint, predicate text)
+  RETURNS TABLE (ray bigint, record_bytes bytea)
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = {schema}, pg_temp
+AS $function$)SQL") + SelectedRaysBodyV6 +
+                                 "$function$;\n";
+const char* const SchemaV6 = SchemaV6Text.c_str();
 }
 }

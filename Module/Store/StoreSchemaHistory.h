@@ -48,6 +48,12 @@ extern const char* const SchemaV5Finish;
 /// Migration 5's texts: the "rendering" section (JSON) that a frame's or scene's text without one
 /// gets, that of singleRayRendering() as effectiveSceneText() writes it.
 extern const char* const RenderingSectionV5;
+/// Migration 6 (version 5 to 6), once the migrating role may act as the predicate role: the
+/// function that evaluates predicates, replaced by one that checks the predicate's tokens first.
+/// A script with {schema}; also what repairs version 4's function at version 6 and later.
+extern const char* const SchemaV6;
+/// The body of version 6's function, as pg_proc.prosrc holds it.
+extern const char* const SelectedRaysBodyV6;
 }
 }
 

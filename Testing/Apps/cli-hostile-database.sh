@@ -2,8 +2,9 @@
 # asrt against a database used in the ways that must not hurt it, on a throwaway server that
 # asrtWithThrowawayPostgres started and named in the PG* variables (a superuser, as on the private
 # server): reading commands pointed at a database that is not ASRT's, a frame already stored
-# (refused before its trace), the hostile --where predicates of Testing/Data/hostile, a role
-# without CREATEROLE, and two --replace stores of one frame at once.
+# (refused before its trace), the hostile --where predicates of Testing/Data/hostile, a frame row
+# edited to an impossible size, a role without CREATEROLE, and two --replace stores of one frame
+# at once.
 # Usage: cli-hostile-database.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR HOSTILE_DIR
 set -euo pipefail
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"; hostile="$6"
@@ -24,9 +25,9 @@ sql -d unrelated -c "CREATE TABLE someone_elses (x int)"
 test "$(sql -d unrelated -c "SELECT string_agg(relname, ',') FROM pg_class
   WHERE relnamespace = 'public'::regnamespace")" = someone_elses
 step "asrt db init makes the schema, once"
-"$expect" 0 "schema version 5 created; predicates run as the role asrt_predicate" -- \
+"$expect" 0 "schema version 6 created; predicates run as the role asrt_predicate" -- \
   "$asrt" db init --db "dbname=unrelated"
-"$expect" 0 "schema version 5 already in place" -- "$asrt" db init --db "dbname=unrelated"
+"$expect" 0 "schema version 6 already in place" -- "$asrt" db init --db "dbname=unrelated"
 "$expect" 0 "no frames stored yet" -- "$asrt" list --db "dbname=unrelated"
 "$expect" 2 "--db goes with init only" -- "$asrt" db status --db "dbname=unrelated"
 
@@ -41,7 +42,7 @@ step "in a series, the frame before the stored one is traced and stored, the sto
 "$check" ramp-000.png=8x8 '!ramp-001.png'
 test "$("$asrt" list | tail -n +2 | wc -l)" -eq 2
 
-step "hostile --where predicates are refused with exit code 3 and harm nothing"
+step "hostile --where predicates are refused with exit code 3, select nothing and harm nothing"
 sql -c "CREATE EXTENSION IF NOT EXISTS dblink"
 # Another session, as a concurrent asrt trace --store would be: it must survive every predicate.
 coproc VICTIM { psql -X -q -At; }
@@ -54,7 +55,7 @@ rm -f /tmp/asrt-hostile-copy-to-program /tmp/asrt-hostile-lo-export
 count=0
 while IFS= read -r predicate; do
   case "$predicate" in '' | '#'*) continue ;; esac
-  if ! "$expect" 3 "the ray predicate failed" -- \
+  if ! "$expect" 3 "the ray predicate was refused" -- \
     "$asrt" show 1 --where "$predicate" --png hostile.png > out.txt; then
     cat out.txt; exit 1
   fi
@@ -63,7 +64,7 @@ while IFS= read -r predicate; do
   test "$(victimPid)" = "$victim"
   count=$((count + 1))
 done < "$hostile/predicates.txt"
-test "$count" -ge 15
+test "$count" -ge 40
 victimProcess=$VICTIM_PID
 echo '\q' >&"${VICTIM[1]}"
 wait "$victimProcess"
@@ -72,9 +73,21 @@ test ! -e /tmp/asrt-hostile-copy-to-program
 test ! -e /tmp/asrt-hostile-lo-export
 test "$(sql -c "SELECT count(*) FROM frames")" = 2
 step "ordinary predicates still select rays"
-"$expect" 0 "wrote picked.png" -- "$asrt" show 1 --png picked.png \
-  --where "i < 4 AND current_user = 'asrt_predicate'"
+"$expect" 0 "wrote picked.png" -- "$asrt" show 1 --png picked.png --where "i < 4 AND abs(j) >= 0"
 "$check" '~picked.png=8x8'
+
+step "a frame row edited to a size no read can allocate is one line and exit code 3"
+oneLine="$(dirname "$0")/expect-one-line-error.sh"
+for size in "width = 100000, height = 100000" "width = 2147483647, height = 1"; do
+  sql -c "UPDATE frames SET $size WHERE id = 1"
+  "$oneLine" 3 "frame 1 is inconsistent: frames.width x frames.height = [0-9]+ x [0-9]+ is more than the 268435456 pixels \(2\^28\)" \
+    -- "$asrt" show 1 --png edited.png
+  "$oneLine" 3 "frame 1 is inconsistent: frames.width x frames.height" \
+    -- "$asrt" interpolate 1 2 -q -o edited/
+done
+sql -c "UPDATE frames SET width = 8, height = 8 WHERE id = 1"
+"$check" '!edited.png'
+"$expect" 0 "wrote edited.png" -- "$asrt" show 1 --png edited.png
 
 step "a role without CREATEROLE is told what to do, and doing it is enough"
 sql -c "CREATE ROLE asrt_plain LOGIN" -c "CREATE DATABASE plain OWNER asrt_plain"
@@ -82,7 +95,7 @@ sql -c "CREATE ROLE asrt_plain LOGIN" -c "CREATE DATABASE plain OWNER asrt_plain
   -- "$asrt" db init --db "dbname=plain user=asrt_plain"
 test "$(sql -d plain -c "SELECT count(*) FROM pg_class WHERE relnamespace = 'public'::regnamespace")" = 0
 sql -c "GRANT asrt_predicate TO asrt_plain"
-"$expect" 0 "schema version 5 created" -- "$asrt" db init --db "dbname=plain user=asrt_plain"
+"$expect" 0 "schema version 6 created" -- "$asrt" db init --db "dbname=plain user=asrt_plain"
 
 step "two --replace stores of one frame at once: the one that loses is told what happened"
 # A second session stands in for the winner: it holds frame 1 deleted in an open transaction, the
@@ -123,6 +136,6 @@ trap '"$asrt" db --dir "$private" destroy > /dev/null 2>&1 || true; rm -rf "$pri
   unset PGHOST PGPORT PGDATABASE PGUSER
   export ASRT_DB_DIR="$private"
   "$expect" 0 "no frames stored yet" -- "$asrt" list
-  "$expect" 0 "schema version 5 already in place" -- "$asrt" db init
+  "$expect" 0 "schema version 6 already in place" -- "$asrt" db init
 )
 echo "cli-hostile-database: all steps passed"

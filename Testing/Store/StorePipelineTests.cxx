@@ -516,3 +516,52 @@ TEST(StorePipeline, BadPolylinesAreRefusedBeforeAnythingIsWritten)
     EXPECT_EQ(count(state), before) << c.what;
   }
 }
+
+TEST(StorePipeline, AFrameRowEditedToAnImpossibleSizeIsAnErrorNotAnAllocation)
+{
+  const asrt::SceneDescription d = fig1Description(8, 6);
+  const asrt::FrameTracer tracer(d);
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  asrt::TraceAndStoreOptions options;
+  options.label = "edited size";
+  const std::int64_t id = asrt::traceAndStore(tracer, store, options);
+  asrt::testing::Db db(server().conninfo());
+  const std::string where = " WHERE id = " + std::to_string(id);
+  const std::string frame = "frame " + std::to_string(id) + " is inconsistent: ";
+
+  auto readError = [&](double memoryLimit)
+  {
+    vtkNew<vtkGeodesicPostgreSQLReader> reader;
+    reader->SetConnectionString(server().conninfo().c_str());
+    reader->SetFrameId(id);
+    reader->SetMemoryLimit(memoryLimit);
+    vtkNew<ErrorLog> log;
+    reader->AddObserver(vtkCommand::ErrorEvent, log);
+    reader->Update();
+    if (log->Messages.empty())
+    {
+      EXPECT_EQ(reader->GetImageOutput()->GetNumberOfPoints(), 8 * 6);
+      return std::string("(no error)");
+    }
+    EXPECT_EQ(reader->GetImageOutput()->GetNumberOfPoints(), 0);
+    EXPECT_EQ(reader->GetHitsOutput()->GetNumberOfPoints(), 0);
+    return log->Messages[0];
+  };
+  for (const char* size : { "width = 100000, height = 100000", "width = 2147483647, height = 1" })
+  {
+    db.value(std::string("UPDATE frames SET ") + size + where);
+    const std::string e = readError(0);
+    EXPECT_NE(e.find(frame + "frames.width x frames.height = "), std::string::npos) << size << e;
+  }
+  db.value("UPDATE frames SET width = 8, height = 0" + where);
+  EXPECT_NE(readError(0).find(frame + "frames.height = 0"), std::string::npos);
+
+  // Within the pixel limit, but more than the memory allowed.
+  db.value("UPDATE frames SET width = 8, height = 6" + where);
+  EXPECT_EQ(readError(0), "(no error)");
+  const std::string e = readError(1000);
+  EXPECT_NE(e.find("frame " + std::to_string(id) + " (8 x 6 pixels, 48 rays) needs about"),
+            std::string::npos)
+    << e;
+}

@@ -1,6 +1,7 @@
 // The checks around a frame's identity and a database's schema: readers create no schema
 // (upgrade()), checkFrameIdentity() refuses exactly what writeFrame() refuses, and the loser of
-// two concurrent replacements of one frame is told what happened.
+// two concurrent replacements of one frame is told what happened. Also: a frame row edited to a
+// size no read can allocate is refused, naming the frame and the field.
 #include "RayStore.h"
 #include "SharedServer.h"
 #include "StoreTestSupport.h"
@@ -44,6 +45,17 @@ std::vector<RayRecord> records(std::uint64_t seed)
   for (std::size_t k = 0; k < 30; ++k)
     out.push_back(syntheticRecord(seed, k, 6));
   return out;
+}
+
+/// Every field of every record the same, bit for bit.
+bool sameBits(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
+{
+  if (a.size() != b.size())
+    return false;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    if (recordBits(a[k]) != recordBits(b[k]))
+      return false;
+  return true;
 }
 
 /// The relations of the database's current schema, by name.
@@ -189,4 +201,67 @@ TEST(StoreWrites, TheLoserOfTwoConcurrentReplacementsIsToldWhatHappened)
   EXPECT_EQ(frames[0].label, "first");
   EXPECT_EQ(first.readFrame(frames[0].id).size(), 30u);
   EXPECT_EQ(db.value("SELECT count(*) FROM frames"), "1");
+}
+
+TEST(StoreReaders, AFrameRowEditedToAnImpossibleSizeIsRefusedBeforeAnythingIsAllocated)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  const std::vector<RayRecord> written = records(5);
+  const std::int64_t id = store.writeFrame(scene(1), "edited", written);
+  const std::string frame = "frame " + std::to_string(id) + " is inconsistent: ";
+  Db db(ci);
+  auto edit = [&](const std::string& set)
+  { db.value("UPDATE frames SET " + set + " WHERE id = " + std::to_string(id)); };
+
+  // Sizes as the owner could set them with SQL, and the field each error must name.
+  const std::pair<const char*, const char*> cases[] = {
+    { "width = 100000, height = 100000", "frames.width x frames.height = 100000 x 100000" },
+    { "width = 2147483647, height = 1", "frames.width x frames.height = 2147483647 x 1" },
+    { "width = 16385, height = 16384", "frames.width x frames.height = 16385 x 16384" },
+    { "width = 0", "frames.width = 0" },
+    { "height = -3", "frames.height = -3" },
+  };
+  for (const auto& [set, field] : cases)
+  {
+    edit(set);
+    for (const std::string& predicate : { std::string(), std::string("j = 0") })
+    {
+      const std::string e = errorOf([&] { store.readFrame(id, predicate); });
+      EXPECT_EQ(e.find(frame + field), 0u) << set << ": " << e;
+      EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    }
+    edit("width = 6, height = 5");
+  }
+  // 2^28 pixels is the tracer's own limit, and allowed.
+  edit("width = 16384, height = 16384");
+  EXPECT_TRUE(sameBits(store.readFrame(id), written));
+
+  // More rays than a frame may trace, the tiles edited to agree.
+  const std::string tooMany = std::to_string((1LL << 28) + 1);
+  edit("ray_count = " + tooMany);
+  db.value("UPDATE frame_tiles SET ray_count = " + tooMany +
+           " WHERE frame_id = " + std::to_string(id));
+  const std::string e = errorOf([&] { store.readFrame(id); });
+  EXPECT_EQ(e.find(frame + "frames.ray_count = " + tooMany), 0u) << e;
+  edit("ray_count = -1");
+  EXPECT_EQ(errorOf([&] { store.readFrame(id); }).find(frame + "frames.ray_count = -1"), 0u);
+}
+
+TEST(StoreReaders, AWholeReadBeyondTheMemoryLimitIsRefused)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate();
+  const std::vector<RayRecord> written = records(6);
+  const std::int64_t id = store.writeFrame(scene(1), "memory", written);
+  // The records alone take written.size() * sizeof(RayRecord) bytes.
+  const double need = double(written.size() * sizeof(RayRecord));
+  store.setMemoryLimit(need - 1);
+  const std::string e = errorOf([&] { store.readFrame(id); });
+  EXPECT_EQ(e.find("reading frame " + std::to_string(id) + " needs "), 0u) << e;
+  EXPECT_NE(e.find("(frames.ray_count)"), std::string::npos) << e;
+  store.setMemoryLimit(need);
+  EXPECT_TRUE(sameBits(store.readFrame(id), written));
 }

@@ -408,7 +408,7 @@ TEST(RenderingMigration, Version4FramesKeepTheirRaysAndGetTheRenderingTheyWereTr
   ASSERT_EQ(db.value("SELECT count(*) FROM scenes"), "4");
 
   store.migrate();
-  ASSERT_EQ(store.schemaVersion(), 5);
+  ASSERT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   // The rays: every field as stored, and one ray a pixel.
   using Checked = std::pair<std::int64_t, const Version4Frame*>;
   for (const auto& [id, f] :
@@ -527,7 +527,7 @@ TEST(RenderingMigration, AFrameStoredTwiceIsRefusedLeavingVersion4AsItWas)
   // The user keeps one of them; the migration then goes through.
   db.value("DELETE FROM frames WHERE id = " + std::to_string(ida));
   store.migrate();
-  EXPECT_EQ(store.schemaVersion(), 5);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   EXPECT_EQ(store.findFrame(s), ido);
   EXPECT_EQ(firstDifference(store.readFrame(ido), singleRay(old.tiles[0])), -1);
   EXPECT_EQ(db.value("SELECT count(*) FROM pg_inherits WHERE inhparent = 'ray_blocks'::regclass"),
@@ -572,7 +572,7 @@ TEST(RenderingMigration, AnInterruptedMigrationLeavesVersion4AsItWas)
 
   // Run again, uninterrupted, it goes through.
   store.migrate();
-  EXPECT_EQ(store.schemaVersion(), 5);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   EXPECT_EQ(firstDifference(store.readFrame(id1), singleRay(joined(first.tiles))), -1);
   EXPECT_EQ(firstDifference(store.readFrame(id2), singleRay(second.tiles[0])), -1);
   EXPECT_EQ(store.findFrame(first.scene), id1);
