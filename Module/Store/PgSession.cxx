@@ -2,6 +2,7 @@
 
 #include "StoreRecordCodec.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 
@@ -12,13 +13,119 @@ namespace pg
 const char* const WriteBegin = "BEGIN ISOLATION LEVEL READ COMMITTED";
 const char* const ReadBegin = "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY";
 
-std::string trimmed(std::string s)
+namespace
 {
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
+bool lower(char c)
+{
+  return c >= 'a' && c <= 'z';
+}
+
+bool upper(char c)
+{
+  return c >= 'A' && c <= 'Z';
+}
+
+bool startsWith(const std::string& s, const char* prefix)
+{
+  return s.compare(0, std::strlen(prefix), prefix) == 0;
+}
+
+/// Whether `line` begins with a field label as libpq prints the server's fields: capitals, a colon
+/// and two spaces ("ERROR:  ", "DETAIL:  ", "HINT:  ", "CONTEXT:  ").
+bool labelled(const std::string& line)
+{
+  std::size_t k = 0;
+  while (k < line.size() && upper(line[k]))
   {
-    s.pop_back();
+    ++k;
   }
-  return s;
+  return k > 0 && line.compare(k, 3, ":  ") == 0;
+}
+
+/// Lines that show the store's SQL or the server's source rather than what went wrong: the
+/// statement excerpt ("LINE 1: SELECT ...", a caret line follows), QUERY, CONTEXT, LOCATION.
+bool leftOut(const std::string& line)
+{
+  if (startsWith(line, "LINE "))
+  {
+    const std::size_t colon = line.find(':');
+    return colon != std::string::npos && colon > 5 &&
+           line.find_first_not_of("0123456789", 5) == colon;
+  }
+  return startsWith(line, "QUERY:  ") || startsWith(line, "CONTEXT:  ") ||
+         startsWith(line, "LOCATION:  ") || startsWith(line, "STATEMENT:  ");
+}
+}
+
+std::string oneLine(const std::string& message)
+{
+  std::vector<std::string> pieces;
+  bool leavingOut = false; // inside a field that is left out (its further lines go with it)
+  std::size_t at = 0;
+  while (at < message.size())
+  {
+    std::size_t end = message.find('\n', at);
+    end = end == std::string::npos ? message.size() : end;
+    std::string line = message.substr(at, end - at);
+    at = end + 1;
+    const bool indented = !line.empty() && (line[0] == '\t' || line[0] == ' ');
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos)
+    {
+      continue;
+    }
+    line = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+    if (!indented && leftOut(line))
+    {
+      leavingOut = true;
+      continue;
+    }
+    if (!indented && labelled(line))
+    {
+      leavingOut = false;
+    }
+    else if (leavingOut)
+    {
+      continue;
+    }
+    else if (indented && !pieces.empty())
+    {
+      // libpq's own explanation of the line before ("\tIs the server running ..."), or the rest
+      // of a sentence it wrapped ("\tbefore or while processing the request.").
+      if (lower(line[0]))
+      {
+        pieces.back() += " " + line;
+        continue;
+      }
+      // A sentence of its own after "; ", its capital lowered (not an acronym's: "SSL ...").
+      if (upper(line[0]) && !(line.size() > 1 && upper(line[1])))
+      {
+        line[0] = char(line[0] - 'A' + 'a');
+      }
+    }
+    pieces.push_back(line);
+  }
+  // libpq may say the same twice (a failed send, then the failed read of the same statement).
+  std::vector<std::string> distinct;
+  for (const std::string& piece : pieces)
+  {
+    if (std::find(distinct.begin(), distinct.end(), piece) == distinct.end())
+    {
+      distinct.push_back(piece);
+    }
+  }
+  std::string out;
+  for (std::size_t k = 0; k < distinct.size(); ++k)
+  {
+    std::string piece = distinct[k];
+    if (k + 1 < distinct.size() && piece.size() > 1 && piece.back() == '.' &&
+        piece[piece.size() - 2] != '.')
+    {
+      piece.pop_back(); // the sentence goes on after "; "
+    }
+    out += (k > 0 ? "; " : "") + piece;
+  }
+  return out;
 }
 
 Connection connect(const std::string& conninfo)
@@ -40,12 +147,12 @@ Connection connect(const std::string& conninfo)
   if (!conn || PQstatus(conn.get()) != CONNECTION_OK)
   {
     throw StoreError("cannot connect to PostgreSQL: " +
-                     (conn ? trimmed(PQerrorMessage(conn.get())) : "out of memory"));
+                     (conn ? oneLine(PQerrorMessage(conn.get())) : "out of memory"));
   }
   if (PQsetClientEncoding(conn.get(), "UTF8") != 0)
   {
     throw StoreError("cannot set the client encoding to UTF8: " +
-                     trimmed(PQerrorMessage(conn.get())));
+                     oneLine(PQerrorMessage(conn.get())));
   }
   // The server's notices ("table does not exist, skipping", ...) are not the caller's business;
   // libpq would print them on stderr.
@@ -73,7 +180,7 @@ bool reconnect(PGconn* conn)
     msg = PQerrorMessage(conn);
   }
   const char* state = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : nullptr;
-  throw StoreError(what + ": " + trimmed(msg), state ? state : "");
+  throw StoreError(what + ": " + oneLine(msg), state ? state : "");
 }
 
 void cancelQuery(PGconn* conn)
@@ -230,7 +337,7 @@ std::string quoteIdentifier(PGconn* conn, const std::string& name, const std::st
   char* quoted = PQescapeIdentifier(conn, name.c_str(), name.size());
   if (!quoted)
   {
-    throw StoreError(what + ": " + trimmed(PQerrorMessage(conn)));
+    throw StoreError(what + ": " + oneLine(PQerrorMessage(conn)));
   }
   std::string s = quoted;
   PQfreemem(quoted);

@@ -36,8 +36,14 @@ extern const char* const WriteBegin;
 /// Reads see one snapshot and can change nothing.
 extern const char* const ReadBegin;
 
-/// `s` without its trailing newlines and spaces (libpq's messages end with one).
-std::string trimmed(std::string s);
+/// A message of libpq's (PQerrorMessage, PQresultErrorMessage) as one line, as every message of
+/// the store is: libpq spreads one error over several lines (the server's DETAIL and HINT, an
+/// excerpt of the statement with a caret under the error, a CONTEXT, its own explanations indented
+/// by a tab, a long sentence wrapped). The server's message and its DETAIL and HINT are kept,
+/// joined by "; "; the statement excerpt, QUERY, CONTEXT and LOCATION are left out (the store's
+/// SQL, not the user's); libpq's indented explanations join the line they explain, a wrapped
+/// sentence its beginning.
+std::string oneLine(const std::string& message);
 
 /// A connection set up as every connection of the store is: a connect_timeout of 10 s unless the
 /// conninfo or PGCONNECT_TIMEOUT sets one, UTF8, notices silenced. Throws StoreError with libpq's
@@ -175,7 +181,7 @@ void Params::stream(PGconn* conn, const std::string& sql, const std::string& wha
     else if (st != PGRES_SINGLE_TUPLE && st != PGRES_TUPLES_OK && error.empty())
     {
       const char* s = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
-      error = what + ": " + trimmed(PQresultErrorMessage(raw));
+      error = what + ": " + oneLine(PQresultErrorMessage(raw));
       state = s ? s : "";
     }
   }

@@ -171,7 +171,7 @@ struct RayStore::Impl
       if (!pg::reconnect(this->conn()))
       {
         throw StoreError("lost the connection to PostgreSQL and could not reconnect: " +
-                         pg::trimmed(PQerrorMessage(this->conn())));
+                         pg::oneLine(PQerrorMessage(this->conn())));
       }
     }
   }
