@@ -608,119 +608,6 @@ int RayStore::writeConnections() const
   return this->P->WriteConnections;
 }
 
-namespace
-{
-/// What beginTiledFrame()'s transaction did: the 'writing' frame of this identity, inserted or
-/// joined (none when the row it conflicted with vanished before it could be looked at), and
-/// whether a complete frame was deleted for it.
-struct TiledFrameStart
-{
-  std::optional<std::int64_t> id;
-  bool replaced = false;
-};
-
-TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId,
-                                      const storage::SceneTexts& texts,
-                                      const SceneDescription& scene, const std::string& label,
-                                      int tileCount, bool replace)
-{
-  return pg::transaction(
-    conn, pg::WriteBegin,
-    [&]() -> TiledFrameStart
-    {
-      TiledFrameStart start{ storage::insertFrame(conn, sceneId, texts, scene, label, tileCount,
-                                                  true) };
-      if (!start.id)
-      {
-        const std::optional<storage::FrameOfIdentity> old =
-          storage::findFrameOfIdentity(conn, texts, true);
-        if (!old)
-        {
-          pg::exec(conn, "ROLLBACK", "ending the transaction failed");
-          return start;
-        }
-        if (old->status == "writing")
-        {
-          if (old->tileCount != tileCount)
-          {
-            throw StoreError(
-              "frame " + std::to_string(old->id) + " of this scene is being written as " +
-              std::to_string(old->tileCount) + " tiles, not " + std::to_string(tileCount));
-          }
-          pg::exec(conn, "COMMIT", "committing the frame failed");
-          start.id = old->id;
-          return start;
-        }
-        storage::deleteReplaced(conn, *old, replace);
-        start.replaced = true;
-        // No conflict is possible any more: the old row is deleted and locked by us.
-        start.id = storage::insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
-      }
-      pg::exec(conn, "COMMIT", "committing the frame failed");
-      return start;
-    });
-}
-
-/// The tile count of frame `frameId`, locked FOR KEY SHARE in the caller's transaction, after
-/// checking that `tile` can be written into it. FOR KEY SHARE keeps the frame from being deleted
-/// under the COPY without blocking the other tiles' writers (the foreign keys take the same lock
-/// anyway).
-int lockFrameForTile(PGconn* conn, std::int64_t frameId, int tile, const std::string& which)
-{
-  pg::Result r = pg::Params().i64(frameId).i32(tile).exec(
-    conn,
-    "SELECT f.status, f.tile_count, EXISTS (SELECT 1 FROM frame_tiles t WHERE t.frame_id = "
-    "f.id AND t.tile = $2) FROM frames f WHERE f.id = $1 FOR KEY SHARE OF f",
-    "looking for the frame failed");
-  if (PQntuples(r.get()) == 0)
-  {
-    throw StoreError("writing " + which + " failed: there is no such frame");
-  }
-  const int tileCount = pg::getI32(r.get(), 0, 1);
-  if (pg::getBool(r.get(), 0, 2))
-  {
-    throw StoreError("writing " + which + " failed: the tile is already written");
-  }
-  if (pg::getText(r.get(), 0, 0) != "writing")
-  {
-    throw StoreError("writing " + which + " failed: the frame is complete");
-  }
-  if (tile < 0 || tile >= tileCount)
-  {
-    throw StoreError("writing " + which + " failed: the frame has tiles 0 to " +
-                     std::to_string(tileCount - 1));
-  }
-  return tileCount;
-}
-
-/// Completes frame `frameId` if its tiles are all written. Only now, after the COPY, is the frame
-/// row locked, so tiles are written in parallel and only this short step is serialised. Under the
-/// lock, the count (a fresh snapshot) sees every tile committed before and this one: of two last
-/// tiles committing together, the second to get the lock sees the first's row and completes the
-/// frame. FOR NO KEY UPDATE, not FOR UPDATE, which would conflict with the other writers'
-/// key-share locks and deadlock two of them.
-void completeIfLastTile(PGconn* conn, std::int64_t frameId, int tileCount)
-{
-  pg::Params().i64(frameId).exec(conn, "SELECT 1 FROM frames WHERE id = $1 FOR NO KEY UPDATE",
-                                 "locking the frame failed");
-  pg::Result r = pg::Params().i64(frameId).exec(
-    conn,
-    "SELECT count(*), coalesce(sum(ray_count), 0)::bigint FROM frame_tiles WHERE frame_id = $1",
-    "counting the tiles failed");
-  if (pg::getI64(r.get(), 0, 0) == tileCount)
-  {
-    pg::Params()
-      .i64(frameId)
-      .i64(pg::getI64(r.get(), 0, 1))
-      .exec(conn,
-            "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = "
-            "extract(epoch FROM clock_timestamp() - created_at), completed_at = "
-            "clock_timestamp() WHERE id = $1",
-            "completing the frame failed");
-  }
-}
-}
-
 std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std::string& label,
                                        int tileCount, bool replace)
 {
@@ -741,10 +628,11 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
   for (int attempt = 0; attempt < TiledFrameBeginAttempts; ++attempt)
   {
     const std::int64_t sceneId = storage::sceneRow(conn, texts);
-    TiledFrameStart start;
+    storage::TiledFrameStart start;
     try
     {
-      start = beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace);
+      start =
+        storage::beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace);
     }
     catch (const storage::SceneVanished&)
     {
@@ -784,7 +672,7 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
     conn, pg::WriteBegin,
     [&]
     {
-      const int tileCount = lockFrameForTile(conn, frameId, tile, which);
+      const int tileCount = storage::lockFrameForTile(conn, frameId, tile, which);
       try
       {
         storage::copyTile(conn, frameId, tile, count, next);
@@ -801,7 +689,7 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
         }
         throw;
       }
-      completeIfLastTile(conn, frameId, tileCount);
+      storage::completeIfLastTile(conn, frameId, tileCount);
       pg::exec(conn, "COMMIT", "committing the tile failed");
     });
 }
