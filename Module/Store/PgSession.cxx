@@ -3,6 +3,7 @@
 #include "StoreRecordCodec.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
 
@@ -12,6 +13,7 @@ namespace pg
 {
 const char* const WriteBegin = "BEGIN ISOLATION LEVEL READ COMMITTED";
 const char* const ReadBegin = "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY";
+const char* const LockNotAvailableState = "55P03";
 
 namespace
 {
@@ -172,7 +174,38 @@ bool reconnect(PGconn* conn)
   return true;
 }
 
-[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r)
+std::string relationAtError(const PGresult* r, const std::string& sql)
+{
+  // A lock on a table is taken where the statement names it, and the server's error points there
+  // (a character position, from 1; the store's SQL is ASCII).
+  const char* position = nullptr;
+  std::string text;
+  if (r && (position = PQresultErrorField(r, PG_DIAG_STATEMENT_POSITION)))
+  {
+    text = sql;
+  }
+  else if (r && (position = PQresultErrorField(r, PG_DIAG_INTERNAL_POSITION)))
+  {
+    const char* query = PQresultErrorField(r, PG_DIAG_INTERNAL_QUERY);
+    text = query ? query : "";
+  }
+  const long at = position ? std::strtol(position, nullptr, 10) - 1 : -1;
+  if (at < 0 || std::size_t(at) >= text.size())
+  {
+    return std::string();
+  }
+  // An identifier, possibly qualified by its schema: letters, digits, '_', '$' and '.'.
+  std::size_t end = std::size_t(at);
+  while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) ||
+                               text[end] == '_' || text[end] == '$' || text[end] == '.'))
+  {
+    ++end;
+  }
+  return text.substr(std::size_t(at), end - std::size_t(at));
+}
+
+[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r,
+                       const std::string& sql)
 {
   std::string msg = r ? PQresultErrorMessage(r) : "";
   if (msg.empty())
@@ -180,6 +213,10 @@ bool reconnect(PGconn* conn)
     msg = PQerrorMessage(conn);
   }
   const char* state = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : nullptr;
+  if (state && std::strcmp(state, LockNotAvailableState) == 0)
+  {
+    throw LockNotAvailable(what, what + ": " + oneLine(msg), relationAtError(r, sql));
+  }
   throw StoreError(what + ": " + oneLine(msg), state ? state : "");
 }
 
@@ -218,7 +255,7 @@ Result Params::exec(PGconn* conn, const std::string& sql, const std::string& wha
   const ExecStatusType st = r ? PQresultStatus(r.get()) : PGRES_FATAL_ERROR;
   if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK)
   {
-    fail(what, conn, r.get());
+    fail(what, conn, r.get(), sql);
   }
   return r;
 }
@@ -262,7 +299,7 @@ void execScript(PGconn* conn, const std::string& sql, const std::string& what)
   Result r(PQexec(conn, sql.c_str()));
   if (!r || PQresultStatus(r.get()) != PGRES_COMMAND_OK)
   {
-    fail(what, conn, r.get());
+    fail(what, conn, r.get(), sql);
   }
 }
 

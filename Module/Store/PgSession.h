@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace asrt
@@ -52,8 +53,38 @@ Connection connect(const std::string& conninfo);
 /// Reconnects a connection that broke (server restart, terminated backend); whether it is up.
 bool reconnect(PGconn* conn);
 
-/// Throws StoreError "<what>: <the server's message>", with its SQLSTATE.
-[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r);
+/// The SQLSTATE of a statement that gave up waiting for a lock (lock_not_available: lock_timeout
+/// ran out).
+extern const char* const LockNotAvailableState;
+
+/// The StoreError of a statement that gave up waiting for a lock: what it was doing ("listing the
+/// frames failed") and the relation it waited for, as the statement names it, when the server
+/// pointed at it (else empty: a row, or a lock other than a table's).
+class LockNotAvailable : public StoreError
+{
+public:
+  LockNotAvailable(std::string what, const std::string& message, std::string relation)
+    : StoreError(message, LockNotAvailableState)
+    , What(std::move(what))
+    , Relation(std::move(relation))
+  {
+  }
+  const std::string& doing() const { return this->What; }
+  const std::string& relation() const { return this->Relation; }
+
+private:
+  std::string What;
+  std::string Relation;
+};
+
+/// The relation named where the server's error `r` points in the statement `sql` (or in the
+/// query of a function it ran); empty if it points nowhere.
+std::string relationAtError(const PGresult* r, const std::string& sql);
+
+/// Throws StoreError "<what>: <the server's message>", with its SQLSTATE; LockNotAvailable for a
+/// statement `sql` (when given) that gave up waiting for a lock.
+[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r,
+                       const std::string& sql = std::string());
 /// Asks the server to cancel the statement under way on `conn` (best effort).
 void cancelQuery(PGconn* conn);
 
@@ -159,7 +190,7 @@ void Params::stream(PGconn* conn, const std::string& sql, const std::string& wha
 {
   this->sendStreamed(conn, sql, what);
   // Every result is consumed, even after an error, so that the connection is ready again.
-  std::string error, state;
+  std::string error, state, relation;
   while (PGresult* raw = PQgetResult(conn))
   {
     Result r(raw);
@@ -183,7 +214,12 @@ void Params::stream(PGconn* conn, const std::string& sql, const std::string& wha
       const char* s = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
       error = what + ": " + oneLine(PQresultErrorMessage(raw));
       state = s ? s : "";
+      relation = relationAtError(raw, sql);
     }
+  }
+  if (!error.empty() && state == LockNotAvailableState)
+  {
+    throw LockNotAvailable(what, error, relation);
   }
   if (!error.empty())
   {

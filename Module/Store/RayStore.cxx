@@ -7,11 +7,13 @@
 #include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
+#include "StoreReadLimits.h"
 #include "StoreRecordCodec.h"
 #include "StoreSchema.h"
 #include "StoreTileRows.h"
 
 #include <algorithm>
+#include <climits>
 #include <utility>
 
 namespace asrt
@@ -159,6 +161,7 @@ struct RayStore::Impl
   storage::HelperConnections Helpers;
   bool SchemaChecked = false;
   int WriteConnections = RayStore::kDefaultWriteConnections;
+  storage::ReadLimits Limits{ RayStore::kDefaultReadLockTimeout, {} };
 
   PGconn* conn() const { return this->Conn.get(); }
 
@@ -174,6 +177,13 @@ struct RayStore::Impl
                          pg::oneLine(PQerrorMessage(this->conn())));
       }
     }
+  }
+
+  /// The connection, reconnected if it broke (before a read's limits are put on it).
+  PGconn* connected()
+  {
+    this->ensureConnected();
+    return this->conn();
   }
 
   void requireSchema()
@@ -238,8 +248,8 @@ public:
                            {
                              std::vector<PGconn*> connections = this->Helpers;
                              connections.push_back(this->Conn);
-                             storage::WriteCancellation cancel(this->Frame.options.cancelled,
-                                                               connections);
+                             storage::StatementCancellation cancel(this->Frame.options.cancelled,
+                                                                   connections);
                              this->Cancel = &cancel;
                              try
                              {
@@ -269,7 +279,7 @@ public:
   }
 
 private:
-  std::int64_t store(std::int64_t sceneId, storage::WriteCancellation& cancel)
+  std::int64_t store(std::int64_t sceneId, storage::StatementCancellation& cancel)
   {
     this->claimIdentity();
     const std::int64_t id = this->insertRow(sceneId);
@@ -421,7 +431,7 @@ private:
   int Tiles;
   bool Replaced = false;
   std::int64_t WritingId = -1; ///< the frame of a parallel write, once it has an id
-  const storage::WriteCancellation* Cancel = nullptr; ///< while the transaction's body runs
+  const storage::StatementCancellation* Cancel = nullptr; ///< while the transaction's body runs
 };
 }
 
@@ -488,6 +498,12 @@ std::vector<RayRecord> RayStore::Impl::readAllRays(std::int64_t id, std::int64_t
   std::vector<RayRecord> records = allocateRecords(std::size_t(rayCount));
   const std::vector<std::string> groups = groupTiles(tiles, helpers.size() + 1);
   const std::string snapshot = helpers.empty() ? std::string() : exportSnapshot(conn);
+  // The helpers' statements are the read's too: limited and cancelled alike.
+  std::optional<storage::ReadScope> helpersRead;
+  if (!helpers.empty())
+  {
+    helpersRead.emplace(helpers, this->Limits);
+  }
   std::vector<std::int64_t> gots(helpers.size() + 1, 0);
   storage::FanOut(helpers).run(
     [&](PGconn* c, std::size_t k)
@@ -529,9 +545,14 @@ int RayStore::backendPid() const
 }
 
 int RayStore::schemaVersion()
+try
 {
-  this->P->ensureConnected();
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   return storage::readSchemaVersion(this->P->conn());
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 void RayStore::migrate(int targetVersion)
@@ -552,18 +573,44 @@ void RayStore::migrate(int targetVersion)
 }
 
 void RayStore::upgrade()
+try
 {
-  this->P->ensureConnected();
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->SchemaChecked = false;
   storage::migrateSchema(this->P->conn(), kSchemaVersion, false);
-  storage::dropOrphanBlocks(this->P->conn());
-  storage::dropUnusedScenes(this->P->conn(), -1);
+  read.tidyBriefly(
+    [this]
+    {
+      storage::dropOrphanBlocks(this->P->conn());
+      storage::dropUnusedScenes(this->P->conn(), -1);
+    });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
+
+void RayStore::setReadLockTimeout(std::chrono::milliseconds t)
+{
+  if (t.count() < 0 || t.count() > INT_MAX)
+  {
+    throw StoreError("a read's lock timeout must be between 0 and " + std::to_string(INT_MAX) +
+                     " ms (got " + std::to_string(t.count()) + ")");
+  }
+  this->P->Limits.lockTimeout = t;
+}
+
+void RayStore::setReadCancellation(std::function<bool()> cancelled)
+{
+  this->P->Limits.cancelled = std::move(cancelled);
 }
 
 void RayStore::checkFrameIdentity(const SceneDescription& scene, bool replace)
+try
 {
   pg::requireText(scene.name, "the scene name");
   const storage::SceneTexts texts = storage::sceneTexts(scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   pg::transaction(conn, pg::ReadBegin,
@@ -576,6 +623,10 @@ void RayStore::checkFrameIdentity(const SceneDescription& scene, bool replace)
                     }
                     pg::exec(conn, "ROLLBACK", "ending the read failed");
                   });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
@@ -695,7 +746,9 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
 }
 
 std::vector<std::int64_t> RayStore::abandonedFrames(std::chrono::seconds olderThan)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r =
     pg::Params()
@@ -712,16 +765,28 @@ std::vector<std::int64_t> RayStore::abandonedFrames(std::chrono::seconds olderTh
   }
   return ids;
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::vector<FrameInfo> RayStore::listFrames()
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   return storage::selectFrames(this->P->conn(), pg::Params(), " ORDER BY f.id",
                                "listing the frames failed");
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 FrameInfo RayStore::frameInfo(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   const std::vector<FrameInfo> frames = storage::selectFrames(
     this->P->conn(), pg::Params().i64(id), " AND f.id = $1", "reading the frame failed");
@@ -731,18 +796,30 @@ FrameInfo RayStore::frameInfo(std::int64_t id)
   }
   return frames.front();
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::string RayStore::frameSceneText(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r = storage::completeFrameColumn(this->P->conn(), id, "effective_text",
                                               "reading the frame's scene failed");
   return pg::getText(r.get(), 0, 0);
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::optional<std::int64_t> RayStore::findFrame(const SceneDescription& scene)
+try
 {
   const storage::SceneTexts texts = storage::sceneTexts(scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r =
     pg::Params()
@@ -755,6 +832,10 @@ std::optional<std::int64_t> RayStore::findFrame(const SceneDescription& scene)
     return std::nullopt;
   }
   return pg::getI64(r.get(), 0, 0);
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 void RayStore::deleteFrame(std::int64_t id)
@@ -811,10 +892,13 @@ struct PredicateLocksRelease
 }
 
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
+try
 {
-  this->P->requireSchema();
-  PGconn* conn = this->P->conn();
+  PGconn* conn = this->P->connected();
   const PredicateLocksRelease release{ conn, !predicate.empty() };
+  // Ends before the release: no cancel reaches its statement.
+  const storage::ReadScope read({ conn }, this->P->Limits);
+  this->P->requireSchema();
   // REPEATABLE READ: the frame row, its tiles and its rays come from one snapshot. Always rolled
   // back, so that nothing a predicate might have done (set_config, ...) outlives the read.
   return pg::transaction(
@@ -831,9 +915,15 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
       return records;
     });
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::vector<RayPath> RayStore::readPaths(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   return pg::transaction(conn, pg::ReadBegin,
@@ -844,5 +934,9 @@ std::vector<RayPath> RayStore::readPaths(std::int64_t id)
                            pg::exec(conn, "ROLLBACK", "ending the read failed");
                            return paths;
                          });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 }

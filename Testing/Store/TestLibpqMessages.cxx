@@ -177,9 +177,11 @@ TEST(LibpqMessages, AServerStoppedUnderASessionIsOneLine)
   ASSERT_NE(raw.find("\n\t"), std::string::npos) << "libpq's message has no second line: " << raw;
   EXPECT_EQ(asrt::pg::oneLine(raw), closed);
 
-  // The store's messages: the statement that met the closed connection (libpq may take a second
-  // statement to see the connection as lost), then the reconnection that found no server.
-  EXPECT_EQ(errorOf([&] { store.listFrames(); }), "listing the frames failed: " + closed);
+  // The store's messages: the statement that met the closed connection (the read's first, which
+  // sets its lock timeout; libpq may take a second statement to see the connection as lost), then
+  // the reconnection that found no server.
+  const std::string lost = "reading from the store failed: " + closed;
+  EXPECT_EQ(errorOf([&] { store.listFrames(); }), lost);
   const std::string noServer = "lost the connection to PostgreSQL and could not reconnect: "
                                "connection to server on socket \"" +
                                socketOf(server.conninfo()) +
@@ -191,7 +193,7 @@ TEST(LibpqMessages, AServerStoppedUnderASessionIsOneLine)
     error = errorOf([&] { store.listFrames(); });
     if (error != noServer)
     {
-      EXPECT_EQ(error, "listing the frames failed: " + closed);
+      EXPECT_EQ(error, lost);
     }
   }
   EXPECT_EQ(error, noServer);
