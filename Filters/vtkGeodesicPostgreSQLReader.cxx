@@ -13,11 +13,25 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <utility>
 
 vtkStandardNewMacro(vtkGeodesicPostgreSQLReader);
+
+namespace
+{
+/// The reader's limits on the statements of its store.
+void limitReads(asrt::RayStore& store, double lockTimeout, const std::function<bool()>& cancelled)
+{
+  // Whole milliseconds; a positive time never becomes 0, which would mean no limit at all.
+  store.setReadLockTimeout(std::chrono::milliseconds(
+    std::max(std::llround(lockTimeout * 1000), lockTimeout > 0 ? 1LL : 0LL)));
+  store.setReadCancellation(cancelled);
+}
+}
 
 vtkGeodesicPostgreSQLReader::vtkGeodesicPostgreSQLReader()
 {
@@ -61,6 +75,7 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    limitReads(store, this->LockTimeout, this->CancelRequested);
     // A reader upgrades an older ASRT schema but creates none in a database that has none.
     store.upgrade();
     const std::vector<asrt::FrameInfo> frames = store.listFrames();
@@ -120,6 +135,7 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    limitReads(store, this->LockTimeout, this->CancelRequested);
     const std::vector<asrt::RayRecord> records =
       store.readFrame(this->ResolvedFrame, this->Predicate ? this->Predicate : "");
     this->UpdateProgress(0.7);
@@ -154,6 +170,11 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
   return 1;
 }
 
+void vtkGeodesicPostgreSQLReader::SetCancelRequested(std::function<bool()> cancelled)
+{
+  this->CancelRequested = std::move(cancelled);
+}
+
 void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -161,5 +182,6 @@ void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
      << (this->ConnectionString && *this->ConnectionString ? "(set)" : "(default)") << "\n";
   os << indent << "FrameId: " << this->FrameId << "\n";
   os << indent << "Predicate: " << (this->Predicate ? this->Predicate : "") << "\n";
+  os << indent << "LockTimeout: " << this->LockTimeout << " s\n";
   os << indent << "Frames listed: " << this->FrameIds.size() << "\n";
 }
