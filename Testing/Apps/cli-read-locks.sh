@@ -41,7 +41,8 @@ hold_lock() {
   psql -X -q -A -t -v ON_ERROR_STOP=1 < sql.fifo > psql.out 2>&1 &
   psql_pid=$!
   exec 4> sql.fifo
-  echo "BEGIN; LOCK TABLE $1 IN ACCESS EXCLUSIVE MODE; SELECT 'lock held by ' || pg_backend_pid();" >&4
+  echo "BEGIN; LOCK TABLE $1 IN ACCESS EXCLUSIVE MODE;
+    SELECT 'lock held by ' || pg_backend_pid();" >&4
   wait_until grep -q "lock held by" psql.out || fail "the lock was not taken: $(cat psql.out)"
   locker="$(sed -n 's/^lock held by \([0-9]*\)$/\1/p' psql.out)"
   locked_table="$1"
@@ -114,8 +115,9 @@ gives_up_on() {
   release_lock
   test "$rc" -eq 3 || fail "exit code $rc, expected 3"
   test "$(wc -l < err.txt)" -eq 1 || fail "stderr has $(wc -l < err.txt) lines, expected one"
-  grep -Eq "^asrt $1: database: .*: the $table table is locked by another session; gave up after 0\.5 s$" \
-    err.txt || fail "the message does not name the locked table and the wait"
+  local said="the $table table is locked by another session; gave up after 0\.5 s"
+  grep -Eq "^asrt $1: database: .*: $said\$" err.txt ||
+    fail "the message does not name the locked table and the wait"
   test ! -e x.png || fail "x.png was written"
 }
 
