@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Reads that meet a table another session holds locked (psql, in an open transaction, LOCK TABLE
-# ... IN ACCESS EXCLUSIVE MODE, which blocks every read of it): asrt list and asrt show stop at
-# once on Ctrl-C or SIGTERM with exit code 130, and give up after ASRT_LOCK_TIMEOUT with one line
-# naming the table and exit code 3. Each case checks that psql still holds the lock when asrt has
-# ended (asrt did not wait for it) and that no file was written. The lock is taken on frames
-# (list and show wait in their first reads) or on ray_blocks (show waits in the reader, for the
-# rays). Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
+# ... IN ACCESS EXCLUSIVE MODE, which blocks every read of it): asrt list, show and interpolate
+# stop at once on Ctrl-C or SIGTERM with exit code 130, and give up after ASRT_LOCK_TIMEOUT with
+# one line naming the table and exit code 3. Each case checks that psql still holds the lock when
+# asrt has ended (asrt did not wait for it) and that no file was written. The lock is taken on
+# frames (the commands wait in their first reads) or on ray_blocks (show waits in the reader, for
+# the rays). Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
 # Usage: cli-read-locks.sh CASE ASRT EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
 case_name="$1"; asrt="$2"; expect="$3"; scenes="$4"; work="$5/$1"
@@ -24,11 +24,12 @@ wait_until() {
 running() { kill -0 "$1" 2> /dev/null; }
 stopped() { ! running "$1"; }
 
-# A frame to read; sets frame to its id as the store reports it.
+# A frame to read (of fig2-no-hole, with ARGS... as overrides); sets frame to its id as the store
+# reports it.
 store_frame() {
   local out
   out="$("$expect" 0 "stored as frame [0-9]+" -- \
-    "$asrt" trace "$scenes/fig2-no-hole.json" -r 8x8 -q --store -o traced)" || {
+    "$asrt" trace "$scenes/fig2-no-hole.json" -r 8x8 -q "$@" --store -o traced)" || {
     echo "$out"
     return 1
   }
@@ -100,6 +101,7 @@ interrupted_while_waiting() {
   test "$rc" -eq 130 || fail "exit code $rc, expected 130"
   grep -q "interrupted" err.txt || fail "no word of the interrupt"
   test ! -e x.png || fail "x.png was written"
+  test ! -e out || test -z "$(ls -A out)" || fail "files were written: $(ls -A out)"
   test -z "$(ls -A | grep '\.part$')" || fail "a temporary was left: $(ls -A)"
 }
 
@@ -121,16 +123,22 @@ gives_up_on() {
   test ! -e x.png || fail "x.png was written"
 }
 
-list_sigint() { store_frame && interrupted_while_waiting INT frames list; }
-list_sigterm() { store_frame && interrupted_while_waiting TERM frames list; }
-show_sigint() { store_frame && interrupted_while_waiting INT frames show "$frame" --png x.png; }
-show_sigterm() { store_frame && interrupted_while_waiting TERM frames show "$frame" --png x.png; }
+list_sigint() { store_frame; interrupted_while_waiting INT frames list; }
+list_sigterm() { store_frame; interrupted_while_waiting TERM frames list; }
+show_sigint() { store_frame; interrupted_while_waiting INT frames show "$frame" --png x.png; }
+show_sigterm() { store_frame; interrupted_while_waiting TERM frames show "$frame" --png x.png; }
 # The frame's row is read; the reader waits for its rays.
 show_rays_sigint() {
-  store_frame && interrupted_while_waiting INT ray_blocks show "$frame" --png x.png
+  store_frame; interrupted_while_waiting INT ray_blocks show "$frame" --png x.png
 }
-list_lock_timeout() { store_frame && gives_up_on frames list; }
-show_rays_lock_timeout() { store_frame && gives_up_on ray_blocks show "$frame" --png x.png; }
+interpolate_sigint() {
+  store_frame
+  local first="$frame"
+  store_frame --mass 0.5
+  interrupted_while_waiting INT frames interpolate "$first" "$frame" -n 3 -o out/
+}
+list_lock_timeout() { store_frame; gives_up_on frames list; }
+show_rays_lock_timeout() { store_frame; gives_up_on ray_blocks show "$frame" --png x.png; }
 
 bad_lock_timeout() {
   step "ASRT_LOCK_TIMEOUT that is no number of seconds: a usage error naming it"
