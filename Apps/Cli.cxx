@@ -4,9 +4,11 @@
 #include "InterruptibleRead.h"
 #include "Progress.h"
 #include "Propagator.h"
+#include "RayStore.h"
 #include "SceneFile.h"
 #include "StoreConnection.h"
 #include "VtkMessages.h"
+#include "vtkGeodesicPostgreSQLReader.h"
 #include "vtkGeodesicSource.h"
 #include "vtkImageData.h"
 
@@ -31,7 +33,8 @@ const char* const kExitCodeHelp = R"(Exit codes:
   1    the work failed (a file could not be written, more rays failed than
        --max-failed-share allows, rendering failed, ...)
   2    usage error (unknown option, missing or malformed value)
-  3    database error (unreachable, refused, no such frame, frame already stored)
+  3    database error (unreachable, refused, a table locked past ASRT_LOCK_TIMEOUT,
+       no such frame, frame already stored)
   4    bad input (scene file, texture, parameters: e.g. camera inside the horizon)
   130  interrupted with Ctrl-C (nothing half-written is left behind)
 )";
@@ -63,6 +66,9 @@ const char* const kDatabaseHelp = R"(Database:
   --db CONNINFO         libpq connection string or URI, e.g. "host=/tmp dbname=asrt"; else
                         $ASRT_DB, else the standard PG* variables if any is set, else the
                         private server of "asrt db" (started when needed)
+  ASRT_LOCK_TIMEOUT     seconds a read waits for a table that another session holds locked
+                        before it gives up naming the table (exit code 3); default 30, 0
+                        waits as long as the lock is held. Ctrl-C stops any wait at once.
 )";
 
 std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b)
@@ -417,6 +423,33 @@ std::string databaseConnection(const Options& options)
   {
     throw DatabaseError(std::string("cannot start the private PostgreSQL server: ") + e.what());
   }
+}
+
+std::chrono::milliseconds readLockTimeout()
+{
+  const char* text = std::getenv("ASRT_LOCK_TIMEOUT");
+  if (!text || !*text)
+    return RayStore::kDefaultReadLockTimeout;
+  const double seconds = parseNumber("ASRT_LOCK_TIMEOUT", text);
+  // PostgreSQL's lock_timeout counts milliseconds in an int.
+  constexpr double kMaxSeconds = 2147483;
+  if (seconds < 0 || seconds > kMaxSeconds)
+    throw UsageError("ASRT_LOCK_TIMEOUT: " + quotedArgument(text) +
+                     " is not a number of seconds from 0 to 2147483");
+  // Whole milliseconds; a positive time never becomes 0, which would mean no limit at all.
+  return std::chrono::milliseconds(std::max(std::llround(seconds * 1000), seconds > 0 ? 1LL : 0LL));
+}
+
+void limitReads(RayStore& store)
+{
+  store.setReadLockTimeout(readLockTimeout());
+  store.setReadCancellation(&tools::interruptRequested);
+}
+
+void limitReads(vtkGeodesicPostgreSQLReader* reader)
+{
+  reader->SetLockTimeout(double(readLockTimeout().count()) / 1000);
+  reader->SetCancelRequested(&tools::interruptRequested);
 }
 
 std::int64_t parseFrameId(const std::string& text)

@@ -3,6 +3,7 @@
 #ifndef asrt_cli_Cli_h
 #define asrt_cli_Cli_h
 
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -10,12 +11,15 @@
 #include <string>
 #include <vector>
 
+class vtkGeodesicPostgreSQLReader;
 class vtkGeodesicSource;
 class vtkImageData;
 class vtkMultiProcessController;
 
 namespace asrt
 {
+class RayStore;
+
 namespace cli
 {
 /// Exit codes, as `asrt --help` documents them.
@@ -137,6 +141,15 @@ std::string databaseGiven(const Options& options);
 /// The conninfo from --db, else $ASRT_DB, else the PG* variables, else the private embedded
 /// server (started if needed). Throws DatabaseError.
 std::string databaseConnection(const Options& options);
+
+/// How long a read of the database waits for a table that another session holds locked:
+/// $ASRT_LOCK_TIMEOUT seconds (0: as long as the lock is held), else the store's default (30 s).
+/// Throws UsageError naming the variable for anything but a number of seconds from 0 to 2147483.
+std::chrono::milliseconds readLockTimeout();
+/// Puts the limits of the command line's reads on a store or a reader: readLockTimeout(), and
+/// Ctrl-C or SIGTERM cancelling the statement under way, a wait for a lock included.
+void limitReads(RayStore& store);
+void limitReads(vtkGeodesicPostgreSQLReader* reader);
 
 /// Concatenates option lists.
 std::vector<OptionSpec> operator+(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b);

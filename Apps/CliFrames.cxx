@@ -88,13 +88,15 @@ std::string clipped(const std::string& text, std::size_t width)
 }
 
 /// Opens the store and upgrades an older schema; list and show only read, so they create none,
-/// except in the private server's own database. Every failure is a database error.
+/// except in the private server's own database. Every failure is a database error, but for one
+/// that Ctrl-C brought about (a read it cancelled): that is the interrupt.
 template<class F>
 auto withStore(const Options& options, const std::string& conninfo, F&& f)
 {
   try
   {
     RayStore store(conninfo);
+    limitReads(store);
     if (storeConnectionIsPrivate(databaseGiven(options).c_str()))
       store.migrate();
     else
@@ -103,6 +105,8 @@ auto withStore(const Options& options, const std::string& conninfo, F&& f)
   }
   catch (const StoreError& e)
   {
+    if (tools::interruptRequested())
+      throw Interrupted();
     throw DatabaseError(e.what());
   }
 }
@@ -191,6 +195,7 @@ int runShow(const std::vector<std::string>& args)
   tools::VtkMessageCatcher messages;
   messages.watchAlgorithm(reader);
   reader->SetConnectionString(conninfo.c_str());
+  limitReads(reader);
   reader->SetFrameId(static_cast<vtkIdType>(id));
   if (options.has("where"))
     reader->SetPredicate(options.get("where").c_str());

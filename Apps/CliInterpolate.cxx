@@ -137,8 +137,11 @@ std::vector<vtkSmartPointer<vtkAlgorithm>> readKeyFrames(const Options& options,
     tools::VtkMessageCatcher messages;
     messages.watchAlgorithm(reader);
     reader->SetConnectionString(conninfo.c_str());
+    limitReads(reader);
     reader->SetFrameId(static_cast<vtkIdType>(std::stoll(names[k])));
     reader->Update();
+    if (tools::interruptRequested())
+      throw Interrupted();
     if (messages.failed())
       throw DatabaseError(messages.firstError());
     ends[k] = reader;

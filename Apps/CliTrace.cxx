@@ -244,6 +244,8 @@ void refuseStoredFrame(RayStore& store, vtkGeodesicSource* source, bool replace)
   }
   catch (const StoreError& e)
   {
+    if (tools::interruptRequested())
+      throw Interrupted();
     throw DatabaseError(withCommandLineAdvice(e.what()));
   }
 }
@@ -545,6 +547,7 @@ int runTrace(const std::vector<std::string>& args)
   {
     conninfo = databaseConnection(options);
     store = std::make_unique<RayStore>(conninfo);
+    limitReads(*store);
     store->migrate();
   }
 

@@ -13,6 +13,8 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <utility>
@@ -21,6 +23,15 @@ vtkStandardNewMacro(vtkGeodesicPostgreSQLReader);
 
 namespace
 {
+/// The reader's limits on the statements of its store.
+void limitReads(asrt::RayStore& store, double lockTimeout, const std::function<bool()>& cancelled)
+{
+  // Whole milliseconds; a positive time never becomes 0, which would mean no limit at all.
+  store.setReadLockTimeout(std::chrono::milliseconds(
+    std::max(std::llround(lockTimeout * 1000), lockTimeout > 0 ? 1LL : 0LL)));
+  store.setReadCancellation(cancelled);
+}
+
 /// Bytes a pixel of the image takes (RGB colours, object id, image order, path length,
 /// termination, rays a pixel), and a ray once read (its record, then its hit point with every
 /// field as point data and its vertex), rounded up.
@@ -87,6 +98,7 @@ int vtkGeodesicPostgreSQLReader::RequestInformation(vtkInformation*, vtkInformat
   try
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
+    limitReads(store, this->LockTimeout, this->CancelRequested);
     // A reader upgrades an older ASRT schema but creates none in a database that has none.
     store.upgrade();
     const std::vector<asrt::FrameInfo> frames = store.listFrames();
@@ -150,6 +162,7 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
   {
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     store.setMemoryLimit(this->MemoryLimit);
+    limitReads(store, this->LockTimeout, this->CancelRequested);
     const std::vector<asrt::RayRecord> records =
       store.readFrame(this->ResolvedFrame, this->Predicate ? this->Predicate : "");
     this->UpdateProgress(0.7);
@@ -184,6 +197,11 @@ int vtkGeodesicPostgreSQLReader::RequestData(vtkInformation*, vtkInformationVect
   return 1;
 }
 
+void vtkGeodesicPostgreSQLReader::SetCancelRequested(std::function<bool()> cancelled)
+{
+  this->CancelRequested = std::move(cancelled);
+}
+
 void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -192,5 +210,6 @@ void vtkGeodesicPostgreSQLReader::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "FrameId: " << this->FrameId << "\n";
   os << indent << "MemoryLimit: " << this->MemoryLimit << "\n";
   os << indent << "Predicate: " << (this->Predicate ? this->Predicate : "") << "\n";
+  os << indent << "LockTimeout: " << this->LockTimeout << " s\n";
   os << indent << "Frames listed: " << this->FrameIds.size() << "\n";
 }

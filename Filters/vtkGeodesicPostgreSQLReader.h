@@ -14,7 +14,9 @@
  * the role asrt_predicate alone (asrt::RayStore::readFrame); port 2 then holds the polylines of
  * the selected rays' pixels only.
  * Connection as for vtkGeodesicPostgreSQLWriter; a database without an ASRT schema is an error
- * (the reader creates none), an older schema is upgraded.
+ * (the reader creates none), an older schema is upgraded. A table that another session holds
+ * locked is waited for at most LockTimeout seconds, and the reading can be cancelled
+ * (SetCancelRequested), a wait for a lock included.
  */
 #ifndef vtkGeodesicPostgreSQLReader_h
 #define vtkGeodesicPostgreSQLReader_h
@@ -22,9 +24,10 @@
 #include "asrtFiltersModule.h" // for export macro
 #include "vtkImageAlgorithm.h"
 
-#include <cstdint> // for std::int64_t
-#include <string>  // for std::string
-#include <vector>  // for std::vector
+#include <cstdint>    // for std::int64_t
+#include <functional> // for the cancellation predicate
+#include <string>     // for std::string
+#include <vector>     // for std::vector
 
 class vtkImageData;
 class vtkPolyData;
@@ -72,6 +75,21 @@ public:
   vtkPolyData* GetHitsOutput();
   vtkPolyData* GetPolylinesOutput();
 
+  ///@{
+  /// How long, in seconds, each statement of the reading waits for a lock that another session
+  /// holds before the reading fails with an error naming the locked table; 0 waits as long as the
+  /// lock is held. Default 30 (asrt::RayStore::kDefaultReadLockTimeout).
+  vtkSetClampMacro(LockTimeout, double, 0.0, 2147483.0);
+  vtkGetMacro(LockTimeout, double);
+  ///@}
+
+#ifndef __VTK_WRAP__
+  /// Asked again and again, from another thread, while the frames are listed or read: once it
+  /// returns true, the statement under way is cancelled on the server (a wait for a lock
+  /// included), with an error and no output (asrt::RayStore::setReadCancellation). Unset: never.
+  void SetCancelRequested(std::function<bool()> cancelled);
+#endif
+
 protected:
   vtkGeodesicPostgreSQLReader();
   ~vtkGeodesicPostgreSQLReader() override;
@@ -82,6 +100,8 @@ protected:
   char* ConnectionString = nullptr;
   char* Predicate = nullptr;
   vtkIdType FrameId = -1;
+  double LockTimeout = 30;
+  std::function<bool()> CancelRequested;
   std::vector<vtkIdType> FrameIds;
   std::vector<std::string> FrameDescriptions;
   double MemoryLimit = 0.0;

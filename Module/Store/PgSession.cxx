@@ -2,6 +2,8 @@
 
 #include "StoreRecordCodec.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
 
@@ -11,14 +13,121 @@ namespace pg
 {
 const char* const WriteBegin = "BEGIN ISOLATION LEVEL READ COMMITTED";
 const char* const ReadBegin = "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY";
+const char* const LockNotAvailableState = "55P03";
 
-std::string trimmed(std::string s)
+namespace
 {
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
+bool lower(char c)
+{
+  return c >= 'a' && c <= 'z';
+}
+
+bool upper(char c)
+{
+  return c >= 'A' && c <= 'Z';
+}
+
+bool startsWith(const std::string& s, const char* prefix)
+{
+  return s.compare(0, std::strlen(prefix), prefix) == 0;
+}
+
+/// Whether `line` begins with a field label as libpq prints the server's fields: capitals, a colon
+/// and two spaces ("ERROR:  ", "DETAIL:  ", "HINT:  ", "CONTEXT:  ").
+bool labelled(const std::string& line)
+{
+  std::size_t k = 0;
+  while (k < line.size() && upper(line[k]))
   {
-    s.pop_back();
+    ++k;
   }
-  return s;
+  return k > 0 && line.compare(k, 3, ":  ") == 0;
+}
+
+/// Lines that show the store's SQL or the server's source rather than what went wrong: the
+/// statement excerpt ("LINE 1: SELECT ...", a caret line follows), QUERY, CONTEXT, LOCATION.
+bool leftOut(const std::string& line)
+{
+  if (startsWith(line, "LINE "))
+  {
+    const std::size_t colon = line.find(':');
+    return colon != std::string::npos && colon > 5 &&
+           line.find_first_not_of("0123456789", 5) == colon;
+  }
+  return startsWith(line, "QUERY:  ") || startsWith(line, "CONTEXT:  ") ||
+         startsWith(line, "LOCATION:  ") || startsWith(line, "STATEMENT:  ");
+}
+}
+
+std::string oneLine(const std::string& message)
+{
+  std::vector<std::string> pieces;
+  bool leavingOut = false; // inside a field that is left out (its further lines go with it)
+  std::size_t at = 0;
+  while (at < message.size())
+  {
+    std::size_t end = message.find('\n', at);
+    end = end == std::string::npos ? message.size() : end;
+    std::string line = message.substr(at, end - at);
+    at = end + 1;
+    const bool indented = !line.empty() && (line[0] == '\t' || line[0] == ' ');
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos)
+    {
+      continue;
+    }
+    line = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+    if (!indented && leftOut(line))
+    {
+      leavingOut = true;
+      continue;
+    }
+    if (!indented && labelled(line))
+    {
+      leavingOut = false;
+    }
+    else if (leavingOut)
+    {
+      continue;
+    }
+    else if (indented && !pieces.empty())
+    {
+      // libpq's own explanation of the line before ("\tIs the server running ..."), or the rest
+      // of a sentence it wrapped ("\tbefore or while processing the request.").
+      if (lower(line[0]))
+      {
+        pieces.back() += " " + line;
+        continue;
+      }
+      // A sentence of its own after "; ", its capital lowered (not an acronym's: "SSL ...").
+      if (upper(line[0]) && !(line.size() > 1 && upper(line[1])))
+      {
+        line[0] = char(line[0] - 'A' + 'a');
+      }
+    }
+    pieces.push_back(line);
+  }
+  // libpq may say the same twice (a failed send, then the failed read of the same statement).
+  std::vector<std::string> distinct;
+  for (const std::string& piece : pieces)
+  {
+    if (std::find(distinct.begin(), distinct.end(), piece) == distinct.end())
+    {
+      distinct.push_back(piece);
+    }
+  }
+  std::string out;
+  for (std::size_t k = 0; k < distinct.size(); ++k)
+  {
+    std::string piece = distinct[k];
+    if (k + 1 < distinct.size() && piece.size() > 1 && piece.back() == '.' &&
+        piece[piece.size() - 2] != '.')
+    {
+      piece.pop_back(); // the sentence goes on after "; "
+    }
+    out += (k > 0 ? "; " : "") + piece;
+  }
+  return out;
 }
 
 Connection connect(const std::string& conninfo)
@@ -40,12 +149,12 @@ Connection connect(const std::string& conninfo)
   if (!conn || PQstatus(conn.get()) != CONNECTION_OK)
   {
     throw StoreError("cannot connect to PostgreSQL: " +
-                     (conn ? trimmed(PQerrorMessage(conn.get())) : "out of memory"));
+                     (conn ? oneLine(PQerrorMessage(conn.get())) : "out of memory"));
   }
   if (PQsetClientEncoding(conn.get(), "UTF8") != 0)
   {
     throw StoreError("cannot set the client encoding to UTF8: " +
-                     trimmed(PQerrorMessage(conn.get())));
+                     oneLine(PQerrorMessage(conn.get())));
   }
   // The server's notices ("table does not exist, skipping", ...) are not the caller's business;
   // libpq would print them on stderr.
@@ -65,7 +174,38 @@ bool reconnect(PGconn* conn)
   return true;
 }
 
-[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r)
+std::string relationAtError(const PGresult* r, const std::string& sql)
+{
+  // A lock on a table is taken where the statement names it, and the server's error points there
+  // (a character position, from 1; the store's SQL is ASCII).
+  const char* position = nullptr;
+  std::string text;
+  if (r && (position = PQresultErrorField(r, PG_DIAG_STATEMENT_POSITION)))
+  {
+    text = sql;
+  }
+  else if (r && (position = PQresultErrorField(r, PG_DIAG_INTERNAL_POSITION)))
+  {
+    const char* query = PQresultErrorField(r, PG_DIAG_INTERNAL_QUERY);
+    text = query ? query : "";
+  }
+  const long at = position ? std::strtol(position, nullptr, 10) - 1 : -1;
+  if (at < 0 || std::size_t(at) >= text.size())
+  {
+    return std::string();
+  }
+  // An identifier, possibly qualified by its schema: letters, digits, '_', '$' and '.'.
+  std::size_t end = std::size_t(at);
+  while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) ||
+                               text[end] == '_' || text[end] == '$' || text[end] == '.'))
+  {
+    ++end;
+  }
+  return text.substr(std::size_t(at), end - std::size_t(at));
+}
+
+[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r,
+                       const std::string& sql)
 {
   std::string msg = r ? PQresultErrorMessage(r) : "";
   if (msg.empty())
@@ -73,7 +213,11 @@ bool reconnect(PGconn* conn)
     msg = PQerrorMessage(conn);
   }
   const char* state = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : nullptr;
-  throw StoreError(what + ": " + trimmed(msg), state ? state : "");
+  if (state && std::strcmp(state, LockNotAvailableState) == 0)
+  {
+    throw LockNotAvailable(what, what + ": " + oneLine(msg), relationAtError(r, sql));
+  }
+  throw StoreError(what + ": " + oneLine(msg), state ? state : "");
 }
 
 void cancelQuery(PGconn* conn)
@@ -111,7 +255,7 @@ Result Params::exec(PGconn* conn, const std::string& sql, const std::string& wha
   const ExecStatusType st = r ? PQresultStatus(r.get()) : PGRES_FATAL_ERROR;
   if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK)
   {
-    fail(what, conn, r.get());
+    fail(what, conn, r.get(), sql);
   }
   return r;
 }
@@ -155,7 +299,7 @@ void execScript(PGconn* conn, const std::string& sql, const std::string& what)
   Result r(PQexec(conn, sql.c_str()));
   if (!r || PQresultStatus(r.get()) != PGRES_COMMAND_OK)
   {
-    fail(what, conn, r.get());
+    fail(what, conn, r.get(), sql);
   }
 }
 
@@ -230,7 +374,7 @@ std::string quoteIdentifier(PGconn* conn, const std::string& name, const std::st
   char* quoted = PQescapeIdentifier(conn, name.c_str(), name.size());
   if (!quoted)
   {
-    throw StoreError(what + ": " + trimmed(PQerrorMessage(conn)));
+    throw StoreError(what + ": " + oneLine(PQerrorMessage(conn)));
   }
   std::string s = quoted;
   PQfreemem(quoted);

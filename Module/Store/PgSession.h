@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace asrt
@@ -36,8 +37,14 @@ extern const char* const WriteBegin;
 /// Reads see one snapshot and can change nothing.
 extern const char* const ReadBegin;
 
-/// `s` without its trailing newlines and spaces (libpq's messages end with one).
-std::string trimmed(std::string s);
+/// A message of libpq's (PQerrorMessage, PQresultErrorMessage) as one line, as every message of
+/// the store is: libpq spreads one error over several lines (the server's DETAIL and HINT, an
+/// excerpt of the statement with a caret under the error, a CONTEXT, its own explanations indented
+/// by a tab, a long sentence wrapped). The server's message and its DETAIL and HINT are kept,
+/// joined by "; "; the statement excerpt, QUERY, CONTEXT and LOCATION are left out (the store's
+/// SQL, not the user's); libpq's indented explanations join the line they explain, a wrapped
+/// sentence its beginning.
+std::string oneLine(const std::string& message);
 
 /// A connection set up as every connection of the store is: a connect_timeout of 10 s unless the
 /// conninfo or PGCONNECT_TIMEOUT sets one, UTF8, notices silenced. Throws StoreError with libpq's
@@ -46,8 +53,38 @@ Connection connect(const std::string& conninfo);
 /// Reconnects a connection that broke (server restart, terminated backend); whether it is up.
 bool reconnect(PGconn* conn);
 
-/// Throws StoreError "<what>: <the server's message>", with its SQLSTATE.
-[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r);
+/// The SQLSTATE of a statement that gave up waiting for a lock (lock_not_available: lock_timeout
+/// ran out).
+extern const char* const LockNotAvailableState;
+
+/// The StoreError of a statement that gave up waiting for a lock: what it was doing ("listing the
+/// frames failed") and the relation it waited for, as the statement names it, when the server
+/// pointed at it (else empty: a row, or a lock other than a table's).
+class LockNotAvailable : public StoreError
+{
+public:
+  LockNotAvailable(std::string what, const std::string& message, std::string relation)
+    : StoreError(message, LockNotAvailableState)
+    , What(std::move(what))
+    , Relation(std::move(relation))
+  {
+  }
+  const std::string& doing() const { return this->What; }
+  const std::string& relation() const { return this->Relation; }
+
+private:
+  std::string What;
+  std::string Relation;
+};
+
+/// The relation named where the server's error `r` points in the statement `sql` (or in the
+/// query of a function it ran); empty if it points nowhere.
+std::string relationAtError(const PGresult* r, const std::string& sql);
+
+/// Throws StoreError "<what>: <the server's message>", with its SQLSTATE; LockNotAvailable for a
+/// statement `sql` (when given) that gave up waiting for a lock.
+[[noreturn]] void fail(const std::string& what, PGconn* conn, const PGresult* r,
+                       const std::string& sql = std::string());
 /// Asks the server to cancel the statement under way on `conn` (best effort).
 void cancelQuery(PGconn* conn);
 
@@ -153,7 +190,7 @@ void Params::stream(PGconn* conn, const std::string& sql, const std::string& wha
 {
   this->sendStreamed(conn, sql, what);
   // Every result is consumed, even after an error, so that the connection is ready again.
-  std::string error, state;
+  std::string error, state, relation;
   while (PGresult* raw = PQgetResult(conn))
   {
     Result r(raw);
@@ -175,9 +212,14 @@ void Params::stream(PGconn* conn, const std::string& sql, const std::string& wha
     else if (st != PGRES_SINGLE_TUPLE && st != PGRES_TUPLES_OK && error.empty())
     {
       const char* s = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
-      error = what + ": " + trimmed(PQresultErrorMessage(raw));
+      error = what + ": " + oneLine(PQresultErrorMessage(raw));
       state = s ? s : "";
+      relation = relationAtError(raw, sql);
     }
+  }
+  if (!error.empty() && state == LockNotAvailableState)
+  {
+    throw LockNotAvailable(what, error, relation);
   }
   if (!error.empty())
   {

@@ -8,11 +8,13 @@
 #include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
+#include "StoreReadLimits.h"
 #include "StoreRecordCodec.h"
 #include "StoreSchema.h"
 #include "StoreTileRows.h"
 
 #include <algorithm>
+#include <climits>
 #include <utility>
 
 namespace asrt
@@ -160,6 +162,7 @@ struct RayStore::Impl
   storage::HelperConnections Helpers;
   bool SchemaChecked = false;
   int WriteConnections = RayStore::kDefaultWriteConnections;
+  storage::ReadLimits Limits{ RayStore::kDefaultReadLockTimeout, {} };
 
   PGconn* conn() const { return this->Conn.get(); }
 
@@ -172,9 +175,16 @@ struct RayStore::Impl
       if (!pg::reconnect(this->conn()))
       {
         throw StoreError("lost the connection to PostgreSQL and could not reconnect: " +
-                         pg::trimmed(PQerrorMessage(this->conn())));
+                         pg::oneLine(PQerrorMessage(this->conn())));
       }
     }
+  }
+
+  /// The connection, reconnected if it broke (before a read's limits are put on it).
+  PGconn* connected()
+  {
+    this->ensureConnected();
+    return this->conn();
   }
 
   void requireSchema()
@@ -239,8 +249,8 @@ public:
                            {
                              std::vector<PGconn*> connections = this->Helpers;
                              connections.push_back(this->Conn);
-                             storage::WriteCancellation cancel(this->Frame.options.cancelled,
-                                                               connections);
+                             storage::StatementCancellation cancel(this->Frame.options.cancelled,
+                                                                   connections);
                              this->Cancel = &cancel;
                              try
                              {
@@ -270,7 +280,7 @@ public:
   }
 
 private:
-  std::int64_t store(std::int64_t sceneId, storage::WriteCancellation& cancel)
+  std::int64_t store(std::int64_t sceneId, storage::StatementCancellation& cancel)
   {
     this->claimIdentity();
     const std::int64_t id = this->insertRow(sceneId);
@@ -422,7 +432,7 @@ private:
   int Tiles;
   bool Replaced = false;
   std::int64_t WritingId = -1; ///< the frame of a parallel write, once it has an id
-  const storage::WriteCancellation* Cancel = nullptr; ///< while the transaction's body runs
+  const storage::StatementCancellation* Cancel = nullptr; ///< while the transaction's body runs
 };
 }
 
@@ -489,6 +499,12 @@ std::vector<RayRecord> RayStore::Impl::readAllRays(std::int64_t id, std::int64_t
   std::vector<RayRecord> records = allocateRecords(std::size_t(rayCount));
   const std::vector<std::string> groups = groupTiles(tiles, helpers.size() + 1);
   const std::string snapshot = helpers.empty() ? std::string() : exportSnapshot(conn);
+  // The helpers' statements are the read's too: limited and cancelled alike.
+  std::optional<storage::ReadScope> helpersRead;
+  if (!helpers.empty())
+  {
+    helpersRead.emplace(helpers, this->Limits);
+  }
   std::vector<std::int64_t> gots(helpers.size() + 1, 0);
   storage::FanOut(helpers).run(
     [&](PGconn* c, std::size_t k)
@@ -530,9 +546,14 @@ int RayStore::backendPid() const
 }
 
 int RayStore::schemaVersion()
+try
 {
-  this->P->ensureConnected();
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   return storage::readSchemaVersion(this->P->conn());
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 void RayStore::migrate(int targetVersion)
@@ -553,18 +574,44 @@ void RayStore::migrate(int targetVersion)
 }
 
 void RayStore::upgrade()
+try
 {
-  this->P->ensureConnected();
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->SchemaChecked = false;
   storage::migrateSchema(this->P->conn(), kSchemaVersion, false);
-  storage::dropOrphanBlocks(this->P->conn());
-  storage::dropUnusedScenes(this->P->conn(), -1);
+  read.tidyBriefly(
+    [this]
+    {
+      storage::dropOrphanBlocks(this->P->conn());
+      storage::dropUnusedScenes(this->P->conn(), -1);
+    });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
+
+void RayStore::setReadLockTimeout(std::chrono::milliseconds t)
+{
+  if (t.count() < 0 || t.count() > INT_MAX)
+  {
+    throw StoreError("a read's lock timeout must be between 0 and " + std::to_string(INT_MAX) +
+                     " ms (got " + std::to_string(t.count()) + ")");
+  }
+  this->P->Limits.lockTimeout = t;
+}
+
+void RayStore::setReadCancellation(std::function<bool()> cancelled)
+{
+  this->P->Limits.cancelled = std::move(cancelled);
 }
 
 void RayStore::checkFrameIdentity(const SceneDescription& scene, bool replace)
+try
 {
   pg::requireText(scene.name, "the scene name");
   const storage::SceneTexts texts = storage::sceneTexts(scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   pg::transaction(conn, pg::ReadBegin,
@@ -577,6 +624,10 @@ void RayStore::checkFrameIdentity(const SceneDescription& scene, bool replace)
                     }
                     pg::exec(conn, "ROLLBACK", "ending the read failed");
                   });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 std::int64_t RayStore::writeFrame(const SceneDescription& scene, const std::string& label,
@@ -609,119 +660,6 @@ int RayStore::writeConnections() const
   return this->P->WriteConnections;
 }
 
-namespace
-{
-/// What beginTiledFrame()'s transaction did: the 'writing' frame of this identity, inserted or
-/// joined (none when the row it conflicted with vanished before it could be looked at), and
-/// whether a complete frame was deleted for it.
-struct TiledFrameStart
-{
-  std::optional<std::int64_t> id;
-  bool replaced = false;
-};
-
-TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId,
-                                      const storage::SceneTexts& texts,
-                                      const SceneDescription& scene, const std::string& label,
-                                      int tileCount, bool replace)
-{
-  return pg::transaction(
-    conn, pg::WriteBegin,
-    [&]() -> TiledFrameStart
-    {
-      TiledFrameStart start{ storage::insertFrame(conn, sceneId, texts, scene, label, tileCount,
-                                                  true) };
-      if (!start.id)
-      {
-        const std::optional<storage::FrameOfIdentity> old =
-          storage::findFrameOfIdentity(conn, texts, true);
-        if (!old)
-        {
-          pg::exec(conn, "ROLLBACK", "ending the transaction failed");
-          return start;
-        }
-        if (old->status == "writing")
-        {
-          if (old->tileCount != tileCount)
-          {
-            throw StoreError(
-              "frame " + std::to_string(old->id) + " of this scene is being written as " +
-              std::to_string(old->tileCount) + " tiles, not " + std::to_string(tileCount));
-          }
-          pg::exec(conn, "COMMIT", "committing the frame failed");
-          start.id = old->id;
-          return start;
-        }
-        storage::deleteReplaced(conn, *old, replace);
-        start.replaced = true;
-        // No conflict is possible any more: the old row is deleted and locked by us.
-        start.id = storage::insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
-      }
-      pg::exec(conn, "COMMIT", "committing the frame failed");
-      return start;
-    });
-}
-
-/// The tile count of frame `frameId`, locked FOR KEY SHARE in the caller's transaction, after
-/// checking that `tile` can be written into it. FOR KEY SHARE keeps the frame from being deleted
-/// under the COPY without blocking the other tiles' writers (the foreign keys take the same lock
-/// anyway).
-int lockFrameForTile(PGconn* conn, std::int64_t frameId, int tile, const std::string& which)
-{
-  pg::Result r = pg::Params().i64(frameId).i32(tile).exec(
-    conn,
-    "SELECT f.status, f.tile_count, EXISTS (SELECT 1 FROM frame_tiles t WHERE t.frame_id = "
-    "f.id AND t.tile = $2) FROM frames f WHERE f.id = $1 FOR KEY SHARE OF f",
-    "looking for the frame failed");
-  if (PQntuples(r.get()) == 0)
-  {
-    throw StoreError("writing " + which + " failed: there is no such frame");
-  }
-  const int tileCount = pg::getI32(r.get(), 0, 1);
-  if (pg::getBool(r.get(), 0, 2))
-  {
-    throw StoreError("writing " + which + " failed: the tile is already written");
-  }
-  if (pg::getText(r.get(), 0, 0) != "writing")
-  {
-    throw StoreError("writing " + which + " failed: the frame is complete");
-  }
-  if (tile < 0 || tile >= tileCount)
-  {
-    throw StoreError("writing " + which + " failed: the frame has tiles 0 to " +
-                     std::to_string(tileCount - 1));
-  }
-  return tileCount;
-}
-
-/// Completes frame `frameId` if its tiles are all written. Only now, after the COPY, is the frame
-/// row locked, so tiles are written in parallel and only this short step is serialised. Under the
-/// lock, the count (a fresh snapshot) sees every tile committed before and this one: of two last
-/// tiles committing together, the second to get the lock sees the first's row and completes the
-/// frame. FOR NO KEY UPDATE, not FOR UPDATE, which would conflict with the other writers'
-/// key-share locks and deadlock two of them.
-void completeIfLastTile(PGconn* conn, std::int64_t frameId, int tileCount)
-{
-  pg::Params().i64(frameId).exec(conn, "SELECT 1 FROM frames WHERE id = $1 FOR NO KEY UPDATE",
-                                 "locking the frame failed");
-  pg::Result r = pg::Params().i64(frameId).exec(
-    conn,
-    "SELECT count(*), coalesce(sum(ray_count), 0)::bigint FROM frame_tiles WHERE frame_id = $1",
-    "counting the tiles failed");
-  if (pg::getI64(r.get(), 0, 0) == tileCount)
-  {
-    pg::Params()
-      .i64(frameId)
-      .i64(pg::getI64(r.get(), 0, 1))
-      .exec(conn,
-            "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = "
-            "extract(epoch FROM clock_timestamp() - created_at), completed_at = "
-            "clock_timestamp() WHERE id = $1",
-            "completing the frame failed");
-  }
-}
-}
-
 std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std::string& label,
                                        int tileCount, bool replace)
 {
@@ -742,10 +680,11 @@ std::int64_t RayStore::beginTiledFrame(const SceneDescription& scene, const std:
   for (int attempt = 0; attempt < TiledFrameBeginAttempts; ++attempt)
   {
     const std::int64_t sceneId = storage::sceneRow(conn, texts);
-    TiledFrameStart start;
+    storage::TiledFrameStart start;
     try
     {
-      start = beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace);
+      start =
+        storage::beginOrJoinTiledFrame(conn, sceneId, texts, scene, label, tileCount, replace);
     }
     catch (const storage::SceneVanished&)
     {
@@ -785,7 +724,7 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
     conn, pg::WriteBegin,
     [&]
     {
-      const int tileCount = lockFrameForTile(conn, frameId, tile, which);
+      const int tileCount = storage::lockFrameForTile(conn, frameId, tile, which);
       try
       {
         storage::copyTile(conn, frameId, tile, count, next);
@@ -802,13 +741,15 @@ void RayStore::writeTile(std::int64_t frameId, int tile, std::size_t count,
         }
         throw;
       }
-      completeIfLastTile(conn, frameId, tileCount);
+      storage::completeIfLastTile(conn, frameId, tileCount);
       pg::exec(conn, "COMMIT", "committing the tile failed");
     });
 }
 
 std::vector<std::int64_t> RayStore::abandonedFrames(std::chrono::seconds olderThan)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r =
     pg::Params()
@@ -825,16 +766,28 @@ std::vector<std::int64_t> RayStore::abandonedFrames(std::chrono::seconds olderTh
   }
   return ids;
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::vector<FrameInfo> RayStore::listFrames()
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   return storage::selectFrames(this->P->conn(), pg::Params(), " ORDER BY f.id",
                                "listing the frames failed");
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 FrameInfo RayStore::frameInfo(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   const std::vector<FrameInfo> frames = storage::selectFrames(
     this->P->conn(), pg::Params().i64(id), " AND f.id = $1", "reading the frame failed");
@@ -844,18 +797,30 @@ FrameInfo RayStore::frameInfo(std::int64_t id)
   }
   return frames.front();
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::string RayStore::frameSceneText(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r = storage::completeFrameColumn(this->P->conn(), id, "effective_text",
                                               "reading the frame's scene failed");
   return pg::getText(r.get(), 0, 0);
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::optional<std::int64_t> RayStore::findFrame(const SceneDescription& scene)
+try
 {
   const storage::SceneTexts texts = storage::sceneTexts(scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   pg::Result r =
     pg::Params()
@@ -868,6 +833,10 @@ std::optional<std::int64_t> RayStore::findFrame(const SceneDescription& scene)
     return std::nullopt;
   }
   return pg::getI64(r.get(), 0, 0);
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 
 void RayStore::deleteFrame(std::int64_t id)
@@ -924,12 +893,15 @@ struct PredicateLocksRelease
 }
 
 std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& predicate)
+try
 {
   // Checked before anything reaches the server: only what the grammar allows is sent.
   const std::string predicateSql = predicate.empty() ? predicate : rayPredicateSql(predicate);
-  this->P->requireSchema();
-  PGconn* conn = this->P->conn();
+  PGconn* conn = this->P->connected();
   const PredicateLocksRelease release{ conn, !predicate.empty() };
+  // Ends before the release: no cancel reaches its statement.
+  const storage::ReadScope read({ conn }, this->P->Limits);
+  this->P->requireSchema();
   // REPEATABLE READ: the frame row, its tiles and its rays come from one snapshot. Always rolled
   // back, so that nothing a predicate might have done (set_config, ...) outlives the read.
   return pg::transaction(
@@ -953,9 +925,15 @@ std::vector<RayRecord> RayStore::readFrame(std::int64_t id, const std::string& p
       return records;
     });
 }
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
 
 std::vector<RayPath> RayStore::readPaths(std::int64_t id)
+try
 {
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   PGconn* conn = this->P->conn();
   return pg::transaction(conn, pg::ReadBegin,
@@ -966,5 +944,9 @@ std::vector<RayPath> RayStore::readPaths(std::int64_t id)
                            pg::exec(conn, "ROLLBACK", "ending the read failed");
                            return paths;
                          });
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
 }
 }

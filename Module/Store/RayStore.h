@@ -315,6 +315,23 @@ public:
   /// The complete frame stored for this scene with these parameters, if any.
   std::optional<std::int64_t> findFrame(const SceneDescription& scene);
 
+  /// The reads are upgrade(), schemaVersion(), listFrames(), frameInfo(), frameSceneText(),
+  /// findFrame(), checkFrameIdentity(), abandonedFrames(), readFrame() and readPaths(). How long
+  /// each statement of a read waits for a lock that another session holds (LOCK TABLE, a
+  /// migration under way, ...) before the read gives up: StoreError "<what failed>: the frames
+  /// table is locked by another session; gave up after 30 s" (SQLSTATE 55P03). Zero: reads wait
+  /// as long as a lock is held. Default kDefaultReadLockTimeout. Writes wait for locks as long as
+  /// it takes (FrameWriteOptions::cancelled stops them); the tidying up after others' failed or
+  /// deleted writes that reads do in passing gives way to a lock at once and is left for later.
+  static constexpr std::chrono::milliseconds kDefaultReadLockTimeout{ 30000 };
+  /// Throws StoreError for a negative timeout or one beyond PostgreSQL's (about 24 days).
+  void setReadLockTimeout(std::chrono::milliseconds t);
+  /// Asked again and again (from a thread of its own) while a read runs: once it returns true, the
+  /// read's statement under way is cancelled on the server (a wait for a lock included) and the
+  /// read throws StoreError "reading from the store was cancelled" (SQLSTATE 57014); while it
+  /// stays true, no read starts. Empty (default): never.
+  void setReadCancellation(std::function<bool()> cancelled);
+
   void setPredicateTimeout(std::chrono::milliseconds t) { this->PredicateTimeout = t; }
   /// The bytes that readFrame() may allocate for the records of a whole frame; 0 (default):
   /// defaultMemoryLimit(). A frame that would need more is refused (StoreError) before anything

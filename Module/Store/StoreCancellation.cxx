@@ -9,6 +9,8 @@ namespace asrt
 namespace storage
 {
 const char* const CancelledState = "57014";
+const char* const WriteCancelledMessage = "writing the frame was cancelled; nothing was stored";
+const char* const ReadCancelledMessage = "reading from the store was cancelled";
 
 namespace
 {
@@ -17,9 +19,11 @@ namespace
 constexpr std::chrono::milliseconds PollInterval{ 20 };
 }
 
-WriteCancellation::WriteCancellation(const std::function<bool()>& cancelled,
-                                     const std::vector<PGconn*>& connections)
+StatementCancellation::StatementCancellation(const std::function<bool()>& cancelled,
+                                             const std::vector<PGconn*>& connections,
+                                             const char* message)
   : Cancelled(cancelled)
+  , Message(message)
 {
   if (!this->Cancelled)
   {
@@ -35,7 +39,7 @@ WriteCancellation::WriteCancellation(const std::function<bool()>& cancelled,
   this->Watcher = std::thread([this] { this->watch(); });
 }
 
-WriteCancellation::~WriteCancellation()
+StatementCancellation::~StatementCancellation()
 {
   this->stop();
   for (PGcancel* c : this->Cancels)
@@ -44,16 +48,16 @@ WriteCancellation::~WriteCancellation()
   }
 }
 
-void WriteCancellation::check() const
+void StatementCancellation::check() const
 {
   // The predicate itself too: it may have turned true since the watcher last asked.
   if (this->requested() || (this->Cancelled && this->Cancelled()))
   {
-    throw StoreError("writing the frame was cancelled; nothing was stored", CancelledState);
+    throw StoreError(this->Message, CancelledState);
   }
 }
 
-void WriteCancellation::stop()
+void StatementCancellation::stop()
 {
   {
     std::lock_guard<std::mutex> lock(this->Mutex);
@@ -66,7 +70,7 @@ void WriteCancellation::stop()
   }
 }
 
-void WriteCancellation::watch()
+void StatementCancellation::watch()
 {
   std::unique_lock<std::mutex> lock(this->Mutex);
   while (!this->Wake.wait_for(lock, PollInterval, [this] { return this->Stopping; }))

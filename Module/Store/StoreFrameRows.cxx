@@ -356,6 +356,45 @@ std::vector<RayPath> readPathRows(PGconn* conn, std::int64_t id)
   return paths;
 }
 
+TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
+                                      const SceneDescription& scene, const std::string& label,
+                                      int tileCount, bool replace)
+{
+  return pg::transaction(
+    conn, pg::WriteBegin,
+    [&]() -> TiledFrameStart
+    {
+      TiledFrameStart start{ insertFrame(conn, sceneId, texts, scene, label, tileCount, true) };
+      if (!start.id)
+      {
+        const std::optional<FrameOfIdentity> old = findFrameOfIdentity(conn, texts, true);
+        if (!old)
+        {
+          pg::exec(conn, "ROLLBACK", "ending the transaction failed");
+          return start;
+        }
+        if (old->status == "writing")
+        {
+          if (old->tileCount != tileCount)
+          {
+            throw StoreError(
+              "frame " + std::to_string(old->id) + " of this scene is being written as " +
+              std::to_string(old->tileCount) + " tiles, not " + std::to_string(tileCount));
+          }
+          pg::exec(conn, "COMMIT", "committing the frame failed");
+          start.id = old->id;
+          return start;
+        }
+        deleteReplaced(conn, *old, replace);
+        start.replaced = true;
+        // No conflict is possible any more: the old row is deleted and locked by us.
+        start.id = insertFrame(conn, sceneId, texts, scene, label, tileCount, false);
+      }
+      pg::exec(conn, "COMMIT", "committing the frame failed");
+      return start;
+    });
+}
+
 void requireReadMemory(std::int64_t id, std::int64_t rayCount, double limit)
 {
   const double bytes = static_cast<double>(rayCount) * sizeof(RayRecord);

@@ -72,6 +72,20 @@ std::optional<FrameOfIdentity> findFrameOfIdentity(PGconn* conn, const SceneText
 /// decide with this.
 void refuseIdentityClash(const FrameOfIdentity& old, bool replace);
 
+/// What beginTiledFrame()'s transaction did: the 'writing' frame of this identity, inserted or
+/// joined (none when the row it conflicted with vanished before it could be looked at), and
+/// whether a complete frame was deleted for it.
+struct TiledFrameStart
+{
+  std::optional<std::int64_t> id;
+  bool replaced = false;
+};
+/// beginTiledFrame()'s transaction: inserts the 'writing' frame of this identity, or joins the one
+/// there, or deletes a complete one (`replace`) for it, and commits.
+TiledFrameStart beginOrJoinTiledFrame(PGconn* conn, std::int64_t sceneId, const SceneTexts& texts,
+                                      const SceneDescription& scene, const std::string& label,
+                                      int tileCount, bool replace);
+
 /// The complete frame `old` has the identity of the one being written: a duplicate, refused
 /// unless `replace`, which deletes its row (its paths and tiles go with it). Its tables of rays
 /// are dropped after the commit (see dropOrphanBlocks: dropping them here would lock ray_blocks

@@ -271,5 +271,54 @@ std::string blockTableList(const PGresult* frameTiles)
   }
   return tables;
 }
+
+int lockFrameForTile(PGconn* conn, std::int64_t frameId, int tile, const std::string& which)
+{
+  pg::Result r = pg::Params().i64(frameId).i32(tile).exec(
+    conn,
+    "SELECT f.status, f.tile_count, EXISTS (SELECT 1 FROM frame_tiles t WHERE t.frame_id = "
+    "f.id AND t.tile = $2) FROM frames f WHERE f.id = $1 FOR KEY SHARE OF f",
+    "looking for the frame failed");
+  if (PQntuples(r.get()) == 0)
+  {
+    throw StoreError("writing " + which + " failed: there is no such frame");
+  }
+  const int tileCount = pg::getI32(r.get(), 0, 1);
+  if (pg::getBool(r.get(), 0, 2))
+  {
+    throw StoreError("writing " + which + " failed: the tile is already written");
+  }
+  if (pg::getText(r.get(), 0, 0) != "writing")
+  {
+    throw StoreError("writing " + which + " failed: the frame is complete");
+  }
+  if (tile < 0 || tile >= tileCount)
+  {
+    throw StoreError("writing " + which + " failed: the frame has tiles 0 to " +
+                     std::to_string(tileCount - 1));
+  }
+  return tileCount;
+}
+
+void completeIfLastTile(PGconn* conn, std::int64_t frameId, int tileCount)
+{
+  pg::Params().i64(frameId).exec(conn, "SELECT 1 FROM frames WHERE id = $1 FOR NO KEY UPDATE",
+                                 "locking the frame failed");
+  pg::Result r = pg::Params().i64(frameId).exec(
+    conn,
+    "SELECT count(*), coalesce(sum(ray_count), 0)::bigint FROM frame_tiles WHERE frame_id = $1",
+    "counting the tiles failed");
+  if (pg::getI64(r.get(), 0, 0) == tileCount)
+  {
+    pg::Params()
+      .i64(frameId)
+      .i64(pg::getI64(r.get(), 0, 1))
+      .exec(conn,
+            "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = "
+            "extract(epoch FROM clock_timestamp() - created_at), completed_at = "
+            "clock_timestamp() WHERE id = $1",
+            "completing the frame failed");
+  }
+}
 }
 }

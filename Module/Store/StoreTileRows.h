@@ -72,6 +72,18 @@ void dropUnattachedTiles(PGconn* conn, std::int64_t ownFrame = -1) noexcept;
 /// waits at most a moment for reads under way and otherwise leaves the tables for a later call
 /// (rays_v and readFrame never show them). Never throws.
 void dropOrphanBlocks(PGconn* conn) noexcept;
+/// The tile count of frame `frameId`, locked FOR KEY SHARE in the caller's transaction, after
+/// checking that `tile` can be written into it. FOR KEY SHARE keeps the frame from being deleted
+/// under the COPY without blocking the other tiles' writers (the foreign keys take the same lock
+/// anyway).
+int lockFrameForTile(PGconn* conn, std::int64_t frameId, int tile, const std::string& which);
+/// Completes frame `frameId` if its tiles are all written. Only now, after the COPY, is the frame
+/// row locked, so tiles are written in parallel and only this short step is serialised. Under the
+/// lock, the count (a fresh snapshot) sees every tile committed before and this one: of two last
+/// tiles committing together, the second to get the lock sees the first's row and completes the
+/// frame. FOR NO KEY UPDATE, not FOR UPDATE, which would conflict with the other writers'
+/// key-share locks and deadlock two of them.
+void completeIfLastTile(PGconn* conn, std::int64_t frameId, int tileCount);
 /// The tables of the rows of `frameTiles` (frame id and tile number, binary), comma-separated.
 std::string blockTableList(const PGresult* frameTiles);
 }
