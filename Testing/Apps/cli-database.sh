@@ -3,6 +3,7 @@
 # and named in the PG* variables (no --db: the standard variables must be honoured).
 # Usage: cli-database.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 step() { echo "== $*"; }
@@ -12,7 +13,7 @@ store() {
   local out
   out="$("$expect" 0 "stored as frame [0-9]+" -- "$@")" || { echo "$out"; return 1; }
   echo "$out"
-  stored="$(sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' <<< "$out" | tail -n 1)"
+  stored="$("$here/stored-frame-id.sh" <<< "$out")"
 }
 
 step "a database the user names gets no schema from a reading command; asrt db init makes it"

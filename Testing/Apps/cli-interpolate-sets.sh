@@ -7,6 +7,7 @@
 # why in one line; a movie named as a FIFO is written through it.
 # Usage: cli-interpolate-sets.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
 one_line="$(dirname "$expect")/expect-one-line-error.sh"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
@@ -35,7 +36,7 @@ step "the scenes and their textures copied here, two frames of the mass ramp sto
 cp -r "$scenes" scenes
 cp -r "$scenes/../textures" textures
 # The ids are read from what the store reports: a sequence may skip values.
-stored_id() { sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' | tail -n 1; }
+stored_id() { "$here/stored-frame-id.sh"; }
 A="$("$expect" 0 "stored as frame [0-9]+" -- "$asrt" trace scenes/fig4-mass-start.json -r 48x48 -q \
   --mass 0.4 --store=ramp -o a | stored_id)"
 B="$("$expect" 0 "stored as frame [0-9]+" -- "$asrt" trace scenes/fig5-mass-end.json -r 48x48 -q \

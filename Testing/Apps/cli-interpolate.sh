@@ -4,6 +4,7 @@
 # written and read back, and the pairs that cannot be interpolated are refused with their codes.
 # Usage: cli-interpolate.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 step() { echo "== $*"; }
@@ -13,7 +14,7 @@ store() {
   local out
   out="$("$expect" 0 "stored as frame [0-9]+" -- "$@")" || { echo "$out"; return 1; }
   echo "$out"
-  stored="$(sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' <<< "$out" | tail -n 1)"
+  stored="$("$here/stored-frame-id.sh" <<< "$out")"
 }
 
 step "store two ends of a short mass ramp (A, B), another size (SMALL), the Kerr disk (OTHER)"

@@ -8,6 +8,7 @@
 # the rays). Needs a throwaway server named by the PG* variables (asrtWithThrowawayPostgres).
 # Usage: cli-read-locks.sh CASE ASRT EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 case_name="$1"; asrt="$2"; expect="$3"; scenes="$4"; work="$5/$1"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 step() { echo "== $*"; }
@@ -33,7 +34,7 @@ store_frame() {
     echo "$out"
     return 1
   }
-  frame="$(sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' <<< "$out" | tail -n 1)"
+  frame="$("$here/stored-frame-id.sh" <<< "$out")"
 }
 
 # psql holds TABLE locked until release_lock, in a transaction fed through a FIFO.

@@ -8,6 +8,7 @@
 # /dev/null and /dev/full, written through, and checked to be character devices afterwards.
 # Usage: hostile-files.sh CASE ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 case_name="$1"; asrt="$2"; check="$3"; expect="$4"; scenes="$5"; work="$6/$1"
 rm -rf "$work"; mkdir -p "$work"; cd "$work"
 scene="$scenes/fig2-no-hole.json"
@@ -260,7 +261,7 @@ show_through_devices() {
   step "a stored frame, exported to a regular file for reference"
   # The id as the store reports it: a sequence may skip values.
   id="$("$expect" 0 "stored as frame [0-9]+" -- "$asrt" trace "$scene" -r 32x32 -q --store -o traced |
-    sed -n 's/.*stored as frame \([0-9][0-9]*\).*/\1/p' | tail -n 1)"
+    "$here/stored-frame-id.sh")"
   test -n "$id" || fail "no frame id reported"
   "$asrt" show "$id" --png ref.png > /dev/null
   step "show writes through a FIFO, which stays a FIFO"
