@@ -1,0 +1,415 @@
+#include "PathInterpolation.h"
+
+#include "ErrorEstimate.h"
+#include "FrameTracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+namespace asrt
+{
+namespace
+{
+/// The failure colour of FrameTracer: a ray that ended neither on an object nor cleanly.
+const Color failureColor(1.0, 0.0, 1.0);
+
+/// u differences the short way round, as the Jacobians take them: u is periodic on closed
+/// surfaces.
+double shortWay(double a, double b)
+{
+  return (a - b) - std::round(a - b);
+}
+
+[[noreturn]] void invalid(const std::string& what)
+{
+  throw InvalidParameter("path interpolation: " + what);
+}
+
+/// Squared colour difference summed over the channels, in levels² of 255.
+float colorError2(const Color& a, const Color& b)
+{
+  const Color d = 255.0 * (a - b);
+  return static_cast<float>(d.squaredNorm());
+}
+
+void checkKeys(const std::vector<PathKey>& keys, double t, int width, int height)
+{
+  if (width <= 0 || height <= 0)
+    invalid("the frame size must be positive, got " + std::to_string(width) + " x " +
+            std::to_string(height));
+  if (keys.size() < 2)
+    invalid("at least 2 key frames are needed, got " + std::to_string(keys.size()));
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  for (std::size_t k = 0; k < keys.size(); ++k)
+  {
+    if (!keys[k].records || keys[k].records->size() != n)
+      invalid("key frame " + std::to_string(k) + " has " +
+              std::to_string(keys[k].records ? keys[k].records->size() : 0) +
+              " records, the frame " + std::to_string(width) + " x " + std::to_string(height) +
+              " has " + std::to_string(n) + " pixels");
+    if (!std::isfinite(keys[k].s) || (k > 0 && !(keys[k].s > keys[k - 1].s)))
+      invalid("the keys' parameters must be finite and strictly increasing (key " +
+              std::to_string(k) + ")");
+    const std::vector<RayRecord>& r = *keys[k].records;
+    for (std::size_t p = 0; p < n; ++p)
+      if (r[p].i != static_cast<int>(p % width) || r[p].j != static_cast<int>(p / width))
+        invalid("key frame " + std::to_string(k) + ": record " + std::to_string(p) + " is pixel (" +
+                std::to_string(r[p].i) + ", " + std::to_string(r[p].j) + "), not (" +
+                std::to_string(p % width) + ", " + std::to_string(p / width) + ")");
+  }
+  if (!(t >= keys.front().s && t <= keys.back().s))
+  {
+    std::ostringstream os;
+    os.precision(17);
+    os << "t = " << t << " lies outside the keys' range [" << keys.front().s << ", "
+       << keys.back().s << "]";
+    invalid(os.str());
+  }
+}
+
+/// Whether a key's record can serve as a node: one ray (no edge through the pixel).
+bool singleRay(const RayRecord& r)
+{
+  return r.raysPerPixel <= 1;
+}
+
+/// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike;
+/// sets `estimate` as the header says.
+RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                       const Scene& scene, PathMethod& method, float& estimate)
+{
+  const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
+  const bool left =
+    a > 0 && singleRay((*keys[a - 1].records)[p]) && endAlike((*keys[a - 1].records)[p], *inner[0]);
+  const bool right = a + 2 < keys.size() && singleRay((*keys[a + 2].records)[p]) &&
+                     endAlike(*inner[1], (*keys[a + 2].records)[p]);
+  const RayRecord* nodes[4];
+  double s[4];
+  int n = 0;
+  const std::size_t first = left ? a - 1 : a, last = right ? a + 2 : a + 1;
+  for (std::size_t k = first; k <= last; ++k)
+  {
+    nodes[n] = &(*keys[k].records)[p];
+    s[n++] = keys[k].s;
+  }
+  RayRecord out = predictRecord(nodes, s, n, t);
+  out.color = shadePrediction(scene, out);
+  if (n == 2)
+  {
+    method = PathMethod::Linear;
+    estimate = colorError2(inner[0]->color, inner[1]->color);
+    return out;
+  }
+  method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
+  // One order lower: without the outer node farther from t (the left one on a tie).
+  const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
+  const int offset = dropLeft ? 1 : 0;
+  const RayRecord lower = predictRecord(nodes + offset, s + offset, n - 1, t);
+  estimate = colorError2(out.color, shadePrediction(scene, lower));
+  return out;
+}
+
+/// A pixel that a key supersampled (an edge runs through it) but whose topology holds between the
+/// keys: its colour, the average over the edge's two sides, varies smoothly with s while the edge
+/// stays inside it, so the colours themselves are interpolated; the record is the nearer key's.
+RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                           PathMethod& method, float& estimate)
+{
+  const RayRecord& ra = (*keys[a].records)[p];
+  const RayRecord& rb = (*keys[a + 1].records)[p];
+  const bool left = a > 0 && endAlike((*keys[a - 1].records)[p], ra);
+  const bool right = a + 2 < keys.size() && endAlike(rb, (*keys[a + 2].records)[p]);
+  const std::size_t first = left ? a - 1 : a, last = right ? a + 2 : a + 1;
+  double s[4], w[4];
+  Color c[4];
+  int n = 0;
+  for (std::size_t k = first; k <= last; ++k)
+  {
+    c[n] = (*keys[k].records)[p].color;
+    s[n++] = keys[k].s;
+  }
+  auto blend = [&](int offset, int count)
+  {
+    lagrangeWeights(s + offset, count, t, w);
+    Color out = Color::Zero();
+    for (int k = 0; k < count; ++k)
+      out += w[k] * c[offset + k];
+    return Color(out.cwiseMax(0.0).cwiseMin(1.0));
+  };
+  RayRecord out = t - keys[a].s <= keys[a + 1].s - t ? ra : rb;
+  out.color = blend(0, n);
+  if (n == 2)
+  {
+    method = PathMethod::Linear;
+    estimate = colorError2(ra.color, rb.color);
+    return out;
+  }
+  method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
+  const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
+  estimate = colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1));
+  return out;
+}
+}
+
+const char* toString(PathMethod m)
+{
+  switch (m)
+  {
+    case PathMethod::Key:
+      return "key";
+    case PathMethod::Cubic:
+      return "cubic";
+    case PathMethod::Quadratic:
+      return "quadratic";
+    case PathMethod::Linear:
+      return "linear";
+    case PathMethod::Retrace:
+      return "retrace";
+    case PathMethod::Retraced:
+      return "retraced";
+  }
+  return "unknown";
+}
+
+std::vector<std::size_t> PathFrame::counts() const
+{
+  std::vector<std::size_t> c(kPathMethodCount, 0);
+  for (std::uint8_t m : this->method)
+    ++c[std::min<std::size_t>(m, kPathMethodCount - 1)];
+  return c;
+}
+
+void lagrangeWeights(const double* s, int n, double t, double* w)
+{
+  for (int k = 0; k < n; ++k)
+  {
+    double num = 1.0, den = 1.0;
+    for (int m = 0; m < n; ++m)
+    {
+      if (m == k)
+        continue;
+      num *= t - s[m];
+      den *= s[k] - s[m];
+    }
+    w[k] = num / den;
+  }
+}
+
+bool endAlike(const RayRecord& a, const RayRecord& b)
+{
+  auto clean = [](Termination e) {
+    return e == Termination::Escaped || e == Termination::Captured || e == Termination::HitObject;
+  };
+  return a.objectId == b.objectId && a.termination == b.termination && clean(a.termination) &&
+         std::abs(a.winding - b.winding) < kWindingJump;
+}
+
+RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, double t)
+{
+  double w[4];
+  lagrangeWeights(s, n, t, w);
+  RayRecord out = *nodes[0];
+  out.origin = out.direction = out.hitPoint = out.hitNormal = Vec3::Zero();
+  out.momentum = Vec4::Zero();
+  out.u = out.v = out.affineLength = out.winding = out.chordError = out.maxAbsH = 0;
+  out.dudi = out.dudj = out.dvdi = out.dvdj = 0;
+  out.steps = 0;
+  out.raysPerPixel = 1;
+  // Each node's u the short way round from the previous node's, so that a u drifting across the
+  // seam stays one smooth function of s.
+  double u = nodes[0]->u;
+  for (int k = 0; k < n; ++k)
+  {
+    const RayRecord& r = *nodes[k];
+    if (k > 0)
+      u += shortWay(r.u, nodes[k - 1]->u);
+    out.u += w[k] * u;
+    out.v += w[k] * r.v;
+    out.origin += w[k] * r.origin;
+    out.direction += w[k] * r.direction;
+    out.momentum += w[k] * r.momentum;
+    out.hitPoint += w[k] * r.hitPoint;
+    out.hitNormal += w[k] * r.hitNormal;
+    out.affineLength += w[k] * r.affineLength;
+    out.winding += w[k] * r.winding;
+    out.dudi += w[k] * r.dudi;
+    out.dudj += w[k] * r.dudj;
+    out.dvdi += w[k] * r.dvdi;
+    out.dvdj += w[k] * r.dvdj;
+    out.maxAbsH = std::max(out.maxAbsH, r.maxAbsH);
+  }
+  out.u -= std::floor(out.u);
+  out.v = std::clamp(out.v, 0.0, 1.0);
+  if (out.direction.norm() > 0)
+    out.direction.normalize();
+  if (out.hitNormal.norm() > 0)
+    out.hitNormal.normalize();
+  out.imageOrder = static_cast<std::int32_t>(std::floor(out.winding / M_PI));
+  return out;
+}
+
+Color shadePrediction(const Scene& scene, const RayRecord& r)
+{
+  if (r.objectId >= 0)
+    return scene.shadeFootprint(r.objectId, r.u, r.v, { r.dudi, r.dvdi, r.dudj, r.dvdj });
+  switch (r.termination)
+  {
+    case Termination::Captured:
+      return scene.horizonColor;
+    case Termination::Escaped:
+      return scene.background;
+    default:
+      return failureColor;
+  }
+}
+
+PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,
+                               const Scene& scene)
+{
+  checkKeys(keys, t, width, height);
+  PathFrame f;
+  f.width = width;
+  f.height = height;
+  f.t = t;
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  // The inner pair (a, a + 1) brackets t.
+  std::size_t a = 0;
+  while (a + 2 < keys.size() && keys[a + 1].s <= t)
+    ++a;
+  for (const std::size_t k : { a, a + 1 })
+    if (keys[k].s == t)
+    {
+      f.records = *keys[k].records;
+      f.estimate.assign(n, 0.0f);
+      f.method.assign(n, static_cast<std::uint8_t>(PathMethod::Key));
+      return f;
+    }
+  const std::vector<RayRecord>& ka = *keys[a].records;
+  const std::vector<RayRecord>& kb = *keys[a + 1].records;
+  const bool nearerA = t - keys[a].s <= keys[a + 1].s - t;
+  std::vector<std::uint8_t> disagree(n, 0);
+  for (std::size_t p = 0; p < n; ++p)
+    disagree[p] = !endAlike(ka[p], kb[p]);
+  f.records.resize(n);
+  f.estimate.resize(n);
+  f.method.resize(n);
+  const float unknown = std::numeric_limits<float>::infinity();
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      const std::size_t p = static_cast<std::size_t>(j) * width + i;
+      // An edge that moved between the keys may cross the disagreeing pixels' neighbours at t.
+      bool near = false;
+      for (int dj = -1; dj <= 1 && !near; ++dj)
+        for (int di = -1; di <= 1 && !near; ++di)
+        {
+          const int x = i + di, y = j + dj;
+          near = x >= 0 && x < width && y >= 0 && y < height &&
+                 disagree[static_cast<std::size_t>(y) * width + x];
+        }
+      if (near)
+      {
+        f.records[p] = nearerA ? ka[p] : kb[p];
+        f.estimate[p] = unknown;
+        f.method[p] = static_cast<std::uint8_t>(PathMethod::Retrace);
+        continue;
+      }
+      PathMethod m;
+      if (!singleRay(ka[p]) || !singleRay(kb[p]))
+        f.records[p] = predictEdgePixel(keys, a, p, t, m, f.estimate[p]);
+      else
+        f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
+      f.method[p] = static_cast<std::uint8_t>(m);
+    }
+  return f;
+}
+
+PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, double targetDb,
+                                 double probeFraction)
+{
+  if (!(targetDb > 0.0 && targetDb <= kMaxQualityTargetDb))
+  {
+    std::ostringstream os;
+    os << "path interpolation: the quality target must lie in (0, " << kMaxQualityTargetDb
+       << "] dB, got " << targetDb;
+    throw InvalidParameter(os.str());
+  }
+  const CameraParameters& cam = tracer.description().camera;
+  if (cam.width != frame.width || cam.height != frame.height)
+    invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
+            std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
+            std::to_string(frame.height));
+  const std::size_t n = frame.records.size();
+  PathCompletion done;
+  const std::vector<std::int32_t> order = retraceOrder(frame.estimate);
+  std::vector<std::size_t> rank(n);
+  for (std::size_t k = 0; k < n; ++k)
+    rank[static_cast<std::size_t>(order[k])] = k;
+  for (std::uint8_t m : frame.method)
+    done.mustRetrace += m == static_cast<std::uint8_t>(PathMethod::Retrace);
+
+  std::vector<char> traced(n, 0);
+  auto trace = [&](const std::vector<std::int32_t>& pixels)
+  {
+    std::vector<std::pair<int, int>> ij;
+    std::vector<std::int32_t> which;
+    for (std::int32_t p : pixels)
+      if (!traced[static_cast<std::size_t>(p)])
+      {
+        traced[static_cast<std::size_t>(p)] = 1;
+        which.push_back(p);
+        ij.emplace_back(p % frame.width, p / frame.width);
+      }
+    const std::vector<RayRecord> records = tracer.tracePixels(ij);
+    std::vector<RayRecord> before(which.size());
+    for (std::size_t k = 0; k < which.size(); ++k)
+    {
+      const std::size_t p = static_cast<std::size_t>(which[k]);
+      before[k] = frame.records[p];
+      frame.records[p] = records[k];
+      frame.estimate[p] = 0.0f;
+      frame.method[p] = static_cast<std::uint8_t>(PathMethod::Retraced);
+    }
+    done.retraced += which.size();
+    return before;
+  };
+
+  // The pixels the keys cannot vouch for, and the probes, in one pass.
+  const std::vector<std::int32_t> probes = probePixels(n, probeFraction, 64, 0x9e3779b97f4a7c15ULL);
+  std::vector<std::size_t> probeRank;
+  std::vector<double> probeError2;
+  {
+    std::vector<std::int32_t> first(order.begin(), order.begin() + done.mustRetrace);
+    first.insert(first.end(), probes.begin(), probes.end());
+    std::vector<std::int32_t> firstDistinct;
+    std::vector<char> seen(n, 0);
+    for (std::int32_t p : first)
+      if (!seen[static_cast<std::size_t>(p)])
+      {
+        seen[static_cast<std::size_t>(p)] = 1;
+        firstDistinct.push_back(p);
+      }
+    const std::vector<RayRecord> before = trace(firstDistinct);
+    for (std::size_t k = 0; k < firstDistinct.size(); ++k)
+    {
+      const std::size_t p = static_cast<std::size_t>(firstDistinct[k]);
+      if (!std::binary_search(probes.begin(), probes.end(), firstDistinct[k]))
+        continue;
+      probeRank.push_back(rank[p]);
+      // A must-re-trace pixel's error is not the prediction's: it is re-traced whatever the
+      // probes say, and its rank lies below every count chosen.
+      probeError2.push_back(colorError2(before[k].color, frame.records[p].color));
+    }
+  }
+  done.probes = probes.size();
+  const RetraceChoice choice = chooseRetraceCount(n, probeRank, probeError2, targetDb);
+  done.estimatedPsnr = choice.estimatedPsnr;
+  const std::size_t count = std::max(choice.retrace, done.mustRetrace);
+  trace(std::vector<std::int32_t>(order.begin() + done.mustRetrace, order.begin() + count));
+  return done;
+}
+}

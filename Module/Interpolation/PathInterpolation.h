@@ -1,0 +1,127 @@
+// Frames between key frames of a movie path, interpolated per pixel in the path's parameter s (a
+// mass, a spin, an orbit angle): a pixel's ray record is a smooth function of s until its ray
+// changes topology (another object, another way of ending, another image), so each pixel is
+// predicted from its own records in the nearest key frames, then re-shaded.
+//
+//  - Nodes. The inner pair of keys brackets t. If their records of the pixel end alike (object,
+//    termination, a winding that is continuous between them), the outer neighbours join when they
+//    end alike too: 4 nodes give a cubic Lagrange prediction, 3 a quadratic, 2 a linear one.
+//    Otherwise the pixel must be re-traced, and so must its 8 neighbours (an edge that moves
+//    between the keys may cross them at t); so must a pixel that either inner key supersampled
+//    (an edge runs through it).
+//  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
+//    a new image of an object instead shows as a jump of the winding between keys (a ray that now
+//    passes the hole on its other side, or goes once more round it). So continuity is judged on
+//    the winding itself: keys whose windings differ by less than kWindingJump end alike.
+//  - Fields. u is taken the short way round from the nearest node's u, then wrapped into [0, 1);
+//    v, the Jacobians ∂(u, v)/∂(i, j), the hit point and normal, the path length and winding, and
+//    the initial ray are interpolated with the same weights. The colour is the texture filtered
+//    over the interpolated footprint (Scene::shadeFootprint), as a traced pixel's is.
+//  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
+//    dropped) differs from the prediction by about the lower order's error: that squared
+//    difference, summed over the channels in levels² of 255, ranks the pixels for re-tracing.
+//    A linear prediction has no lower order: its estimate is the squared colour step between the
+//    two keys, a bound on what linear interpolation can get wrong in between when the colour
+//    varies monotonically.
+// Plain C++ with OpenMP over rows; the result does not depend on the number of threads.
+#ifndef asrt_PathInterpolation_h
+#define asrt_PathInterpolation_h
+
+#include "RayRecord.h"
+#include "Scene.h"
+#include "asrtInterpolationModule.h"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace asrt
+{
+class FrameTracer;
+
+/// Windings of one pixel in two keys that differ by this much or more are a change of image.
+constexpr double kWindingJump = 0.5 * M_PI;
+
+/// One key frame of a path: its parameter and its records, one per pixel, row-major from the
+/// bottom-left (record k is pixel (k mod width, k / width)).
+struct PathKey
+{
+  double s = 0;
+  const std::vector<RayRecord>* records = nullptr;
+};
+
+/// How a pixel of a path frame got its record.
+enum class PathMethod : std::uint8_t
+{
+  Key = 0,       ///< t is a key's parameter: the key's record itself
+  Cubic = 1,     ///< 4 nodes
+  Quadratic = 2, ///< 3 nodes
+  Linear = 3,    ///< 2 nodes
+  Retrace = 4,   ///< the keys cannot vouch for it: to be traced (its record is the nearer key's)
+  Retraced = 5   ///< traced at t
+};
+constexpr int kPathMethodCount = 6;
+ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
+
+/// A frame at parameter t of a path.
+struct PathFrame
+{
+  int width = 0, height = 0;
+  double t = 0;
+  std::vector<RayRecord> records;
+  /// Per pixel, the estimated squared colour error summed over the channels (levels² of 255);
+  /// infinite where the pixel must be re-traced, 0 for keys and re-traced pixels.
+  std::vector<float> estimate;
+  std::vector<std::uint8_t> method; ///< PathMethod per pixel
+  /// Pixels per PathMethod.
+  std::vector<std::size_t> counts() const;
+};
+
+/// Lagrange weights w[k] of the nodes s[0..n) at t: Σ w[k] f(s[k]) is the polynomial of degree
+/// n − 1 through the nodes, at t. The nodes must be distinct; 1 ≤ n ≤ 4.
+ASRTINTERPOLATION_EXPORT void lagrangeWeights(const double* s, int n, double t, double* w);
+
+/// Whether two records of one pixel end alike: the same object, the same termination, a winding
+/// continuous between them (|Δwinding| < kWindingJump), and a ray that ended cleanly (escaped,
+/// captured or on an object).
+ASRTINTERPOLATION_EXPORT bool endAlike(const RayRecord& a, const RayRecord& b);
+
+/// The record of one pixel predicted from its records at the given nodes (1 to 4, distinct s,
+/// all ending alike): the fields the header lists, interpolated at t; the colour is left to the
+/// caller (shadePrediction). The pixel, termination and object are the first node's.
+ASRTINTERPOLATION_EXPORT RayRecord predictRecord(const RayRecord* const* nodes, const double* s,
+                                                 int n, double t);
+
+/// The colour a traced pixel with this record would show with one ray: the object's texture
+/// filtered over the record's footprint (point-sampled where the footprint is undefined), or the
+/// horizon's, the background's or the failure colour.
+ASRTINTERPOLATION_EXPORT Color shadePrediction(const Scene& scene, const RayRecord& r);
+
+/// The frame at t from the keys (at least 2, their s strictly increasing, t within
+/// [s_first, s_last], every key `width` × `height` records of the same pixels). Throws
+/// InvalidParameter naming what is wrong.
+ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
+                                                        int width, int height, const Scene& scene);
+
+/// What completing a path frame for a quality target did.
+struct PathCompletion
+{
+  std::size_t mustRetrace = 0; ///< pixels the keys could not vouch for
+  std::size_t retraced = 0;    ///< pixels traced at t in all (the above, chosen ones and probes)
+  std::size_t probes = 0;      ///< pixels traced to measure the estimate's scale
+  double estimatedPsnr = 0;    ///< of the completed frame against the frame traced at t
+};
+
+/// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
+/// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
+/// the frame traced at t to reach `targetDb`: the estimate's scale is calibrated by probes, a
+/// fixed pseudo-random `probeFraction` of the pixels traced at t (chooseRetraceCount). Re-traced
+/// records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws InvalidParameter
+/// for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another size.
+ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
+                                                          const FrameTracer& tracer,
+                                                          double targetDb,
+                                                          double probeFraction = 0.01);
+}
+
+#endif

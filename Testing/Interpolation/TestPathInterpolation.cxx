@@ -1,0 +1,329 @@
+// Per-pixel interpolation along a movie path (PathInterpolation.h) against independent truth:
+// polynomials the Lagrange weights must reproduce, synthetic records that are known cubics of s,
+// and frames the test traces itself at the interpolated parameter.
+#include "FrameTracer.h"
+#include "PathInterpolation.h"
+#include "SceneFile.h"
+#include "TextureFiles.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace asrt;
+
+namespace
+{
+std::string errorOf(const std::function<void()>& f)
+{
+  try
+  {
+    f();
+  }
+  catch (const std::exception& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+double polynomial(const std::vector<double>& c, double x)
+{
+  double y = 0;
+  for (auto it = c.rbegin(); it != c.rend(); ++it)
+    y = y * x + *it;
+  return y;
+}
+
+/// A record of pixel (0, 0) on object 1 whose fields are the given polynomials of s.
+RayRecord syntheticRecord(double s, const std::vector<double>& u, const std::vector<double>& v)
+{
+  RayRecord r;
+  r.termination = Termination::HitObject;
+  r.objectId = 1;
+  const double uu = polynomial(u, s);
+  r.u = uu - std::floor(uu);
+  r.v = polynomial(v, s);
+  r.winding = 1.0 + 0.1 * s;
+  r.affineLength = polynomial(u, s) + 40.0;
+  r.dudi = polynomial(v, s);
+  r.dudj = r.dvdi = 0.0;
+  r.dvdj = polynomial(u, s);
+  r.hitPoint = Vec3(polynomial(u, s), polynomial(v, s), 2.0);
+  return r;
+}
+
+SceneDescription rampScene(double mass, int side)
+{
+  const std::string path = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/fig4-mass-start.json";
+  SceneDescription d =
+    loadSceneFile(path, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
+  d.spacetime.mass = mass;
+  d.camera.width = d.camera.height = side;
+  return d;
+}
+
+std::vector<RayRecord> traceFrame(const SceneDescription& d)
+{
+  return FrameTracer(d).traceRows(0, d.camera.height);
+}
+
+/// Squared colour error summed over the channels, levels² of 255.
+double error2(const RayRecord& a, const RayRecord& b)
+{
+  return (255.0 * (a.color - b.color)).squaredNorm();
+}
+
+double psnrOf(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
+{
+  double sum = 0;
+  for (std::size_t p = 0; p < a.size(); ++p)
+    sum += error2(a[p], b[p]);
+  const double mse = sum / (3.0 * a.size());
+  return mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
+}
+}
+
+TEST(PathInterpolation, LagrangeWeightsReproducePolynomialsOfTheirDegree)
+{
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coefficient(-3.0, 3.0);
+  for (int n = 1; n <= 4; ++n)
+    for (int trial = 0; trial < 50; ++trial)
+    {
+      double s[4] = { -0.7, 0.05, 0.3, 1.9 };
+      std::vector<double> c(static_cast<std::size_t>(n));
+      for (double& x : c)
+        x = coefficient(rng);
+      const double t = -0.5 + 2.0 * trial / 50.0;
+      double w[4];
+      lagrangeWeights(s, n, t, w);
+      double sum = 0, weights = 0;
+      for (int k = 0; k < n; ++k)
+      {
+        sum += w[k] * polynomial(c, s[k]);
+        weights += w[k];
+      }
+      EXPECT_NEAR(sum, polynomial(c, t), 1e-12 * (1.0 + std::abs(polynomial(c, t))));
+      EXPECT_NEAR(weights, 1.0, 1e-13);
+    }
+}
+
+// (u, v) are cubics of s, and u crosses the seam between the nodes: 4 nodes give them exactly, and
+// the quadratic one order lower misses by exactly what the cubic's estimate measures.
+TEST(PathInterpolation, FourNodesAreExactForCubicsAndTheLowerOrderMissesByItsOwnError)
+{
+  const std::vector<double> u = { 0.93, 0.2, -0.05, 0.03 }, v = { 0.2, 0.3, 0.1, -0.08 };
+  const double s[4] = { 0.0, 0.4, 0.9, 1.3 };
+  RayRecord keys[4];
+  const RayRecord* nodes[4];
+  for (int k = 0; k < 4; ++k)
+  {
+    keys[k] = syntheticRecord(s[k], u, v);
+    nodes[k] = &keys[k];
+  }
+  for (double t : { 0.45, 0.6, 0.85 })
+  {
+    const RayRecord cubic = predictRecord(nodes, s, 4, t);
+    const double exactU = polynomial(u, t) - std::floor(polynomial(u, t));
+    EXPECT_NEAR(cubic.u, exactU, 1e-12) << t;
+    EXPECT_NEAR(cubic.v, polynomial(v, t), 1e-12) << t;
+    EXPECT_NEAR(cubic.dvdj, polynomial(u, t), 1e-12) << t;
+    EXPECT_NEAR(cubic.hitPoint.x(), polynomial(u, t), 1e-12) << t;
+    // The quadratic through three of the nodes misses by the cubic term's share, which is exactly
+    // the difference of the two predictions: the estimate's measure.
+    const RayRecord quadratic = predictRecord(nodes, s, 3, t);
+    double w[3];
+    lagrangeWeights(s, 3, t, w);
+    double quadraticV = 0;
+    for (int k = 0; k < 3; ++k)
+      quadraticV += w[k] * polynomial(v, s[k]);
+    EXPECT_NEAR(quadratic.v, quadraticV, 1e-12);
+    EXPECT_NEAR(cubic.v - quadratic.v, polynomial(v, t) - quadraticV, 1e-12);
+    EXPECT_GT(std::abs(cubic.v - quadratic.v), 1e-4) << "the cubic term must show at " << t;
+  }
+  // A quadratic path: the two orders agree, so the estimate is zero.
+  const std::vector<double> q = { 0.1, 0.5, -0.2 };
+  for (int k = 0; k < 4; ++k)
+    keys[k] = syntheticRecord(s[k], q, q);
+  const RayRecord a = predictRecord(nodes, s, 4, 0.7), b = predictRecord(nodes, s, 3, 0.7);
+  EXPECT_NEAR(a.v, b.v, 1e-13);
+  EXPECT_NEAR(a.v, polynomial(q, 0.7), 1e-13);
+}
+
+TEST(PathInterpolation, RecordsEndAlikeOnlyOnTheSameObjectTerminationAndImage)
+{
+  RayRecord a;
+  a.termination = Termination::HitObject;
+  a.objectId = 2;
+  a.winding = 3.0;
+  RayRecord b = a;
+  EXPECT_TRUE(endAlike(a, b));
+  b.winding = 3.0 + 0.9 * kWindingJump;
+  EXPECT_TRUE(endAlike(a, b));
+  b.winding = 3.0 + kWindingJump;
+  EXPECT_FALSE(endAlike(a, b)) << "a jump of the winding is another image";
+  b = a;
+  b.objectId = 3;
+  EXPECT_FALSE(endAlike(a, b));
+  b = a;
+  b.termination = Termination::Escaped;
+  EXPECT_FALSE(endAlike(a, b));
+  a.termination = b.termination = Termination::StepBudget;
+  a.objectId = b.objectId = -1;
+  EXPECT_FALSE(endAlike(a, b)) << "a ray that did not end cleanly vouches for nothing";
+}
+
+TEST(PathInterpolation, BadKeysAndTargetsAreRefusedByName)
+{
+  const SceneDescription d = rampScene(0.5, 4);
+  std::vector<RayRecord> r(16);
+  for (int p = 0; p < 16; ++p)
+  {
+    r[p].i = p % 4;
+    r[p].j = p / 4;
+  }
+  const Scene& scene = *d.scene;
+  EXPECT_NE(errorOf(
+              [&] {
+                interpolateAlongPath({ { 0.0, &r } }, 0.0, 4, 4, scene);
+              })
+              .find("at least 2 key frames"),
+            std::string::npos);
+  EXPECT_NE(errorOf(
+              [&] {
+                interpolateAlongPath({ { 0.5, &r }, { 0.5, &r } }, 0.5, 4, 4, scene);
+              })
+              .find("strictly increasing"),
+            std::string::npos);
+  EXPECT_NE(errorOf(
+              [&] {
+                interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 1.5, 4, 4, scene);
+              })
+              .find("outside the keys' range"),
+            std::string::npos);
+  EXPECT_NE(errorOf(
+              [&] {
+                interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 5, 4, scene);
+              })
+              .find("has 16 records"),
+            std::string::npos);
+  PathFrame f = interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene);
+  const FrameTracer tracer(d);
+  for (double bad : { 0.0, -3.0, std::nan(""), 100.5 })
+    EXPECT_NE(errorOf([&] { completePathFrame(f, tracer, bad); }).find("quality target"),
+              std::string::npos)
+      << bad;
+}
+
+// The mass ramp of Figs. 4–5, four key frames h = 0.1 apart, the frame between the middle two
+// against the frame the test traces there itself.
+class PathInterpolationRamp : public ::testing::Test
+{
+protected:
+  static constexpr int Side = 96;
+  static void SetUpTestSuite()
+  {
+    for (int k = 0; k < 4; ++k)
+      keys().push_back(traceFrame(rampScene(0.65 + 0.05 * k, Side)));
+    truth() = traceFrame(rampScene(T, Side));
+  }
+  static std::vector<std::vector<RayRecord>>& keys()
+  {
+    static std::vector<std::vector<RayRecord>> k;
+    return k;
+  }
+  static std::vector<RayRecord>& truth()
+  {
+    static std::vector<RayRecord> t;
+    return t;
+  }
+  static PathFrame interpolated()
+  {
+    std::vector<PathKey> path;
+    for (int k = 0; k < 4; ++k)
+      path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
+    return interpolateAlongPath(path, T, Side, Side, *rampScene(T, Side).scene);
+  }
+  static constexpr double T = 0.72;
+};
+
+TEST_F(PathInterpolationRamp, KeysAreReturnedAsTheyAre)
+{
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
+  const PathFrame f =
+    interpolateAlongPath(path, path[1].s, Side, Side, *rampScene(path[1].s, Side).scene);
+  ASSERT_EQ(f.records.size(), keys()[1].size());
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+    ASSERT_EQ(f.records[p].color, keys()[1][p].color) << p;
+  EXPECT_EQ(f.counts()[static_cast<int>(PathMethod::Key)], f.records.size());
+}
+
+TEST_F(PathInterpolationRamp, PredictedPixelsAreCloseAndTheEstimateFindsTheWorst)
+{
+  const PathFrame f = interpolated();
+  const std::vector<std::size_t> c = f.counts();
+  std::printf("[ path ] %d x %d at M = %.2f: cubic %zu, quadratic %zu, linear %zu, must re-trace "
+              "%zu\n",
+              Side, Side, T, c[1], c[2], c[3], c[4]);
+  EXPECT_GT(c[static_cast<int>(PathMethod::Cubic)], f.records.size() / 2);
+  std::vector<std::size_t> predicted;
+  double sum = 0;
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+    if (f.method[p] != static_cast<std::uint8_t>(PathMethod::Retrace))
+    {
+      predicted.push_back(p);
+      sum += error2(f.records[p], truth()[p]);
+      // Off the pixels the keys cannot vouch for, no pixel changes object.
+      EXPECT_EQ(f.records[p].objectId, truth()[p].objectId) << p;
+    }
+  const double mse = sum / (3.0 * predicted.size());
+  const double psnr = 10.0 * std::log10(255.0 * 255.0 / mse);
+  std::printf("[ path ] predicted pixels against the traced frame: %.1f dB\n", psnr);
+  EXPECT_GT(psnr, 30.0);
+  // The tenth of the predicted pixels the estimate ranks worst carries far more of the true error
+  // than a tenth drawn at random would (which carries a tenth of it).
+  std::vector<std::size_t> ranked = predicted;
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [&](std::size_t a, std::size_t b) { return f.estimate[a] > f.estimate[b]; });
+  double worst = 0;
+  for (std::size_t k = 0; k < ranked.size() / 10; ++k)
+    worst += error2(f.records[ranked[k]], truth()[ranked[k]]);
+  std::printf("[ path ] the estimate's worst tenth holds %.0f %% of the true error\n",
+              100.0 * worst / sum);
+  EXPECT_GT(worst, 0.4 * sum);
+}
+
+TEST_F(PathInterpolationRamp, AQualityTargetIsMetByReTracingTheWorstPixels)
+{
+  const SceneDescription atT = rampScene(T, Side);
+  const FrameTracer tracer(atT);
+  for (double target : { 30.0, 40.0 })
+  {
+    PathFrame f = interpolated();
+    const std::size_t must = f.counts()[static_cast<int>(PathMethod::Retrace)];
+    const PathCompletion done = completePathFrame(f, tracer, target);
+    const double psnr = psnrOf(f.records, truth());
+    std::printf("[ path ] target %.0f dB: %.1f dB, %zu re-traced (%zu must, %zu probes) of %zu\n",
+                target, psnr, done.retraced, done.mustRetrace, done.probes, f.records.size());
+    EXPECT_EQ(done.mustRetrace, must);
+    EXPECT_GE(psnr, target - 1.0);
+    EXPECT_LT(done.retraced, f.records.size());
+    // Re-traced pixels are the traced frame's, to the bit.
+    for (std::size_t p = 0; p < f.records.size(); ++p)
+    {
+      if (f.method[p] == static_cast<std::uint8_t>(PathMethod::Retraced))
+      {
+        ASSERT_EQ(f.records[p].color, truth()[p].color) << p;
+      }
+    }
+  }
+}
