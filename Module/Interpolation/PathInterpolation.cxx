@@ -149,8 +149,59 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   }
   method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
-  estimate = colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1));
+  // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
+  // roughly: the keys' colour step bounds what the edge's motion can change in between.
+  estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1)),
+                      colorError2(ra.color, rb.color));
   return out;
+}
+
+/// The re-trace count from the estimate itself, its scale measured by the probes: the error left
+/// after re-tracing the first k pixels of `order` is c · Σ (estimates of the rest, probes
+/// excluded: they are traced), c = max(1, Σ true / Σ estimated over the probes the keys vouched
+/// for). The floor keeps the estimate's own scale where the probes saw less than it predicts (the
+/// estimate is the lower order's error, an over-estimate where the higher order is better).
+/// False if the probes saw error where the estimate saw none (c unbounded): the caller then falls
+/// back to the probes alone.
+bool chooseByCalibratedEstimate(const std::vector<float>& estimate,
+                                const std::vector<std::int32_t>& order, std::size_t must,
+                                const std::vector<std::int32_t>& probes,
+                                const std::vector<std::size_t>& probeRank,
+                                const std::vector<double>& probeError2, double targetDb,
+                                std::size_t& count, double& estimatedPsnr)
+{
+  double trueSum = 0, estimatedSum = 0;
+  for (std::size_t q = 0; q < probes.size(); ++q)
+    if (probeRank[q] >= must)
+    {
+      trueSum += probeError2[q];
+      estimatedSum += estimate[static_cast<std::size_t>(probes[q])];
+    }
+  if (!(estimatedSum > 0) && trueSum > 0)
+    return false;
+  const double c = estimatedSum > 0 ? std::max(1.0, trueSum / estimatedSum) : 1.0;
+  const std::size_t n = order.size();
+  std::vector<double> rest(n + 1, 0.0);
+  for (std::size_t k = n; k-- > must;)
+  {
+    const std::int32_t p = order[k];
+    const bool probe = std::binary_search(probes.begin(), probes.end(), p);
+    rest[k] =
+      rest[k + 1] + (probe ? 0.0 : static_cast<double>(estimate[static_cast<std::size_t>(p)]));
+  }
+  count = n;
+  estimatedPsnr = std::numeric_limits<double>::infinity();
+  for (std::size_t k = must; k <= n; ++k)
+  {
+    const double psnr = psnrOfMse(c * rest[k] / (3.0 * static_cast<double>(n)));
+    if (psnr >= targetDb)
+    {
+      count = k;
+      estimatedPsnr = psnr;
+      break;
+    }
+  }
+  return true;
 }
 }
 
@@ -352,6 +403,7 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
   for (std::uint8_t m : frame.method)
     done.mustRetrace += m == static_cast<std::uint8_t>(PathMethod::Retrace);
 
+  const std::vector<float> estimates = frame.estimate; // as predicted, before any re-trace
   std::vector<char> traced(n, 0);
   auto trace = [&](const std::vector<std::int32_t>& pixels)
   {
@@ -406,9 +458,15 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
     }
   }
   done.probes = probes.size();
-  const RetraceChoice choice = chooseRetraceCount(n, probeRank, probeError2, targetDb);
-  done.estimatedPsnr = choice.estimatedPsnr;
-  const std::size_t count = std::max(choice.retrace, done.mustRetrace);
+  std::size_t count = 0;
+  if (!chooseByCalibratedEstimate(estimates, order, done.mustRetrace, probes, probeRank,
+                                  probeError2, targetDb, count, done.estimatedPsnr))
+  {
+    const RetraceChoice choice = chooseRetraceCount(n, probeRank, probeError2, targetDb);
+    done.estimatedPsnr = choice.estimatedPsnr;
+    count = choice.retrace;
+  }
+  count = std::max(count, done.mustRetrace);
   trace(std::vector<std::int32_t>(order.begin() + done.mustRetrace, order.begin() + count));
   return done;
 }

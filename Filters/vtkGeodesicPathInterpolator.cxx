@@ -1,0 +1,433 @@
+#include "vtkGeodesicPathInterpolator.h"
+
+#include "AlgorithmAbort.h"
+
+#include "ErrorEstimate.h"
+#include "FrameMatching.h"
+#include "FrameTracer.h"
+#include "GeodesicRecordArrays.h"
+#include "GeodesicSceneLoading.h"
+#include "PathInterpolation.h"
+#include "SceneFile.h"
+
+#include "vtkAlgorithmOutput.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkFloatArray.h"
+#include "vtkIdTypeArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPolyData.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+vtkStandardNewMacro(vtkGeodesicPathInterpolator);
+
+namespace
+{
+std::string keyName(std::size_t k)
+{
+  return "key frame " + std::to_string(k);
+}
+
+/// The angle between the eye's directions from the hole in two frames, in degrees.
+double eyeAngle(const asrt::SceneDescription& a, const asrt::SceneDescription& b)
+{
+  const asrt::Vec3 u = a.camera.position.normalized(), v = b.camera.position.normalized();
+  return std::atan2(u.cross(v).norm(), u.dot(v)) * 180.0 / M_PI;
+}
+}
+
+struct vtkGeodesicPathInterpolator::Internals
+{
+  std::vector<asrt::SceneDescription> Scenes; ///< the keys', without image textures
+  std::vector<double> S;                      ///< the path parameter per key
+  std::string ParameterName;
+  /// +1 if s increases along the keys, −1 if it decreases (the interpolation runs in ±s).
+  double Direction = 1.0;
+
+  // The keys' records and what they were read from.
+  std::vector<std::vector<asrt::RayRecord>> Records;
+  std::vector<const void*> InputData;
+  std::vector<vtkMTimeType> InputTime;
+  // The scene with its textures, for shading and tracing, and the text it was loaded from.
+  asrt::SceneDescription Shading;
+  std::string ShadingText, ShadingDirectory;
+
+  /// The keys' scenes, checked against each other, and the path parameter.
+  void Validate(vtkGeodesicPathInterpolator* self, const std::vector<vtkPolyData*>& hits)
+  {
+    if (hits.size() < 2)
+      throw asrt::InvalidParameter("at least 2 key frames are needed, got " +
+                                   std::to_string(hits.size()));
+    this->Scenes.assign(hits.size(), {});
+    for (std::size_t k = 0; k < hits.size(); ++k)
+    {
+      if (!hits[k] || hits[k]->GetNumberOfPoints() == 0)
+        throw asrt::InvalidParameter(keyName(k) + " has no hit points (did its source fail?)");
+      try
+      {
+        this->Scenes[k] = asrt::frameFromFieldData(hits[k]->GetFieldData());
+      }
+      catch (const std::exception& e)
+      {
+        throw asrt::InvalidParameter(keyName(k) + ": " + e.what());
+      }
+      if (this->Scenes[k].subset.count > 0)
+        throw asrt::InvalidParameter(keyName(k) +
+                                     " holds only a subset of its pixels: only whole frames can "
+                                     "be key frames");
+      const asrt::CameraParameters &c0 = this->Scenes[0].camera, &ck = this->Scenes[k].camera;
+      if (c0.width != ck.width || c0.height != ck.height)
+      {
+        std::ostringstream os;
+        os << "key frames of different resolutions: " << c0.width << " x " << c0.height
+           << " (key frame 0) and " << ck.width << " x " << ck.height << " (" << keyName(k) << ")";
+        throw asrt::InvalidParameter(os.str());
+      }
+      const std::string difference = asrt::sceneDifference(this->Scenes[0], this->Scenes[k]);
+      if (!difference.empty())
+        throw asrt::InvalidParameter("key frames 0 and " + std::to_string(k) +
+                                     " are of different scenes: " + difference);
+    }
+    const int n = self->NumberOfIntermediateFrames;
+    if (n < 1 || n > kMaxIntermediateFrames)
+      throw asrt::InvalidParameter("NumberOfIntermediateFrames must lie in [1, " +
+                                   std::to_string(kMaxIntermediateFrames) + "], got " +
+                                   std::to_string(n));
+    if (!(self->QualityTarget >= 0.0 && self->QualityTarget <= asrt::kMaxQualityTargetDb))
+    {
+      std::ostringstream os;
+      os << "QualityTarget must lie in [0, " << asrt::kMaxQualityTargetDb
+         << "] dB (0: no re-tracing), got " << self->QualityTarget;
+      throw asrt::InvalidParameter(os.str());
+    }
+    if (!(self->ProbeFraction > 0.0 && self->ProbeFraction <= 1.0))
+    {
+      std::ostringstream os;
+      os << "ProbeFraction must lie in (0, 1], got " << self->ProbeFraction;
+      throw asrt::InvalidParameter(os.str());
+    }
+    this->ChooseParameter();
+  }
+
+  /// The first of mass, spin, charge that differs between the keys, else the eye's accumulated
+  /// angle about the hole; it must change strictly monotonically.
+  void ChooseParameter()
+  {
+    const std::size_t K = this->Scenes.size();
+    using Get = double (*)(const asrt::SceneDescription&);
+    const std::pair<const char*, Get> quantities[] = {
+      { "mass", [](const asrt::SceneDescription& d) { return d.spacetime.mass; } },
+      { "spin", [](const asrt::SceneDescription& d) { return d.spacetime.spin; } },
+      { "charge", [](const asrt::SceneDescription& d) { return d.spacetime.charge; } },
+    };
+    this->S.assign(K, 0.0);
+    this->ParameterName.clear();
+    for (const auto& [name, get] : quantities)
+    {
+      bool differs = false;
+      for (std::size_t k = 1; k < K; ++k)
+        differs = differs || get(this->Scenes[k]) != get(this->Scenes[0]);
+      if (!differs)
+        continue;
+      this->ParameterName = name;
+      for (std::size_t k = 0; k < K; ++k)
+        this->S[k] = get(this->Scenes[k]);
+      break;
+    }
+    if (this->ParameterName.empty())
+    {
+      this->ParameterName = "orbit angle";
+      for (std::size_t k = 1; k < K; ++k)
+        this->S[k] = this->S[k - 1] + eyeAngle(this->Scenes[k - 1], this->Scenes[k]);
+    }
+    this->Direction = this->S[1] > this->S[0] ? 1.0 : -1.0;
+    for (std::size_t k = 1; k < K; ++k)
+      if (!(this->Direction * (this->S[k] - this->S[k - 1]) > 0.0))
+      {
+        std::ostringstream os;
+        os.precision(17);
+        os << "the path parameter (" << this->ParameterName
+           << ") must change monotonically along the key frames: " << keyName(k - 1) << " has "
+           << this->S[k - 1] << ", " << keyName(k) << " " << this->S[k];
+        throw asrt::InvalidParameter(os.str());
+      }
+  }
+
+  /// The keys' records in pixel order, read again only when an input changed.
+  void Read(const std::vector<vtkPolyData*>& hits)
+  {
+    const std::size_t K = hits.size();
+    this->Records.resize(K);
+    this->InputData.resize(K, nullptr);
+    this->InputTime.resize(K, 0);
+    const asrt::CameraParameters& c = this->Scenes[0].camera;
+    for (std::size_t k = 0; k < K; ++k)
+    {
+      if (this->InputData[k] == hits[k] && this->InputTime[k] == hits[k]->GetMTime())
+        continue;
+      std::vector<asrt::RayRecord> r = asrt::polyDataToRecords(hits[k]);
+      std::sort(r.begin(), r.end(),
+                [](const asrt::RayRecord& a, const asrt::RayRecord& b)
+                { return a.j != b.j ? a.j < b.j : a.i < b.i; });
+      if (r.size() != static_cast<std::size_t>(c.width) * c.height)
+        throw asrt::InvalidParameter(keyName(k) + " has " + std::to_string(r.size()) +
+                                     " rays, its frame " + std::to_string(c.width * c.height) +
+                                     " pixels");
+      this->Records[k] = std::move(r);
+      this->InputData[k] = hits[k];
+      this->InputTime[k] = hits[k]->GetMTime();
+    }
+  }
+
+  /// The scene with its image textures, loaded again only when its text or folder changed.
+  void LoadShading(const char* directory)
+  {
+    const std::string text = asrt::effectiveSceneText(this->Scenes[0]);
+    const std::string dir = directory ? directory : "";
+    if (this->Shading.scene && text == this->ShadingText && dir == this->ShadingDirectory)
+      return;
+    try
+    {
+      this->Shading = asrt::loadScene(text.c_str(), nullptr, directory);
+    }
+    catch (const std::exception& e)
+    {
+      throw asrt::InvalidParameter(std::string("cannot load the key frames' scene to shade "
+                                               "interpolated pixels: ") +
+                                   e.what());
+    }
+    this->ShadingText = text;
+    this->ShadingDirectory = dir;
+  }
+};
+
+vtkGeodesicPathInterpolator::vtkGeodesicPathInterpolator()
+  : Impl(new Internals)
+{
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(1);
+}
+
+vtkGeodesicPathInterpolator::~vtkGeodesicPathInterpolator()
+{
+  this->SetTextureDirectory(nullptr);
+}
+
+const char* vtkGeodesicPathInterpolator::GetPathParameterName() const
+{
+  return this->Impl->ParameterName.c_str();
+}
+
+int vtkGeodesicPathInterpolator::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  info->Set(vtkAlgorithm::INPUT_IS_REPEATABLE(), 1);
+  return 1;
+}
+
+namespace
+{
+std::vector<vtkPolyData*> keyFrames(vtkAlgorithm* self, vtkInformationVector* in)
+{
+  std::vector<vtkPolyData*> hits;
+  for (int k = 0; k < self->GetNumberOfInputConnections(0); ++k)
+    hits.push_back(vtkPolyData::GetData(in, k));
+  return hits;
+}
+}
+
+int vtkGeodesicPathInterpolator::RequestInformation(vtkInformation*,
+                                                    vtkInformationVector** inputVector,
+                                                    vtkInformationVector* outputVector)
+{
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  try
+  {
+    // The output's size and time steps follow from the keys themselves.
+    for (int k = 0; k < this->GetNumberOfInputConnections(0); ++k)
+    {
+      vtkAlgorithmOutput* connection = this->GetInputConnection(0, k);
+      if (connection && connection->GetProducer())
+        connection->GetProducer()->Update(connection->GetIndex());
+    }
+    this->Impl->Validate(this, keyFrames(this, inputVector[0]));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    if (vtkDataObject* out = vtkDataObject::GetData(outputVector, 0))
+      out->Initialize();
+    return 0;
+  }
+  const asrt::CameraParameters& c = this->Impl->Scenes[0].camera;
+  const int ext[6] = { 0, c.width - 1, 0, c.height - 1, 0, 0 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
+  outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
+  outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
+  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_UNSIGNED_CHAR, 3);
+  const int n = this->NumberOfIntermediateFrames;
+  const int keys = static_cast<int>(this->Impl->Scenes.size());
+  std::vector<double> steps;
+  for (int k = 0; k + 1 < keys; ++k)
+    for (int j = 0; j <= n; ++j)
+      steps.push_back(k + static_cast<double>(j) / (n + 1));
+  steps.push_back(keys - 1);
+  const double range[2] = { 0.0, static_cast<double>(keys - 1) };
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), steps.data(),
+               static_cast<int>(steps.size()));
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+  return 1;
+}
+
+int vtkGeodesicPathInterpolator::RequestUpdateExtent(vtkInformation*,
+                                                     vtkInformationVector** inputVector,
+                                                     vtkInformationVector*)
+{
+  // The keys are not temporal and are needed whole, whatever time or piece is asked of us.
+  for (int k = 0; k < inputVector[0]->GetNumberOfInformationObjects(); ++k)
+  {
+    vtkInformation* in = inputVector[0]->GetInformationObject(k);
+    in->Remove(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
+    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
+  }
+  return 1;
+}
+
+namespace
+{
+/// The output's point arrays beyond the source's, and its field data.
+void addPathArrays(const asrt::PathFrame& f, vtkImageData* image)
+{
+  const vtkIdType n = static_cast<vtkIdType>(f.records.size());
+  auto method = asrt::makeArray<vtkUnsignedCharArray>("PathMethod", 1, n);
+  std::copy(f.method.begin(), f.method.end(), method->GetPointer(0));
+  auto estimate = asrt::makeArray<vtkFloatArray>("ErrorEstimate", 1, n);
+  std::copy(f.estimate.begin(), f.estimate.end(), estimate->GetPointer(0));
+  image->GetPointData()->AddArray(method);
+  image->GetPointData()->AddArray(estimate);
+  const std::vector<std::size_t> counts = f.counts();
+  std::vector<double> shares;
+  for (std::size_t c : counts)
+    shares.push_back(static_cast<double>(c) / static_cast<double>(std::max<vtkIdType>(n, 1)));
+  auto fractions = vtkSmartPointer<vtkDoubleArray>::New();
+  fractions->SetName("PathMethodFractions");
+  fractions->SetNumberOfComponents(static_cast<int>(shares.size()));
+  fractions->InsertNextTuple(shares.data());
+  image->GetFieldData()->AddArray(fractions);
+}
+}
+
+int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                                             vtkInformationVector* outputVector)
+{
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkImageData* image = vtkImageData::GetData(outputVector, 0);
+  this->LastRetracedCount = 0;
+  this->LastMustRetraceCount = 0;
+  this->LastEstimatedPsnr = 0.0;
+  Internals& in = *this->Impl;
+  try
+  {
+    const std::vector<vtkPolyData*> hits = keyFrames(this, inputVector[0]);
+    if (hits.size() != in.Scenes.size())
+      throw asrt::InvalidParameter("the key frames changed since the pipeline's information pass");
+    const int K = static_cast<int>(hits.size());
+    double time = 0;
+    if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+      time = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+    if (std::isnan(time))
+      throw asrt::InvalidParameter("the requested time is NaN");
+    time = std::clamp(time, 0.0, static_cast<double>(K - 1));
+    in.Read(hits);
+    in.LoadShading(this->TextureDirectory);
+    this->UpdateProgress(0.1);
+
+    // The inner pair (a, a + 1) and the fraction of the way from a to a + 1.
+    const int a = std::min(static_cast<int>(std::floor(time)), K - 2);
+    const double fraction = time - a;
+    const double s = fraction >= 1.0 ? in.S[a + 1] : in.S[a] + fraction * (in.S[a + 1] - in.S[a]);
+    std::vector<asrt::PathKey> keys;
+    for (int k = 0; k < K; ++k)
+      keys.push_back({ in.Direction * in.S[k], &in.Records[static_cast<std::size_t>(k)] });
+    const asrt::CameraParameters& cam = in.Scenes[0].camera;
+    asrt::PathFrame f =
+      asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height, *in.Shading.scene);
+    this->UpdateProgress(0.3);
+    const asrt::FrameParameters p = asrt::interpolateParameters(
+      asrt::parametersOf(in.Scenes[a]), asrt::parametersOf(in.Scenes[a + 1]), fraction,
+      asrt::CameraPath::Automatic);
+    this->LastMustRetraceCount =
+      static_cast<vtkIdType>(f.counts()[static_cast<std::size_t>(asrt::PathMethod::Retrace)]);
+    if (this->QualityTarget > 0.0 && fraction > 0.0 && fraction < 1.0)
+    {
+      asrt::SceneDescription atT = in.Shading;
+      asrt::applyParameters(p, atT);
+      if (in.Scenes[a].integrator.method != in.Scenes[a + 1].integrator.method)
+        atT.integrator.method = "auto"; // each key resolved "auto" for its own spacetime
+      const asrt::FrameTracer tracer(atT);
+      const asrt::PathCompletion done =
+        asrt::completePathFrame(f, tracer, this->QualityTarget, this->ProbeFraction);
+      this->LastRetracedCount = static_cast<vtkIdType>(done.retraced);
+      this->LastEstimatedPsnr = done.estimatedPsnr;
+    }
+    if (this->GetAbortExecute())
+    {
+      asrt::reportAbort(this);
+      image->Initialize();
+      return 1;
+    }
+    image->Initialize();
+    asrt::recordsToImage(f.records, cam.width, 0, cam.height, image);
+    addPathArrays(f, image);
+    vtkFieldData* fd = image->GetFieldData();
+    asrt::addDoubleField(fd, "PathParameter", { s });
+    auto retraced = vtkSmartPointer<vtkIdTypeArray>::New();
+    retraced->SetName("RetracedPixels");
+    retraced->InsertNextValue(this->LastRetracedCount);
+    fd->AddArray(retraced);
+    if (this->QualityTarget > 0.0)
+      asrt::addDoubleField(fd, "EstimatedPsnr", { this->LastEstimatedPsnr });
+    asrt::setSpacetimeFieldData(p.spacetime, fd);
+    asrt::addDoubleField(fd, "CameraPosition", { p.position.x(), p.position.y(), p.position.z() });
+    asrt::addDoubleField(fd, "FocalPoint",
+                         { p.focalPoint.x(), p.focalPoint.y(), p.focalPoint.z() });
+    asrt::addDoubleField(fd, "ViewUp", { p.viewUp.x(), p.viewUp.y(), p.viewUp.z() });
+    image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
+    this->UpdateProgress(1.0);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    image->Initialize();
+    return 0;
+  }
+  return 1;
+}
+
+void vtkGeodesicPathInterpolator::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "NumberOfIntermediateFrames: " << this->NumberOfIntermediateFrames << "\n";
+  os << indent << "QualityTarget: " << this->QualityTarget << "\n";
+  os << indent << "ProbeFraction: " << this->ProbeFraction << "\n";
+  os << indent << "TextureDirectory: " << (this->TextureDirectory ? this->TextureDirectory : "")
+     << "\n";
+  os << indent << "PathParameterName: " << this->Impl->ParameterName << "\n";
+  os << indent << "LastRetracedCount: " << this->LastRetracedCount << "\n";
+  os << indent << "LastMustRetraceCount: " << this->LastMustRetraceCount << "\n";
+  os << indent << "LastEstimatedPsnr: " << this->LastEstimatedPsnr << "\n";
+}

@@ -1,0 +1,118 @@
+/**
+ * @class   vtkGeodesicPathInterpolator
+ * @brief   movie frames along a path of key frames, interpolated per pixel in the path's parameter
+ *
+ * Inputs: the hit points of two or more whole frames of one scene (port 1 of vtkGeodesicSource or
+ * of vtkGeodesicPostgreSQLReader), in the order of the path, on the repeatable input port 0
+ * (AddKeyFrameConnection). They differ along one parameter of the movie: the hole's mass, spin or
+ * charge, or the camera's position (an orbit); whatever else differs must follow it smoothly.
+ * The path parameter s is the first of mass, spin, charge that differs between the keys, else the
+ * eye's angle about the hole, accumulated from key to key; it must change monotonically.
+ *
+ * Every pixel is predicted from its own records in the nearest 4 key frames, where they end alike
+ * (asrt::interpolateAlongPath: cubic in s, falling back to quadratic and linear), re-shaded with
+ * the texture filtered over its interpolated footprint. Pixels the keys cannot vouch for (they end
+ * otherwise in the keys around t, or beside such a pixel) show the nearer key until re-traced.
+ * With a QualityTarget, the filter re-traces them and then, worst estimated first, just enough
+ * others for the frame's estimated PSNR against the frame traced at t to reach the target (the
+ * estimate's scale is measured by tracing ProbeFraction of the pixels, asrt::completePathFrame).
+ *
+ * Output: a temporal vtkImageData. TIME_STEPS are k + j/(N + 1) for key k and j = 0 … N (N =
+ * NumberOfIntermediateFrames), up to the last key at K − 1: key k is the time k. Any requested
+ * time in [0, K − 1] is rendered. The image has the source's arrays ("Colors" as scalars,
+ * "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel") plus "PathMethod" (0 key,
+ * 1 cubic, 2 quadratic, 3 linear, 4 to be re-traced, 5 re-traced) and "ErrorEstimate" (the
+ * estimated squared colour error, summed over the channels in levels² of 255; infinite where the
+ * keys cannot vouch for the pixel, 0 where traced). Field data: "PathParameter" (its value at
+ * t), "PathMethodFractions" (the six methods' shares), "RetracedPixels", "EstimatedPsnr" (with a
+ * target), and the parameters at t ("Mass", "Spin", "Charge", "CameraPosition", "FocalPoint",
+ * "ViewUp"), those of interpolating the two keys around t as vtkGeodesicFrameInterpolator does.
+ */
+#ifndef vtkGeodesicPathInterpolator_h
+#define vtkGeodesicPathInterpolator_h
+
+#include "asrtFiltersModule.h" // for export macro
+#include "vtkImageAlgorithm.h"
+
+#include <memory> // for std::unique_ptr
+
+class ASRTFILTERS_EXPORT vtkGeodesicPathInterpolator : public vtkImageAlgorithm
+{
+public:
+  static vtkGeodesicPathInterpolator* New();
+  vtkTypeMacro(vtkGeodesicPathInterpolator, vtkImageAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /// The most frames between two keys.
+  static constexpr int kMaxIntermediateFrames = 10000;
+
+  ///@{
+  /// The key frames, in the order of the path.
+  void AddKeyFrameConnection(vtkAlgorithmOutput* output) { this->AddInputConnection(0, output); }
+  void RemoveAllKeyFrames() { this->RemoveAllInputConnections(0); }
+  ///@}
+
+  ///@{
+  /// N, the frames between two neighbouring keys. Default 8; 1 to kMaxIntermediateFrames.
+  vtkSetMacro(NumberOfIntermediateFrames, int);
+  vtkGetMacro(NumberOfIntermediateFrames, int);
+  ///@}
+
+  ///@{
+  /// The PSNR in dB that every frame is to reach against the frame traced at its parameters,
+  /// by re-tracing; 0 (the default) re-traces nothing (a preview). At most 100.
+  vtkSetMacro(QualityTarget, double);
+  vtkGetMacro(QualityTarget, double);
+  ///@}
+
+  ///@{
+  /// The share of a frame's pixels traced to measure the estimate's scale (default 0.01, at least
+  /// 64 pixels), in (0, 1].
+  vtkSetMacro(ProbeFraction, double);
+  vtkGetMacro(ProbeFraction, double);
+  ///@}
+
+  ///@{
+  /// Where relative texture paths of the frames' scene lie (stored scenes keep paths as written,
+  /// relative to their scene file); empty: the working directory.
+  vtkSetStringMacro(TextureDirectory);
+  vtkGetStringMacro(TextureDirectory);
+  ///@}
+
+  /// The path parameter the keys vary in: "mass", "spin", "charge" or "orbit angle" (degrees);
+  /// empty before the first update.
+  const char* GetPathParameterName() const;
+
+  ///@{
+  /// What the last RequestData did: pixels re-traced (probes included), pixels the keys could not
+  /// vouch for, and the estimated PSNR (0 without a target).
+  vtkGetMacro(LastRetracedCount, vtkIdType);
+  vtkGetMacro(LastMustRetraceCount, vtkIdType);
+  vtkGetMacro(LastEstimatedPsnr, double);
+  ///@}
+
+protected:
+  vtkGeodesicPathInterpolator();
+  ~vtkGeodesicPathInterpolator() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  int NumberOfIntermediateFrames = 8;
+  double QualityTarget = 0.0;
+  double ProbeFraction = 0.01;
+  char* TextureDirectory = nullptr;
+  vtkIdType LastRetracedCount = 0;
+  vtkIdType LastMustRetraceCount = 0;
+  double LastEstimatedPsnr = 0.0;
+
+private:
+  vtkGeodesicPathInterpolator(const vtkGeodesicPathInterpolator&) = delete;
+  void operator=(const vtkGeodesicPathInterpolator&) = delete;
+  struct Internals;
+  std::unique_ptr<Internals> Impl;
+};
+
+#endif

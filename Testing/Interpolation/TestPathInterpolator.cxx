@@ -1,0 +1,195 @@
+// vtkGeodesicPathInterpolator against frames traced by vtkGeodesicSource at the interpolated
+// parameters: the mass ramp of Figs. 4–5 through four key frames, and an orbit of Fig. 1.
+#include "InterpolationTestSupport.h"
+#include "vtkGeodesicPathInterpolator.h"
+
+#include "PathInterpolation.h"
+
+#include "vtkIdTypeArray.h"
+#include "vtkInformation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+using namespace asrt::testing;
+
+namespace
+{
+constexpr int kSide = 80;
+
+std::string textureDirectory()
+{
+  return std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+}
+
+const TracedFrame& rampKey(double mass)
+{
+  static std::map<double, TracedFrame> frames;
+  auto it = frames.find(mass);
+  if (it == frames.end())
+    it = frames
+           .emplace(mass, traceWith(
+                            [mass](vtkGeodesicSource* s)
+                            {
+                              s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+                              s->SetResolution(kSide, kSide);
+                              s->SetMass(mass);
+                            }))
+           .first;
+  return it->second;
+}
+
+struct Pipeline
+{
+  std::vector<vtkSmartPointer<vtkTrivialProducer>> producers;
+  vtkNew<vtkGeodesicPathInterpolator> interpolator;
+  vtkNew<MessageCatcher> catcher;
+
+  explicit Pipeline(const std::vector<vtkPolyData*>& keys)
+  {
+    watch(this->interpolator, this->catcher);
+    for (vtkPolyData* k : keys)
+    {
+      this->producers.push_back(producerOf(k));
+      this->interpolator->AddKeyFrameConnection(this->producers.back()->GetOutputPort());
+    }
+    this->interpolator->SetTextureDirectory(textureDirectory().c_str());
+  }
+  vtkImageData* at(double time)
+  {
+    this->interpolator->UpdateTimeStep(time);
+    return this->interpolator->GetOutput();
+  }
+};
+
+std::vector<vtkPolyData*> rampKeys(const std::vector<double>& masses)
+{
+  std::vector<vtkPolyData*> keys;
+  for (double m : masses)
+    keys.push_back(rampKey(m).hits);
+  return keys;
+}
+}
+
+TEST(PathInterpolator, TimeStepsRunThroughTheKeysAndKeysAreThemselves)
+{
+  Pipeline p(rampKeys({ 0.65, 0.7, 0.75, 0.8 }));
+  p.interpolator->SetNumberOfIntermediateFrames(3);
+  p.interpolator->UpdateInformation();
+  ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
+  vtkInformation* info = p.interpolator->GetOutputInformation(0);
+  const int n = info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  ASSERT_EQ(n, 3 * 4 + 1);
+  const double* steps = info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  EXPECT_EQ(steps[0], 0.0);
+  EXPECT_EQ(steps[4], 1.0);
+  EXPECT_EQ(steps[12], 3.0);
+  EXPECT_STREQ(p.interpolator->GetPathParameterName(), "mass");
+  vtkImageData* key = p.at(2.0);
+  ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
+  EXPECT_DOUBLE_EQ(fieldValue(key, "Mass"), 0.75);
+  EXPECT_EQ(rgbOf(key), rgbOf(rampKey(0.75).image));
+}
+
+// The frame at M = 0.72, between the keys 0.70 and 0.75, against the frame traced there: with a
+// quality target the filter must reach it (within the 1 dB the target allows), re-tracing far
+// fewer pixels than the frame has, and its re-traced pixels are the traced frame's.
+TEST(PathInterpolator, AQualityTargetHoldsAgainstTheTracedFrame)
+{
+  Pipeline p(rampKeys({ 0.65, 0.7, 0.75, 0.8 }));
+  const double time = 1.4; // key 1 (0.70) + 0.4 of the way to key 2 (0.75)
+  vtkImageData* preview = p.at(time);
+  ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
+  const double mass = fieldValue(preview, "Mass");
+  EXPECT_NEAR(mass, 0.72, 1e-12);
+  EXPECT_NEAR(fieldValue(preview, "PathParameter"), 0.72, 1e-12);
+  const TracedFrame truth = traceWith(
+    [mass](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+      s->SetResolution(kSide, kSide);
+      s->SetMass(mass);
+    });
+  const std::vector<std::uint8_t> expected = rgbOf(truth.image);
+  const double plain = asrt::psnr(view(rgbOf(preview), kSide, kSide), view(expected, kSide, kSide));
+  const vtkIdType must = p.interpolator->GetLastMustRetraceCount();
+  EXPECT_EQ(p.interpolator->GetLastRetracedCount(), 0);
+  for (double target : { 30.0, 38.0, 46.0 })
+  {
+    p.interpolator->SetQualityTarget(target);
+    vtkImageData* frame = p.at(time);
+    ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
+    dump(frame, "path-" + std::to_string(int(target)));
+    const std::vector<std::uint8_t> rgb = rgbOf(frame);
+    const double q = asrt::psnr(view(rgb, kSide, kSide), view(expected, kSide, kSide));
+    const vtkIdType retraced = p.interpolator->GetLastRetracedCount();
+    std::printf("[ path ] %dx%d M = %.2f: preview %.1f dB (%lld must re-trace); target %.0f: "
+                "%.1f dB (estimated %.1f), %lld re-traced of %d\n",
+                kSide, kSide, mass, plain, static_cast<long long>(must), target, q,
+                p.interpolator->GetLastEstimatedPsnr(), static_cast<long long>(retraced),
+                kSide * kSide);
+    EXPECT_GE(q, target - 1.0);
+    EXPECT_GE(retraced, must);
+    EXPECT_LT(retraced, kSide * kSide / 2);
+    auto* method =
+      vtkUnsignedCharArray::SafeDownCast(frame->GetPointData()->GetArray("PathMethod"));
+    ASSERT_NE(method, nullptr);
+    vtkIdType marked = 0;
+    for (vtkIdType k = 0; k < method->GetNumberOfTuples(); ++k)
+      if (method->GetValue(k) == static_cast<unsigned char>(asrt::PathMethod::Retraced))
+      {
+        ++marked;
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(rgb[3 * k + c], expected[3 * k + c]) << "pixel " << k;
+      }
+    EXPECT_EQ(marked, retraced);
+  }
+}
+
+TEST(PathInterpolator, BadKeysAndSettingsAreRefusedByName)
+{
+  {
+    Pipeline p(rampKeys({ 0.7 }));
+    p.at(0.0);
+    EXPECT_TRUE(p.catcher->Mentions("at least 2 key frames")) << p.catcher->AllErrors();
+  }
+  {
+    Pipeline p(rampKeys({ 0.7, 0.8, 0.75 }));
+    p.at(0.5);
+    EXPECT_TRUE(p.catcher->Mentions("must change monotonically")) << p.catcher->AllErrors();
+  }
+  {
+    Pipeline p(rampKeys({ 0.7, 0.75 }));
+    p.interpolator->SetQualityTarget(150);
+    p.at(0.5);
+    EXPECT_TRUE(p.catcher->Mentions("QualityTarget must lie in")) << p.catcher->AllErrors();
+  }
+  {
+    Pipeline p(rampKeys({ 0.7, 0.75 }));
+    p.interpolator->SetQualityTarget(std::nan(""));
+    p.at(0.5);
+    EXPECT_TRUE(p.catcher->Mentions("QualityTarget must lie in")) << p.catcher->AllErrors();
+  }
+  {
+    Pipeline p(rampKeys({ 0.7, 0.75 }));
+    p.interpolator->SetNumberOfIntermediateFrames(0);
+    p.at(0.5);
+    EXPECT_TRUE(p.catcher->Mentions("NumberOfIntermediateFrames")) << p.catcher->AllErrors();
+  }
+  {
+    const TracedFrame small = traceWith(
+      [](vtkGeodesicSource* s)
+      {
+        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+        s->SetResolution(kSide / 2, kSide / 2);
+        s->SetMass(0.75);
+      });
+    Pipeline p({ rampKey(0.7).hits, small.hits });
+    p.at(0.5);
+    EXPECT_TRUE(p.catcher->Mentions("different resolutions")) << p.catcher->AllErrors();
+  }
+}
