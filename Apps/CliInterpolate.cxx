@@ -8,7 +8,11 @@
 #include "Progress.h"
 #include "PvdCollection.h"
 #include "VtkMessages.h"
+
+#include "ErrorEstimate.h"
+#include "PathInterpolation.h"
 #include "vtkGeodesicFrameInterpolator.h"
+#include "vtkGeodesicPathInterpolator.h"
 #include "vtkGeodesicPostgreSQLReader.h"
 #include "vtkGeodesicSource.h"
 
@@ -29,6 +33,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -71,10 +76,18 @@ Options:
                         the name "interpolated": -o out/ gives out/interpolated-000.png
   --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
   --fps F               the movie's frames per second (default 10)
-  --exact               re-trace the pixels the matching cannot vouch for (holes, ambiguous
-                        pixels, and those where A and B disagree); slower, exact there
-  --textures DIR        where the scene's relative texture paths lie, for --exact (default:
-                        the scenes directory, Data/scenes)
+  --method M            how frames are made: "splats" (the default without --quality) moves
+                        the key frames' rays across the picture, pair by pair (the paper's
+                        method, a fast preview); "path" predicts every pixel from its own rays
+                        in the nearest 4 key frames, cubic in the path's parameter (mass, spin,
+                        charge or orbit angle), where they end alike
+  --quality DB          with the path method (implied): re-trace, at each frame's parameters,
+                        the pixels the key frames cannot vouch for and, worst estimated first,
+                        enough others for the frame to reach DB against the frame traced there
+  --exact               with splats: re-trace the pixels the matching cannot vouch for (holes,
+                        ambiguous pixels, and those where A and B disagree); slower, exact there
+  --textures DIR        where the scene's relative texture paths lie, for --exact and the
+                        path method (default: the scenes directory, Data/scenes)
   -q, --quiet           no progress on stderr
 
 Without the store:
@@ -196,23 +209,28 @@ struct Sequence
   std::vector<std::string> lines; ///< each frame's shares of pixel classes
 };
 
+/// A frame of the sequence at `time` (key frame k at time k), its line of the table appended to
+/// `line`; the frame stays valid until the next call.
+using FrameAt = std::function<vtkImageData*(double time, std::string& line)>;
+
 /// Writes every frame of the sequence into its set (nothing is in place before the set's
 /// commit). `check` throws on an interrupt or a failed interpolation.
-void writeFrames(const std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>>& pairs,
-                 Sequence& out, tools::ProgressBar& bar, const std::function<void()>& check)
+void writeFrames(int keyPairs, const FrameAt& frameAt, Sequence& out, tools::ProgressBar& bar,
+                 const std::function<void()>& check)
 {
   const int intermediate = out.intermediate;
   // Key frame k is frame k (N + 1) of the sequence; a key frame between two pairs is written once.
-  const int count = static_cast<int>(pairs.size()) * (intermediate + 1) + 1;
+  const int count = keyPairs * (intermediate + 1) + 1;
   for (int k = 0; k < count; ++k)
   {
-    const int pair = std::min(k / (intermediate + 1), static_cast<int>(pairs.size()) - 1);
+    const int pair = std::min(k / (intermediate + 1), keyPairs - 1);
     const double t = static_cast<double>(k - pair * (intermediate + 1)) / (intermediate + 1);
     const double time = pair + t;
-    vtkGeodesicFrameInterpolator* interpolator = pairs[static_cast<std::size_t>(pair)];
-    interpolator->UpdateTimeStep(t);
+    char head[64];
+    std::snprintf(head, sizeof head, "%5d %7.4f", k, time);
+    std::string line = head;
+    vtkImageData* frame = frameAt(time, line);
     check();
-    vtkImageData* frame = interpolator->GetOutput();
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
     tools::writePng(frame, out.files->add(out.prefix + number + ".png"));
@@ -220,15 +238,59 @@ void writeFrames(const std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>
     out.series.add(time, out.prefix + number + ".vti");
     out.movie->addFrame(frame);
     check();
-
-    const std::array<double, 5> shares = fractions(frame);
-    char line[160];
-    std::snprintf(line, sizeof line, "%5d %7.4f %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f", k, time,
-                  fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
-                  100 * shares[3], 100 * shares[4]);
     out.lines.push_back(line);
     bar.update(static_cast<double>(k + 1) / count);
   }
+}
+
+/// The splats' frames: one interpolator per consecutive pair of keys.
+FrameAt splatFrames(const std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>>& pairs)
+{
+  return [&pairs](double time, std::string& line)
+  {
+    const int pair = std::min(static_cast<int>(time), static_cast<int>(pairs.size()) - 1);
+    vtkGeodesicFrameInterpolator* interpolator = pairs[static_cast<std::size_t>(pair)];
+    interpolator->UpdateTimeStep(time - pair);
+    vtkImageData* frame = interpolator->GetOutput();
+    const std::array<double, 5> shares = fractions(frame);
+    char text[160];
+    std::snprintf(text, sizeof text, " %8.4g %9.1f %9.1f %9.1f %9.1f %9.1f",
+                  fieldValue(frame, "Mass"), 100 * shares[0], 100 * shares[1], 100 * shares[2],
+                  100 * shares[3], 100 * shares[4]);
+    line += text;
+    return frame;
+  };
+}
+
+/// The path's frames: one interpolator over every key.
+FrameAt pathFrames(vtkGeodesicPathInterpolator* path, bool target)
+{
+  return [path, target](double time, std::string& line)
+  {
+    path->UpdateTimeStep(time);
+    vtkImageData* frame = path->GetOutput();
+    double shares[kPathMethodCount] = {};
+    if (vtkDataArray* a = frame->GetFieldData()->GetArray("PathMethodFractions"))
+      for (int c = 0; c < kPathMethodCount && c < a->GetNumberOfComponents(); ++c)
+        shares[c] = a->GetComponent(0, c);
+    char text[200];
+    std::snprintf(text, sizeof text, " %10.6g", fieldValue(frame, "PathParameter"));
+    line += text;
+    for (double share : shares)
+    {
+      std::snprintf(text, sizeof text, " %9.1f", 100 * share);
+      line += text;
+    }
+    if (target)
+    {
+      std::snprintf(text, sizeof text, " %9.1f",
+                    frame->GetFieldData()->GetArray("EstimatedPsnr")
+                      ? fieldValue(frame, "EstimatedPsnr")
+                      : std::numeric_limits<double>::infinity());
+      line += text;
+    }
+    return frame;
+  };
 }
 }
 
@@ -239,6 +301,8 @@ int runInterpolate(const std::vector<std::string>& args)
                                                  { "movie", OptionSpec::Value },
                                                  { "fps", OptionSpec::Value },
                                                  { "exact", OptionSpec::Flag },
+                                                 { "method", OptionSpec::Value },
+                                                 { "quality", OptionSpec::Value },
                                                  { "textures", OptionSpec::Value },
                                                  { "quiet", OptionSpec::Flag, 'q' },
                                                  { "scenes", OptionSpec::Flag },
@@ -267,6 +331,22 @@ int runInterpolate(const std::vector<std::string>& args)
   if (intermediate > vtkGeodesicFrameInterpolator::kMaxIntermediateFrames)
     throw UsageError("--frames: at most " +
                      std::to_string(vtkGeodesicFrameInterpolator::kMaxIntermediateFrames));
+  const std::string method = options.get("method", options.has("quality") ? "path" : "splats");
+  if (method != "splats" && method != "path")
+    throw UsageError("--method: \"" + printable(method) + "\" is neither splats nor path");
+  const bool path = method == "path";
+  if (path && options.has("exact"))
+    throw UsageError("--exact goes with --method splats; the path method re-traces with --quality");
+  double quality = 0.0;
+  if (options.has("quality"))
+  {
+    if (!path)
+      throw UsageError("--quality goes with --method path");
+    quality = parseNumber("--quality", options.get("quality"));
+    if (!(quality > 0.0 && quality <= asrt::kMaxQualityTargetDb))
+      throw UsageError("--quality: the target must lie in (0, 100] dB, got " +
+                       options.get("quality"));
+  }
   const int fps = options.positiveInteger("fps").value_or(10);
   const std::string prefix = outputPrefix(options, "interpolated");
   const std::string moviePath = options.get("movie", prefix + ".ogv");
@@ -301,8 +381,22 @@ int runInterpolate(const std::vector<std::string>& args)
       throw InputError(messages.firstError());
   };
   std::vector<vtkSmartPointer<vtkGeodesicFrameInterpolator>> pairs;
+  vtkNew<vtkGeodesicPathInterpolator> along;
   std::string chain = names[0];
-  for (std::size_t k = 0; k + 1 < keys; ++k)
+  for (std::size_t k = 1; k < keys; ++k)
+    chain += " -> " + names[k];
+  if (path)
+  {
+    for (std::size_t k = 0; k < keys; ++k)
+      along->AddKeyFrameConnection(ends[k]->GetOutputPort(1));
+    along->SetNumberOfIntermediateFrames(intermediate);
+    along->SetQualityTarget(quality);
+    along->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
+    messages.watchAlgorithm(along);
+    along->UpdateInformation();
+    check();
+  }
+  for (std::size_t k = 0; !path && k + 1 < keys; ++k)
   {
     auto interpolator = vtkSmartPointer<vtkGeodesicFrameInterpolator>::New();
     interpolator->SetFrameAConnection(ends[k]->GetOutputPort(1));
@@ -314,10 +408,10 @@ int runInterpolate(const std::vector<std::string>& args)
     interpolator->UpdateInformation();
     check();
     pairs.push_back(interpolator);
-    chain += " -> " + names[k + 1];
   }
 
-  const int count = static_cast<int>(pairs.size()) * (intermediate + 1) + 1;
+  const int keyPairs = static_cast<int>(keys) - 1;
+  const int count = keyPairs * (intermediate + 1) + 1;
   tools::ProgressBar bar("interpolate " + chain, quiet ? tools::ProgressBar::Style::Silent
                                                        : tools::ProgressBar::Style::Automatic);
   Sequence sequence;
@@ -325,7 +419,8 @@ int runInterpolate(const std::vector<std::string>& args)
   sequence.intermediate = intermediate;
   sequence.files = &files;
   sequence.movie = movie.get();
-  writeFrames(pairs, sequence, bar, check);
+  writeFrames(keyPairs, path ? pathFrames(along, quality > 0.0) : splatFrames(pairs), sequence, bar,
+              check);
   sequence.series.write(files.add(prefix + ".pvd"));
   movie->close();
   // Frames of an earlier, longer sequence would look like part of this one: they go in the
@@ -338,12 +433,28 @@ int runInterpolate(const std::vector<std::string>& args)
   files.commit();
   bar.finish("-> " + prefix + "-*.png");
 
+  std::string mode = options.has("exact") ? ", exact mode" : "";
+  if (path)
+    mode = ", per pixel along the " + std::string(along->GetPathParameterName()) +
+           (quality > 0.0 ? ", quality target " + options.get("quality") + " dB"
+                          : ", nothing re-traced");
   std::printf("%s %s: %d frames (%d intermediate%s)%s\n", fromScenes ? "scenes" : "frames",
               printable(chain).c_str(), count, intermediate, keys > 2 ? " between each pair" : "",
-              options.has("exact") ? ", exact mode" : "");
-  std::printf("%5s %7s %8s", "frame", keys > 2 ? "time" : "t", "M");
-  for (const char* name : kClassNames)
-    std::printf(" %8s%%", name);
+              mode.c_str());
+  if (path)
+  {
+    std::printf("%5s %7s %10s", "frame", "time", along->GetPathParameterName());
+    for (int m = 0; m < kPathMethodCount; ++m)
+      std::printf(" %8s%%", toString(static_cast<PathMethod>(m)));
+    if (quality > 0.0)
+      std::printf(" %9s", "est. PSNR");
+  }
+  else
+  {
+    std::printf("%5s %7s %8s", "frame", "time", "M");
+    for (const char* name : kClassNames)
+      std::printf(" %8s%%", name);
+  }
   std::printf("\n");
   for (const std::string& line : sequence.lines)
     std::printf("%s\n", line.c_str());

@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -372,7 +373,9 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       asrt::CameraPath::Automatic);
     this->LastMustRetraceCount =
       static_cast<vtkIdType>(f.counts()[static_cast<std::size_t>(asrt::PathMethod::Retrace)]);
-    if (this->QualityTarget > 0.0 && fraction > 0.0 && fraction < 1.0)
+    if (this->QualityTarget > 0.0 && !(fraction > 0.0 && fraction < 1.0))
+      this->LastEstimatedPsnr = std::numeric_limits<double>::infinity(); // a key itself
+    else if (this->QualityTarget > 0.0)
     {
       asrt::SceneDescription atT = in.Shading;
       asrt::applyParameters(p, atT);

@@ -8,6 +8,8 @@
 //   PATH.ogv[=N]    an Ogg Theora movie (well-formed pages) of N frames
 //   !PATH           no such file (nothing left behind)
 //   ~SPEC           as SPEC, but an image may be a single colour (e.g. a selection of rays)
+//   A.png:B.png>=DB two PNGs of one size whose PSNR (over the three channels, 10 log10(255² /
+//                   MSE)) is at least DB
 #include "OggTheoraFile.h"
 
 #include "vtkImageData.h"
@@ -15,6 +17,7 @@
 #include "vtkPNGReader.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkXMLDataElement.h"
 #include "vtkXMLDataParser.h"
@@ -23,6 +26,7 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <cmath>
 #include <cstdio>
 #include <set>
 #include <stdexcept>
@@ -64,8 +68,47 @@ std::string checkImage(vtkImageData* image, const std::string& path, const std::
   return size(image);
 }
 
+vtkSmartPointer<vtkImageData> readPng(const std::string& path)
+{
+  vtkNew<vtkPNGReader> reader;
+  require(SystemTools::FileExists(path, true), path, "missing");
+  require(reader->CanReadFile(path.c_str()) != 0, path, "is not a PNG");
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkSmartPointer<vtkImageData> image = reader->GetOutput();
+  return image;
+}
+
+/// PSNR of two PNGs of one size over their RGB channels; infinite for identical pictures.
+std::string checkPsnr(const std::string& spec)
+{
+  const std::size_t ge = spec.rfind(">="), colon = spec.find(".png:");
+  const std::string a = spec.substr(0, colon + 4), b = spec.substr(colon + 5, ge - colon - 5);
+  const double want = std::stod(spec.substr(ge + 2));
+  vtkSmartPointer<vtkImageData> ia = readPng(a), ib = readPng(b);
+  require(size(ia) == size(ib), spec, "sizes differ: " + size(ia) + " and " + size(ib));
+  auto* ca = vtkUnsignedCharArray::SafeDownCast(ia->GetPointData()->GetScalars());
+  auto* cb = vtkUnsignedCharArray::SafeDownCast(ib->GetPointData()->GetScalars());
+  require(ca && cb && ca->GetNumberOfComponents() >= 3 && cb->GetNumberOfComponents() >= 3, spec,
+          "an image has no RGB colours");
+  double sum = 0;
+  for (vtkIdType k = 0; k < ca->GetNumberOfTuples(); ++k)
+    for (int c = 0; c < 3; ++c)
+    {
+      const double d = double(ca->GetTypedComponent(k, c)) - double(cb->GetTypedComponent(k, c));
+      sum += d * d;
+    }
+  const double mse = sum / (3.0 * double(ca->GetNumberOfTuples()));
+  const double psnr = mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : INFINITY;
+  require(psnr >= want, spec,
+          "PSNR " + std::to_string(psnr) + " dB is below " + std::to_string(want));
+  return "PSNR " + std::to_string(psnr) + " dB";
+}
+
 std::string check(std::string spec)
 {
+  if (spec.find(".png:") != std::string::npos && spec.find(">=") != std::string::npos)
+    return checkPsnr(spec);
   allowBlank = !spec.empty() && spec[0] == '~';
   if (allowBlank)
     spec = spec.substr(1);

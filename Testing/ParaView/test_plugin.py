@@ -135,6 +135,26 @@ for t in steps:
     seen += 1
 check(seen == n + 2, f"stepped through {seen} frames, expected {n + 2}")
 
+# 2b. The path interpolator takes any number of key frames on one input: key frame k is at time k,
+# the mass at each step lies on the ramp through the keys, and with a quality target the frames
+# between the keys come with their re-traced share.
+keys = [ASRTGeodesicSource(SceneFileName=scene, Resolution=[width, height],  # noqa: F821
+                           OverrideSpacetime=1, Mass=m, Spin=0.8) for m in (0.9, 1.0, 1.1)]
+path = ASRTPathInterpolator(KeyFrames=[OutputPort(k, 1) for k in keys],  # noqa: F821
+                            NumberOfIntermediateFrames=1, QualityTarget=30,
+                            TextureDirectory=scenes)
+path.UpdatePipelineInformation()
+path_steps = list(path.TimestepValues)
+check(path_steps == [0.0, 0.5, 1.0, 1.5, 2.0], f"path time steps {path_steps}")
+for t in path_steps:
+    path.UpdatePipeline(t)
+    frame = servermanager.Fetch(path)
+    mass_array = frame.GetFieldData().GetArray("Mass")
+    check(mass_array is not None and math.isclose(mass_array.GetValue(0), 0.9 + 0.1 * t,
+                                                   abs_tol=1e-12),
+          f"path t = {t}: mass {mass_array.GetValue(0) if mass_array else None}")
+    check(frame.GetPointData().GetArray("PathMethod") is not None, f"path t = {t}: no PathMethod")
+
 # 3. Errors reach ParaView's output window and name the field.
 window = vtkStringOutputWindow()
 vtkOutputWindow.SetInstance(window)
