@@ -1,5 +1,6 @@
 #include "Cli.h"
 
+#include "AdaptiveGrid.h"
 #include "DataFiles.h"
 #include "InterruptibleRead.h"
 #include "Progress.h"
@@ -56,6 +57,10 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
                         in pixels whose neighbours disagree); the preset's otherwise
   --max-rays N          the most rays an adaptively sampled pixel takes (1 to 1024)
   --supersample N       N x N rays in every pixel (1 to 32), for reference pictures
+  --grid N              trace every Nth pixel's ray (1 to 256) and refine where rays
+                        disagree, interpolating the rest (1: trace every pixel)
+  --grid-tolerance T    the largest error of the interpolated surface (u, v) that leaves a
+                        grid block unrefined (default 1e-3)
   --step H              the integrator's step
   --max-failed-share F  refuse the frame (exit 1, nothing written or stored) when more than
                         this fraction of its rays failed numerically or ran out of steps
@@ -263,14 +268,15 @@ std::optional<std::pair<int, int>> Options::size(const std::string& name) const
 const std::vector<OptionSpec>& sceneOverrideSpecs()
 {
   static const std::vector<OptionSpec> specs = {
-    { "mass", OptionSpec::Value },       { "spin", OptionSpec::Value },
-    { "charge", OptionSpec::Value },     { "camera", OptionSpec::Value },
-    { "focal", OptionSpec::Value },      { "view-up", OptionSpec::Value },
-    { "view-angle", OptionSpec::Value }, { "resolution", OptionSpec::Value, 'r' },
-    { "preset", OptionSpec::Value },     { "method", OptionSpec::Value },
-    { "step", OptionSpec::Value },       { "max-failed-share", OptionSpec::Value },
-    { "antialias", OptionSpec::Value },  { "max-rays", OptionSpec::Value },
-    { "supersample", OptionSpec::Value }
+    { "mass", OptionSpec::Value },          { "spin", OptionSpec::Value },
+    { "charge", OptionSpec::Value },        { "camera", OptionSpec::Value },
+    { "focal", OptionSpec::Value },         { "view-up", OptionSpec::Value },
+    { "view-angle", OptionSpec::Value },    { "resolution", OptionSpec::Value, 'r' },
+    { "preset", OptionSpec::Value },        { "method", OptionSpec::Value },
+    { "step", OptionSpec::Value },          { "max-failed-share", OptionSpec::Value },
+    { "antialias", OptionSpec::Value },     { "max-rays", OptionSpec::Value },
+    { "supersample", OptionSpec::Value },   { "grid", OptionSpec::Value },
+    { "grid-tolerance", OptionSpec::Value }
   };
   return specs;
 }
@@ -353,6 +359,20 @@ void applySceneOverrides(const Options& options, vtkGeodesicSource* source)
     if (*n > 32)
       throw UsageError("--supersample: must lie in [1, 32], got " + std::to_string(*n));
     source->SetSupersample(*n);
+  }
+  if (auto n = options.positiveInteger("grid"))
+  {
+    if (*n > asrt::kMaxGridLattice)
+      throw UsageError("--grid: must lie in [1, " + std::to_string(asrt::kMaxGridLattice) +
+                       "], got " + std::to_string(*n));
+    source->SetGridLattice(*n);
+  }
+  if (auto t = options.number("grid-tolerance"))
+  {
+    if (!(*t >= 0.0) || !std::isfinite(*t))
+      throw UsageError("--grid-tolerance: must be finite and at least 0, got " +
+                       quotedArgument(options.get("grid-tolerance")));
+    source->SetGridTolerance(*t);
   }
   maxFailedShare(options); // a malformed value is refused before anything is traced
 }

@@ -342,11 +342,18 @@ struct vtkGeodesicDistributedSource::DataRequest
       {
         this->scene = *this->source->Cache;
         this->tracer = std::make_unique<asrt::FrameTracer>(*this->scene);
+        // On the adaptive grid, interleaved blocks are whole rows of lattice blocks: a process
+        // then works through its own lattice blocks (AdaptiveGrid.h), not through every block
+        // its rows cross. The frame is the same either way.
+        int rowsPerBlock = this->source->RowsPerBlock;
+        const int lattice = this->scene->rendering.gridLattice;
+        if (lattice > 1)
+          rowsPerBlock = (rowsPerBlock + lattice - 1) / lattice * lattice;
         this->partition.emplace(this->scene->camera.height, this->run.Size,
                                 this->source->RowLayout == CONTIGUOUS
                                   ? asrt::RowLayout::Contiguous
                                   : asrt::RowLayout::Interleaved,
-                                this->source->RowsPerBlock);
+                                rowsPerBlock);
         this->checkMemory();
       }
       catch (const std::exception& e)

@@ -78,7 +78,8 @@ public:
   ///@}
 
   ///@{
-  /// Rows per interleaved block (default 1): also the rows per stored tile.
+  /// Rows per interleaved block (default 1): also the rows per stored tile. On the adaptive ray
+  /// grid (rendering.gridLattice > 1) it is rounded up to a multiple of the lattice.
   vtkSetClampMacro(RowsPerBlock, int, 1, VTK_INT_MAX);
   vtkGetMacro(RowsPerBlock, int);
   ///@}

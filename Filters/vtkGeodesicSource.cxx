@@ -335,6 +335,10 @@ struct vtkGeodesicSource::Internals
       d.rendering.maxRaysPerPixel = self->MaxRaysPerPixel;
     if (self->Supersample != 0)
       d.rendering.supersample = self->Supersample;
+    if (self->GridLattice != 0)
+      d.rendering.gridLattice = self->GridLattice;
+    if (!std::isnan(self->GridTolerance))
+      d.rendering.gridTolerance = self->GridTolerance;
     // The overridden values pass the scene file's own checks: a frame the file could not describe
     // is refused (a camera outside its celestial sphere, a mass whose horizon overflows, ...).
     asrt::validateScene(d);
@@ -643,7 +647,9 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
      << "\n"
      << indent << "Antialias: " << (this->Antialias ? this->Antialias : "(scene)") << "\n"
      << indent << "MaxRaysPerPixel: " << this->MaxRaysPerPixel << "\n"
-     << indent << "Supersample: " << this->Supersample << "\n";
+     << indent << "Supersample: " << this->Supersample << "\n"
+     << indent << "GridLattice: " << this->GridLattice << "\n"
+     << indent << "GridTolerance: " << this->GridTolerance << "\n";
   os << indent << "OverrideIntegrationStep: " << this->OverrideIntegrationStep << "\n";
   os << indent << "IntegrationStep: " << this->IntegrationStep << "\n";
   os << indent << "PixelSubset: " << (this->PixelSubset ? "set" : "(none)") << "\n";

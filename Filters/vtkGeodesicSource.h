@@ -28,6 +28,7 @@
 #include "vtkImageAlgorithm.h"
 #include "vtkSmartPointer.h" // for members
 
+#include <limits> // for the GridTolerance default
 #include <memory> // for std::shared_ptr
 #include <string> // for std::string
 #include <vector> // for std::vector
@@ -136,6 +137,16 @@ public:
   ///@}
 
   ///@{
+  /// Adaptive ray grid override (asrt::AntialiasOptions::gridLattice, AdaptiveGrid.h): the step of
+  /// the traced lattice (1 traces every pixel, up to 256) and the largest error of the bilinear
+  /// (u, v) that leaves a block whole. 0 and NaN keep the scene's "rendering".
+  vtkSetMacro(GridLattice, int);
+  vtkGetMacro(GridLattice, int);
+  vtkSetMacro(GridTolerance, double);
+  vtkGetMacro(GridTolerance, double);
+  ///@}
+
+  ///@{
   /// Trace only these pixels: a 2-component array of (i, j). Null traces the whole frame.
   /// Untraced pixels of the image are black with Termination 0 ("running"). The frame's scene
   /// (field data "SceneJSON") then names the subset ("subset": count and digest of the pixels),
@@ -221,6 +232,8 @@ protected:
   char* Antialias = nullptr;
   int MaxRaysPerPixel = 0;
   int Supersample = 0;
+  int GridLattice = 0;
+  double GridTolerance = std::numeric_limits<double>::quiet_NaN();
   bool GeneratePolylines = false;
   int PolylineStride = 10;
   double MemoryLimit = 0.0;

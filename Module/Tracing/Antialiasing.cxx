@@ -1,5 +1,7 @@
 #include "Antialiasing.h"
 
+#include "AdaptiveGrid.h"
+
 #include "SceneDescription.h"
 
 #include <cmath>
@@ -68,6 +70,15 @@ void validateRendering(const AntialiasOptions& o, long long pixels)
     std::ostringstream os;
     os << o.colorThreshold;
     refuse("colorThreshold", "must lie in [0, 1], got " + os.str());
+  }
+  if (o.gridLattice < 1 || o.gridLattice > kMaxGridLattice)
+    refuse("gridLattice", "must lie in [1, " + std::to_string(kMaxGridLattice) + "], got " +
+                            std::to_string(o.gridLattice));
+  if (!(o.gridTolerance >= 0.0 && std::isfinite(o.gridTolerance)))
+  {
+    std::ostringstream os;
+    os << o.gridTolerance;
+    refuse("gridTolerance", "must be finite and at least 0, got " + os.str());
   }
   // Rays, not memory, are what a supersample multiplies (the samples of a pixel are folded into
   // its colour as they come); the bound is the frame's: a frame of more rays would take days.

@@ -63,11 +63,17 @@ struct AntialiasOptions
   /// default) colour never decides: texture detail within an object is the filter's to average,
   /// and a lower threshold spends rays on it (bench/REPORT.md measures the trade).
   double colorThreshold = 1.0;
+  /// The adaptive ray grid (AdaptiveGrid.h): the step of its lattice, 1 to kMaxGridLattice; at 1
+  /// (the default) every pixel's centre ray is traced.
+  int gridLattice = 1;
+  /// The largest error of the bilinear (u, v) at a block's check points that leaves it whole.
+  double gridTolerance = 1e-3;
 
   bool operator==(const AntialiasOptions& o) const
   {
     return mode == o.mode && maxRaysPerPixel == o.maxRaysPerPixel && supersample == o.supersample &&
-           colorThreshold == o.colorThreshold;
+           colorThreshold == o.colorThreshold && gridLattice == o.gridLattice &&
+           (gridLattice <= 1 || gridTolerance == o.gridTolerance);
   }
   bool operator!=(const AntialiasOptions& o) const { return !(*this == o); }
 };

@@ -182,7 +182,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
     RayRecord& r = records[k];
     if (filter && side[k] == 1 && r.objectId >= 0 && hasFootprint(r))
       r.color = scene.shadeFootprint(r.objectId, r.u, r.v, footprintOf(r, 1));
-    r.raysPerPixel = 1 + midpointRays[k];
+    r.raysPerPixel = (r.traced ? 1 : 0) + midpointRays[k];
   }
 
   std::vector<std::size_t> sampled;
@@ -214,7 +214,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       const TextureFootprint cell = footprintOf(r, n);
       const bool cellFilter = filter && r.objectId >= 0 && hasFootprint(r);
       Color sum = Color::Zero();
-      int rays = 1;
+      int rays = r.traced ? 1 : 0;
       for (int b = 0; b < n; ++b)
         for (int a = 0; a < n; ++a)
         {

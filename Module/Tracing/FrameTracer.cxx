@@ -222,6 +222,12 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
 std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int, int>>& pixels,
                                                  const std::function<bool(double)>& progress) const
 {
+  if (this->Desc.rendering.gridLattice > 1)
+  {
+    std::vector<RayRecord> grid = this->traceGrid(pixels, progress);
+    computeJacobians(grid);
+    return grid;
+  }
   const long n = static_cast<long>(pixels.size());
   std::vector<RayRecord> out(pixels.size());
   std::atomic<long> done{ 0 };
@@ -292,6 +298,9 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
   auto du = [](double a, double b) { return (a - b) - std::round(a - b); };
   for (RayRecord& r : records)
   {
+    // An interpolated record keeps the Jacobian of its interpolant (AdaptiveGrid.h).
+    if (!r.traced)
+      continue;
     if (r.objectId < 0)
     {
       r.dudi = r.dudj = r.dvdi = r.dvdj = nan;

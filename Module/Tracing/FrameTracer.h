@@ -2,6 +2,7 @@
 #ifndef asrt_FrameTracer_h
 #define asrt_FrameTracer_h
 
+#include "AdaptiveGrid.h"
 #include "RayRecord.h"
 #include "SceneDescription.h"
 #include "asrtTracingModule.h"
@@ -52,7 +53,9 @@ public:
 
   /// The centre rays of tracePixels alone: point-sampled colours, one ray a pixel, Jacobians from
   /// the neighbours among these pixels. For callers that complete the Jacobians with neighbours
-  /// traced elsewhere before anti-aliasing (row bands, other processes).
+  /// traced elsewhere before anti-aliasing (row bands, other processes). With a grid lattice
+  /// above 1 (AntialiasOptions::gridLattice) most records are interpolated (AdaptiveGrid.h),
+  /// the same in any split of the frame.
   std::vector<RayRecord> traceCentres(const std::vector<std::pair<int, int>>& pixels,
                                       const std::function<bool(double)>& progress = nullptr) const;
 
@@ -75,7 +78,8 @@ public:
 
   /// Fills the screen-space Jacobians of the records from their neighbours among them and among
   /// `neighbours` (pixels traced elsewhere, e.g. by another process). Where a pixel appears
-  /// twice, its first appearance counts, records before neighbours.
+  /// twice, its first appearance counts, records before neighbours. Interpolated records (traced
+  /// false) keep the Jacobian of their interpolant.
   static void computeJacobians(std::vector<RayRecord>& records,
                                const std::vector<JacobianSample>& neighbours = {});
 
@@ -90,6 +94,13 @@ private:
   void judgePixels(const std::vector<RayRecord>& records,
                    const std::vector<JacobianSample>& neighbours, int adaptiveSide,
                    std::vector<int>& side, std::vector<int>& midpointRays) const;
+  /// The centre records of traceCentres on the adaptive grid (AdaptiveGrid.h): the whole lattice
+  /// blocks holding the pixels are processed, in parallel, and the pixels' records handed out.
+  std::vector<RayRecord> traceGrid(const std::vector<std::pair<int, int>>& pixels,
+                                   const std::function<bool(double)>& progress) const;
+  struct GridWork;
+  /// Traces a block's 9 points into `work`, then fills it if smooth or refines its 4 quarters.
+  void refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const;
   /// The ray through screen position (x, y) with the given propagator (one per thread).
   RayRecord traceThrough(Propagator& prop, double x, double y) const;
   /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,

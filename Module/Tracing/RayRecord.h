@@ -35,6 +35,9 @@ struct RayRecord
   /// How many rays the colour comes from: 1 for the centre ray alone, more for a supersampled
   /// pixel (the centre ray's fields are still the record's).
   std::int32_t raysPerPixel = 1;
+  /// Whether the centre ray was traced; false for a record interpolated by the adaptive grid
+  /// (AdaptiveGrid.h), whose raysPerPixel counts only the rays anti-aliasing traced for it.
+  bool traced = true;
   /// Screen-space Jacobian ∂(u, v)/∂(i, j) of the hit from neighbouring pixels that hit the same
   /// object in the same image order (u differences taken modulo 1); NaN where no neighbour does.
   double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;

@@ -66,9 +66,19 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
   std::vector<RayRecord> held;
   std::vector<JacobianSample> below, edge;
   std::vector<std::pair<int, int>> pixels;
+  const int lattice = tracer.description().rendering.gridLattice;
   for (int b = first; b < last;)
   {
-    const int e = std::min(last, b + bandRows);
+    // On the adaptive grid a band ends on the lattice where it can: a lattice block is then
+    // processed by one band, not by the two it would straddle (the records are the same either
+    // way).
+    int e = b + bandRows;
+    if (lattice > 1)
+    {
+      const int down = e / lattice * lattice;
+      e = down > b ? down : (b / lattice + 1) * lattice;
+    }
+    e = std::min(last, e);
     pixels.clear();
     for (int j = b; j < e; ++j)
       for (int i = 0; i < W; ++i)

@@ -1,5 +1,7 @@
 #include "SceneFile.h"
 
+#include "AdaptiveGrid.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -634,7 +636,8 @@ private:
   static void rendering(const json& j, SceneDescription& d)
   {
     Fields f(j, "rendering",
-             { "preset", "antialias", "maxRaysPerPixel", "supersample", "colorThreshold" });
+             { "preset", "antialias", "maxRaysPerPixel", "supersample", "colorThreshold",
+               "gridLattice", "gridTolerance" });
     AntialiasOptions& o = d.rendering;
     // A preset sets every field first; the fields given beside it refine it.
     if (const json* v = f.get("preset"))
@@ -670,6 +673,10 @@ private:
       if (o.colorThreshold > 1.0)
         fail(f.sub("colorThreshold"), "must lie in [0, 1], got " + show(*v));
     }
+    if (const json* v = f.get("gridLattice"))
+      o.gridLattice = static_cast<int>(integer(*v, f.sub("gridLattice"), 1, kMaxGridLattice));
+    if (const json* v = f.get("gridTolerance"))
+      o.gridTolerance = nonNegative(*v, f.sub("gridTolerance"));
   }
 
   void tracing(const json& j, SceneDescription& d)
@@ -953,6 +960,13 @@ std::string effectiveSceneText(const SceneDescription& d)
                      { "maxRaysPerPixel", a.maxRaysPerPixel },
                      { "supersample", a.supersample },
                      { "colorThreshold", a.colorThreshold } };
+  // Written only where a grid is used: the texts (and the stored frames' identities) of frames
+  // that trace every pixel stay as they were.
+  if (a.gridLattice > 1)
+  {
+    j["rendering"]["gridLattice"] = a.gridLattice;
+    j["rendering"]["gridTolerance"] = a.gridTolerance;
+  }
   // Whole frames keep exactly the text they always had; a subset frame is a frame of its own.
   if (d.subset.count > 0)
     j["subset"] = { { "pixels", d.subset.count }, { "digest", d.subset.digest } };

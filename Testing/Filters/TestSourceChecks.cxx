@@ -199,3 +199,31 @@ TEST(GeodesicSourceRayEnds, AnImageWithoutTerminationIsNotCounted)
   EXPECT_EQ(counts[0] + counts[1] + counts[2], 0);
   EXPECT_FALSE(vtkGeodesicSource::CountRayEnds(nullptr, counts));
 }
+
+TEST(GeodesicSourceOverrides, GridOptionsOutOfRangeAreRefusedNamingTheField)
+{
+  const std::pair<std::function<void(vtkGeodesicSource*)>, const char*> cases[] = {
+    { [](vtkGeodesicSource* s) { s->SetGridLattice(257); }, "rendering.gridLattice" },
+    { [](vtkGeodesicSource* s) { s->SetGridLattice(-3); }, "rendering.gridLattice" },
+    { [](vtkGeodesicSource* s) { s->SetGridTolerance(-1e-3); }, "rendering.gridTolerance" },
+  };
+  for (const auto& [set, field] : cases)
+  {
+    vtkNew<vtkGeodesicSource> s;
+    const std::string got = traceError(s, set);
+    EXPECT_NE(got.find(field), std::string::npos) << got;
+    EXPECT_EQ(s->GetImageOutput()->GetNumberOfPoints(), 0) << field;
+  }
+  // In range, the frame's scene says how it was traced.
+  vtkNew<vtkGeodesicSource> s;
+  EXPECT_EQ(traceError(s,
+                       [](vtkGeodesicSource* g)
+                       {
+                         g->SetGridLattice(4);
+                         g->SetGridTolerance(2e-3);
+                       }),
+            "");
+  const nlohmann::json text = nlohmann::json::parse(s->GetFrameSceneText());
+  EXPECT_EQ(text["rendering"]["gridLattice"], 4);
+  EXPECT_EQ(text["rendering"]["gridTolerance"], 2e-3);
+}

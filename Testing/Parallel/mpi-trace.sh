@@ -49,6 +49,16 @@ cmp serial.vti blocks.vti
 "$check" same "$serial" "$db"
 test "$("$check" tiles "$db" "$(only_frame "$db")")" = "10/10"
 
+step "on the adaptive grid, 2 processes and 3 in contiguous bands: the single-process frame"
+"$asrt" trace "$scene" -r $size -q --grid 8 --formats png,vti -o grid-serial
+"${mpi[@]}" 2 "$asrt" trace "$scene" -r $size -q --mpi --grid 8 -o grid-np2
+cmp grid-serial.png grid-np2.png
+cmp grid-serial.vti grid-np2.vti
+"${mpi[@]}" 3 "$asrt" trace "$scene" -r $size -q --mpi --mpi-split contiguous --grid 8 \
+  -o grid-contiguous
+cmp grid-serial.vti grid-contiguous.vti
+if cmp -s serial.vti grid-serial.vti; then echo "the grid changed nothing" >&2; exit 1; fi
+
 step "storing it again is refused by every process alike; --replace replaces it"
 db2="${serial/dbname=serial/dbname=np2}"
 "$expect" 3 "already stored.*--replace" -- \

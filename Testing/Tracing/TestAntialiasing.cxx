@@ -271,6 +271,11 @@ TEST(Antialiasing, BadRenderingOptionsAreRefusedNamingTheField)
   refused(R"("supersample": 33)", "rendering.supersample");
   refused(R"("colorThreshold": -0.1)", "rendering.colorThreshold");
   refused(R"("colorThreshold": 2)", "rendering.colorThreshold");
+  refused(R"("gridLattice": 0)", "rendering.gridLattice");
+  refused(R"("gridLattice": 257)", "rendering.gridLattice");
+  refused(R"("gridLattice": 2.5)", "rendering.gridLattice");
+  refused(R"("gridTolerance": -1e-3)", "rendering.gridTolerance");
+  EXPECT_NO_THROW(parse(R"("gridLattice": 256, "gridTolerance": 0)"));
   refused(R"("preset": "fastest")", "rendering.preset");
   refused(R"("supersamples": 2)", "rendering.supersamples");
   // 2²⁸ pixels are a frame's most; supersampled 2 × 2 they are four times the rays a frame may
@@ -279,5 +284,11 @@ TEST(Antialiasing, BadRenderingOptionsAreRefusedNamingTheField)
   // A description changed after parsing is refused by the same rule.
   SceneDescription d = checkerWall(1.0, 10, 10);
   d.rendering.maxRaysPerPixel = 0;
+  EXPECT_THROW(validateScene(d), InvalidParameter);
+  d.rendering.maxRaysPerPixel = 9;
+  d.rendering.gridLattice = 0;
+  EXPECT_THROW(validateScene(d), InvalidParameter);
+  d.rendering.gridLattice = 8;
+  d.rendering.gridTolerance = -1.0;
   EXPECT_THROW(validateScene(d), InvalidParameter);
 }

@@ -1,0 +1,313 @@
+// The adaptive ray grid (AdaptiveGrid.h) and FrameTracer::traceGrid, which traces a frame's centre
+// rays on it.
+#include "AdaptiveGrid.h"
+
+#include "FrameTracer.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace asrt
+{
+namespace
+{
+/// u is periodic on closed surfaces: differences are taken the short way round.
+double shortDu(double a, double b)
+{
+  return (a - b) - std::round(a - b);
+}
+
+bool endsAlike(const RayRecord& a, const RayRecord& b)
+{
+  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
+}
+
+/// The block's corner column (row) a sub-quad starts at for a pixel coordinate: the first where
+/// the pixel lies before the midpoint, else the second (a degenerate first half has no pixels).
+int half(int x, int xm)
+{
+  return x < xm ? 0 : 1;
+}
+
+double fraction(int x, int xa, int xb)
+{
+  return xb > xa ? static_cast<double>(x - xa) / (xb - xa) : 0.0;
+}
+
+/// The bilinear interpolant on one sub-quad: f(s, t) = f00 + s Δ10 + t Δ01 + s t (Δ11 − Δ10 − Δ01)
+/// with Δ the corners' differences from f00.
+struct Bilinear
+{
+  double s, t;
+  template<typename T>
+  T operator()(const T& f00, const T& f10, const T& f01, const T& f11) const
+  {
+    return f00 + s * (f10 - f00) + t * (f01 - f00) + s * t * (f11 - f10 - f01 + f00);
+  }
+};
+}
+
+GridBlock latticeBlock(int i, int j, int lattice, int width, int height)
+{
+  // Corners at multiples of the lattice; the last block of a row (column) ends at the frame's
+  // edge, and a pixel on that edge belongs to it.
+  auto range = [lattice](int x, int size, int& a, int& b)
+  {
+    const int last = std::max(0, size - 1);
+    a = std::min(x, last) / lattice * lattice;
+    if (a == last && a > 0)
+      a -= (a - 1) % lattice + 1; // the frame's last line, on the lattice: the block before it
+    b = std::min(a + lattice, last);
+  };
+  GridBlock g;
+  range(i, width, g.x0, g.x1);
+  range(j, height, g.y0, g.y1);
+  return g;
+}
+
+bool ownsPixel(const GridBlock& b, int i, int j, int width, int height)
+{
+  const bool inI = (i >= b.x0 && i < b.x1) || (i == b.x1 && b.x1 == width - 1);
+  const bool inJ = (j >= b.y0 && j < b.y1) || (j == b.y1 && b.y1 == height - 1);
+  return inI && inJ;
+}
+
+std::array<std::pair<int, int>, 9> blockPoints(const GridBlock& b)
+{
+  const int xs[3] = { b.x0, b.xm(), b.x1 }, ys[3] = { b.y0, b.ym(), b.y1 };
+  std::array<std::pair<int, int>, 9> p;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      p[static_cast<std::size_t>(3 * r + c)] = { xs[c], ys[r] };
+  return p;
+}
+
+bool blockIsSmooth(const GridBlock& b, const std::array<const RayRecord*, 9>& p, double tolerance)
+{
+  for (const RayRecord* r : p)
+    if (!endsAlike(*r, *p[0]))
+      return false;
+  // Rays the integrator lost are never interpolated: a block of them refines to its pixels.
+  const Termination t = p[0]->termination;
+  if (t != Termination::HitObject && t != Termination::Escaped && t != Termination::Captured)
+    return false;
+  if (p[0]->objectId < 0)
+    return true;
+  // The bilinear map of the 4 corners at the 5 other points.
+  const RayRecord &c00 = *p[0], &c10 = *p[2], &c01 = *p[6], &c11 = *p[8];
+  const double d10 = shortDu(c10.u, c00.u), d01 = shortDu(c01.u, c00.u),
+               d11 = shortDu(c11.u, c00.u);
+  for (int k : { 1, 3, 4, 5, 7 })
+  {
+    const RayRecord& r = *p[static_cast<std::size_t>(k)];
+    const Bilinear at{ fraction(r.i, b.x0, b.x1), fraction(r.j, b.y0, b.y1) };
+    const double u = c00.u + at(0.0, d10, d01, d11);
+    const double v = at(c00.v, c10.v, c01.v, c11.v);
+    if (!(std::abs(shortDu(u, r.u)) <= tolerance && std::abs(v - r.v) <= tolerance))
+      return false;
+  }
+  return true;
+}
+
+RayRecord interpolateRecord(const GridBlock& b, const std::array<const RayRecord*, 9>& p, int i,
+                            int j)
+{
+  const int xs[3] = { b.x0, b.xm(), b.x1 }, ys[3] = { b.y0, b.ym(), b.y1 };
+  const int a = half(i, xs[1]), c = half(j, ys[1]);
+  const RayRecord& c00 = *p[static_cast<std::size_t>(3 * c + a)];
+  const RayRecord& c10 = *p[static_cast<std::size_t>(3 * c + a + 1)];
+  const RayRecord& c01 = *p[static_cast<std::size_t>(3 * c + a + 3)];
+  const RayRecord& c11 = *p[static_cast<std::size_t>(3 * c + a + 4)];
+  const int wx = xs[a + 1] - xs[a], wy = ys[c + 1] - ys[c];
+  const Bilinear at{ fraction(i, xs[a], xs[a + 1]), fraction(j, ys[c], ys[c + 1]) };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+
+  RayRecord r;
+  r.i = i;
+  r.j = j;
+  r.origin = c00.origin;
+  r.termination = c00.termination;
+  r.objectId = c00.objectId;
+  r.imageOrder = c00.imageOrder;
+  r.hitPoint = at(c00.hitPoint, c10.hitPoint, c01.hitPoint, c11.hitPoint);
+  r.affineLength = at(c00.affineLength, c10.affineLength, c01.affineLength, c11.affineLength);
+  r.winding = at(c00.winding, c10.winding, c01.winding, c11.winding);
+  r.chordError = std::max({ c00.chordError, c10.chordError, c01.chordError, c11.chordError });
+  r.maxAbsH = std::max({ c00.maxAbsH, c10.maxAbsH, c01.maxAbsH, c11.maxAbsH });
+  r.steps = 0;
+  r.traced = false;
+  r.raysPerPixel = 0;
+  if (r.objectId < 0)
+  {
+    r.dudi = r.dudj = r.dvdi = r.dvdj = nan;
+    return r;
+  }
+  const Vec3 n = at(c00.hitNormal, c10.hitNormal, c01.hitNormal, c11.hitNormal);
+  r.hitNormal = n.norm() > 0 ? Vec3(n.normalized()) : c00.hitNormal;
+  // u unwrapped from the first corner the short way; back in [0, 1) if that crossed the seam.
+  const double d10 = shortDu(c10.u, c00.u), d01 = shortDu(c01.u, c00.u),
+               d11 = shortDu(c11.u, c00.u);
+  r.u = c00.u + at(0.0, d10, d01, d11);
+  if (r.u < 0.0 || r.u >= 1.0)
+    r.u -= std::floor(r.u);
+  r.v = at(c00.v, c10.v, c01.v, c11.v);
+  // The derivatives of the bilinear map at the pixel.
+  const double cross = d11 - d10 - d01, crossV = c11.v - c10.v - c01.v + c00.v;
+  r.dudi = wx > 0 ? (d10 + at.t * cross) / wx : nan;
+  r.dvdi = wx > 0 ? ((c10.v - c00.v) + at.t * crossV) / wx : nan;
+  r.dudj = wy > 0 ? (d01 + at.s * cross) / wy : nan;
+  r.dvdj = wy > 0 ? ((c01.v - c00.v) + at.s * crossV) / wy : nan;
+  return r;
+}
+
+std::vector<GridBlock> latticeBlocksOf(const std::vector<std::pair<int, int>>& pixels, int lattice,
+                                       int width, int height)
+{
+  std::vector<GridBlock> blocks;
+  for (const auto& [i, j] : pixels)
+    blocks.push_back(latticeBlock(i, j, lattice, width, height));
+  auto order = [](const GridBlock& a, const GridBlock& b)
+  { return std::tie(a.y0, a.x0, a.y1, a.x1) < std::tie(b.y0, b.x0, b.y1, b.x1); };
+  std::sort(blocks.begin(), blocks.end(), order);
+  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  return blocks;
+}
+
+/// The rays and interpolations of one lattice block, over its closed pixel range.
+struct FrameTracer::GridWork
+{
+  void reset(const GridBlock& b)
+  {
+    this->Block = b;
+    this->W = b.x1 - b.x0 + 1;
+    const std::size_t n = static_cast<std::size_t>(this->W) * (b.y1 - b.y0 + 1);
+    this->Traced.assign(n, 0);
+    this->Filled.assign(n, 0);
+    this->Rays.resize(n);
+    this->Fills.resize(n);
+  }
+  std::size_t slot(int i, int j) const
+  {
+    return static_cast<std::size_t>(j - this->Block.y0) * this->W + (i - this->Block.x0);
+  }
+  /// The pixel's record: its ray if this block traced it, else its interpolation.
+  const RayRecord& record(int i, int j) const
+  {
+    const std::size_t k = this->slot(i, j);
+    return this->Traced[k] ? this->Rays[k] : this->Fills[k];
+  }
+
+  GridBlock Block;
+  int W = 0;
+  std::vector<unsigned char> Traced, Filled;
+  std::vector<RayRecord> Rays, Fills;
+};
+
+void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const
+{
+  const int W = this->Desc.camera.width, H = this->Desc.camera.height;
+  const auto points = blockPoints(b);
+  std::array<const RayRecord*, 9> p;
+  for (std::size_t k = 0; k < 9; ++k)
+  {
+    const auto [i, j] = points[k];
+    const std::size_t s = work.slot(i, j);
+    if (!work.Traced[s])
+    {
+      work.Rays[s] = this->traceThrough(prop, i, j);
+      work.Traced[s] = 1;
+    }
+    p[k] = &work.Rays[s];
+  }
+  // At most 2 pixels a side, every pixel is one of the 9 points.
+  if (b.x1 - b.x0 <= 2 && b.y1 - b.y0 <= 2)
+    return;
+  if (blockIsSmooth(b, p, this->Desc.rendering.gridTolerance))
+  {
+    for (int j = b.y0; j <= b.y1; ++j)
+      for (int i = b.x0; i <= b.x1; ++i)
+      {
+        const std::size_t s = work.slot(i, j);
+        if (work.Traced[s] || !ownsPixel(b, i, j, W, H))
+          continue;
+        RayRecord r = interpolateRecord(b, p, i, j);
+        r.direction = this->Cam->localDirection(i, j);
+        r.momentum = this->Cam->pixelRay(i, j).p;
+        r.color = this->pointColor(jacobianSample(r));
+        work.Fills[s] = r;
+        work.Filled[s] = 1;
+      }
+    return;
+  }
+  // Split at the midpoints; a side of at most 2 pixels stays whole.
+  const int xm = b.xm(), ym = b.ym();
+  std::vector<std::pair<int, int>> xr, yr;
+  if (b.x1 - b.x0 > 2)
+    xr = { { b.x0, xm }, { xm, b.x1 } };
+  else
+    xr = { { b.x0, b.x1 } };
+  if (b.y1 - b.y0 > 2)
+    yr = { { b.y0, ym }, { ym, b.y1 } };
+  else
+    yr = { { b.y0, b.y1 } };
+  for (const auto& [y0, y1] : yr)
+    for (const auto& [x0, x1] : xr)
+      this->refineBlock(prop, GridBlock{ x0, y0, x1, y1 }, work);
+}
+
+std::vector<RayRecord> FrameTracer::traceGrid(const std::vector<std::pair<int, int>>& pixels,
+                                              const std::function<bool(double)>& progress) const
+{
+  const int W = this->Desc.camera.width, H = this->Desc.camera.height;
+  const int lattice = this->Desc.rendering.gridLattice;
+  const std::vector<GridBlock> blocks = latticeBlocksOf(pixels, lattice, W, H);
+  // Which of the requested pixels each block hands out.
+  auto order = [](const GridBlock& a, const GridBlock& b)
+  { return std::tie(a.y0, a.x0, a.y1, a.x1) < std::tie(b.y0, b.x0, b.y1, b.x1); };
+  std::vector<std::vector<std::size_t>> wanted(blocks.size());
+  for (std::size_t k = 0; k < pixels.size(); ++k)
+  {
+    const GridBlock g = latticeBlock(pixels[k].first, pixels[k].second, lattice, W, H);
+    wanted[static_cast<std::size_t>(std::lower_bound(blocks.begin(), blocks.end(), g, order) -
+                                    blocks.begin())]
+      .push_back(k);
+  }
+
+  std::vector<RayRecord> out(pixels.size());
+  const long n = static_cast<long>(blocks.size());
+  std::atomic<long> done{ 0 };
+  std::atomic<bool> stop{ false };
+  const long reportEvery = std::max(1L, n / 200);
+#pragma omp parallel
+  {
+    std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
+    GridWork work;
+    long lastReported = 0;
+#pragma omp for schedule(dynamic, 1)
+    for (long q = 0; q < n; ++q)
+    {
+      if (stop.load(std::memory_order_relaxed))
+        continue;
+      const GridBlock& b = blocks[static_cast<std::size_t>(q)];
+      work.reset(b);
+      this->refineBlock(*prop, b, work);
+      for (std::size_t k : wanted[static_cast<std::size_t>(q)])
+        out[k] = work.record(pixels[k].first, pixels[k].second);
+      const long d = ++done;
+      if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)
+      {
+        lastReported = d;
+        if (!progress(static_cast<double>(d) / n))
+          stop = true;
+      }
+    }
+  }
+  if (progress && !stop && n > 0)
+    progress(1.0);
+  return out;
+}
+}

@@ -1,0 +1,81 @@
+// The adaptive ray grid: a frame's centre rays traced on a lattice and refined where the rays
+// disagree, the rest interpolated.
+//
+// The frame is cut into blocks whose corners lie on the lattice of step L (pixels whose
+// coordinates are multiples of L; the last blocks of a row or column end at the frame's edge). A
+// block traces its 9 points (corners, edge midpoints, centre) and is smooth when they end alike
+// (object, image order, termination: a hit, the horizon or the sky) and, on a surface, the
+// bilinear map of (u, v) from the 4 corners predicts the 5 other points to within the tolerance
+// (u the short way round: du = (a − b) − round(a − b)). A block that is not smooth splits at its
+// midpoints into 4, down to blocks of at most 2 pixels a side, whose pixels are all among their 9
+// points. A smooth block fills its other pixels bilinearly over its 4 sub-quads from all 9 points.
+//
+// A pixel belongs to the block whose half-open range [x0, x1) × [y0, y1) holds it (the frame's
+// last column and row belong to the blocks that end there). Its record is the traced ray if the
+// processing of its lattice block traced it, else its smooth sub-block's interpolation: a
+// function of the rays of its own lattice block alone, each ray a function of its pixel. So a
+// frame is the same bit for bit at any thread count and in any split into bands, subsets or
+// ranks: a split processes the whole lattice blocks holding its pixels.
+//
+// Like any sampling of the picture, features smaller than the spacing of a block's points (an
+// object whose image falls between them) can be missed by the block that holds them.
+#ifndef asrt_AdaptiveGrid_h
+#define asrt_AdaptiveGrid_h
+
+#include "RayRecord.h"
+#include "asrtTracingModule.h"
+
+#include <array>
+#include <utility>
+#include <vector>
+
+namespace asrt
+{
+/// The largest lattice step a frame's grid may take.
+constexpr int kMaxGridLattice = 256;
+
+/// A block of the grid: the pixels with x0 ≤ i ≤ x1, y0 ≤ j ≤ y1 (its corners).
+struct GridBlock
+{
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int xm() const { return x0 + (x1 - x0) / 2; }
+  int ym() const { return y0 + (y1 - y0) / 2; }
+  bool operator==(const GridBlock& o) const
+  {
+    return x0 == o.x0 && y0 == o.y0 && x1 == o.x1 && y1 == o.y1;
+  }
+};
+
+/// The lattice block of a width × height frame whose half-open range holds pixel (i, j).
+ASRTTRACING_EXPORT GridBlock latticeBlock(int i, int j, int lattice, int width, int height);
+
+/// Whether pixel (i, j) belongs to the block: in [x0, x1) × [y0, y1), or on its far edge where
+/// that is the frame's last column (row).
+ASRTTRACING_EXPORT bool ownsPixel(const GridBlock& b, int i, int j, int width, int height);
+
+/// The 9 points of a block in the order (x0, y0), (xm, y0), (x1, y0), (x0, ym), ..., (x1, y1):
+/// index 3 b + a for column a and row b of {x0, xm, x1} × {y0, ym, y1}.
+ASRTTRACING_EXPORT std::array<std::pair<int, int>, 9> blockPoints(const GridBlock& b);
+
+/// Whether a block with these 9 point records (blockPoints' order) is smooth at this tolerance.
+ASRTTRACING_EXPORT bool blockIsSmooth(const GridBlock& b, const std::array<const RayRecord*, 9>& p,
+                                      double tolerance);
+
+/// The interpolated record of pixel (i, j) of a smooth block from its 9 point records:
+/// objectId, imageOrder and termination from the block; u, v, hitPoint, hitNormal (renormalised),
+/// affineLength and winding bilinear over the sub-quad holding the pixel (u unwrapped from the
+/// sub-quad's first corner, the short way); chordError and maxAbsH the largest of the sub-quad's
+/// corners' (the rays it comes from); steps 0 (no ray was traced); origin the eye; direction and
+/// momentum those of the pixel's own ray (exact: `direction`, `momentum`); the Jacobian
+/// ∂(u, v)/∂(i, j) that of the bilinear map; the colour unset (the caller shades); traced false
+/// and raysPerPixel 0 until anti-aliasing counts it.
+ASRTTRACING_EXPORT RayRecord interpolateRecord(const GridBlock& b,
+                                               const std::array<const RayRecord*, 9>& p, int i,
+                                               int j);
+
+/// The lattice blocks holding the given pixels, each once, in a fixed order (by row, then column).
+ASRTTRACING_EXPORT std::vector<GridBlock> latticeBlocksOf(
+  const std::vector<std::pair<int, int>>& pixels, int lattice, int width, int height);
+}
+
+#endif
