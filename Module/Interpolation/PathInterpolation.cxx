@@ -141,67 +141,18 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   };
   RayRecord out = t - keys[a].s <= keys[a + 1].s - t ? ra : rb;
   out.color = blend(0, n);
+  method = PathMethod::EdgeBlend;
   if (n == 2)
   {
-    method = PathMethod::Linear;
     estimate = colorError2(ra.color, rb.color);
     return out;
   }
-  method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
   // roughly: the keys' colour step bounds what the edge's motion can change in between.
   estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1)),
                       colorError2(ra.color, rb.color));
   return out;
-}
-
-/// The re-trace count from the estimate itself, its scale measured by the probes: the error left
-/// after re-tracing the first k pixels of `order` is c · Σ (estimates of the rest, probes
-/// excluded: they are traced), c = max(1, Σ true / Σ estimated over the probes the keys vouched
-/// for). The floor keeps the estimate's own scale where the probes saw less than it predicts (the
-/// estimate is the lower order's error, an over-estimate where the higher order is better).
-/// False if the probes saw error where the estimate saw none (c unbounded): the caller then falls
-/// back to the probes alone.
-bool chooseByCalibratedEstimate(const std::vector<float>& estimate,
-                                const std::vector<std::int32_t>& order, std::size_t must,
-                                const std::vector<std::int32_t>& probes,
-                                const std::vector<std::size_t>& probeRank,
-                                const std::vector<double>& probeError2, double targetDb,
-                                std::size_t& count, double& estimatedPsnr)
-{
-  double trueSum = 0, estimatedSum = 0;
-  for (std::size_t q = 0; q < probes.size(); ++q)
-    if (probeRank[q] >= must)
-    {
-      trueSum += probeError2[q];
-      estimatedSum += estimate[static_cast<std::size_t>(probes[q])];
-    }
-  if (!(estimatedSum > 0) && trueSum > 0)
-    return false;
-  const double c = estimatedSum > 0 ? std::max(1.0, trueSum / estimatedSum) : 1.0;
-  const std::size_t n = order.size();
-  std::vector<double> rest(n + 1, 0.0);
-  for (std::size_t k = n; k-- > must;)
-  {
-    const std::int32_t p = order[k];
-    const bool probe = std::binary_search(probes.begin(), probes.end(), p);
-    rest[k] =
-      rest[k + 1] + (probe ? 0.0 : static_cast<double>(estimate[static_cast<std::size_t>(p)]));
-  }
-  count = n;
-  estimatedPsnr = std::numeric_limits<double>::infinity();
-  for (std::size_t k = must; k <= n; ++k)
-  {
-    const double psnr = psnrOfMse(c * rest[k] / (3.0 * static_cast<double>(n)));
-    if (psnr >= targetDb)
-    {
-      count = k;
-      estimatedPsnr = psnr;
-      break;
-    }
-  }
-  return true;
 }
 }
 
@@ -221,6 +172,8 @@ const char* toString(PathMethod m)
       return "retrace";
     case PathMethod::Retraced:
       return "retraced";
+    case PathMethod::EdgeBlend:
+      return "edge";
   }
   return "unknown";
 }
@@ -396,14 +349,11 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
             std::to_string(frame.height));
   const std::size_t n = frame.records.size();
   PathCompletion done;
-  const std::vector<std::int32_t> order = retraceOrder(frame.estimate);
-  std::vector<std::size_t> rank(n);
-  for (std::size_t k = 0; k < n; ++k)
-    rank[static_cast<std::size_t>(order[k])] = k;
-  for (std::uint8_t m : frame.method)
-    done.mustRetrace += m == static_cast<std::uint8_t>(PathMethod::Retrace);
-
+  done.estimatedPsnr = std::numeric_limits<double>::infinity();
+  if (frame.counts()[static_cast<std::size_t>(PathMethod::Key)] == n)
+    return done;                                       // a key frame: nothing predicted
   const std::vector<float> estimates = frame.estimate; // as predicted, before any re-trace
+  const std::vector<std::uint8_t> methods = frame.method;
   std::vector<char> traced(n, 0);
   auto trace = [&](const std::vector<std::int32_t>& pixels)
   {
@@ -417,57 +367,105 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
         ij.emplace_back(p % frame.width, p / frame.width);
       }
     const std::vector<RayRecord> records = tracer.tracePixels(ij);
-    std::vector<RayRecord> before(which.size());
     for (std::size_t k = 0; k < which.size(); ++k)
     {
       const std::size_t p = static_cast<std::size_t>(which[k]);
-      before[k] = frame.records[p];
       frame.records[p] = records[k];
       frame.estimate[p] = 0.0f;
       frame.method[p] = static_cast<std::uint8_t>(PathMethod::Retraced);
     }
     done.retraced += which.size();
-    return before;
   };
 
   // The pixels the keys cannot vouch for, and the probes, in one pass.
   const std::vector<std::int32_t> probes = probePixels(n, probeFraction, 64, 0x9e3779b97f4a7c15ULL);
-  std::vector<std::size_t> probeRank;
-  std::vector<double> probeError2;
-  {
-    std::vector<std::int32_t> first(order.begin(), order.begin() + done.mustRetrace);
-    first.insert(first.end(), probes.begin(), probes.end());
-    std::vector<std::int32_t> firstDistinct;
-    std::vector<char> seen(n, 0);
-    for (std::int32_t p : first)
-      if (!seen[static_cast<std::size_t>(p)])
-      {
-        seen[static_cast<std::size_t>(p)] = 1;
-        firstDistinct.push_back(p);
-      }
-    const std::vector<RayRecord> before = trace(firstDistinct);
-    for (std::size_t k = 0; k < firstDistinct.size(); ++k)
-    {
-      const std::size_t p = static_cast<std::size_t>(firstDistinct[k]);
-      if (!std::binary_search(probes.begin(), probes.end(), firstDistinct[k]))
-        continue;
-      probeRank.push_back(rank[p]);
-      // A must-re-trace pixel's error is not the prediction's: it is re-traced whatever the
-      // probes say, and its rank lies below every count chosen.
-      probeError2.push_back(colorError2(before[k].color, frame.records[p].color));
-    }
-  }
+  std::vector<std::int32_t> first;
+  for (std::size_t p = 0; p < n; ++p)
+    if (methods[p] == static_cast<std::uint8_t>(PathMethod::Retrace))
+      first.push_back(static_cast<std::int32_t>(p));
+  done.mustRetrace = first.size();
+  std::vector<RayRecord> predicted;
+  for (std::int32_t p : probes)
+    predicted.push_back(frame.records[static_cast<std::size_t>(p)]);
+  first.insert(first.end(), probes.begin(), probes.end());
+  trace(first);
   done.probes = probes.size();
-  std::size_t count = 0;
-  if (!chooseByCalibratedEstimate(estimates, order, done.mustRetrace, probes, probeRank,
-                                  probeError2, targetDb, count, done.estimatedPsnr))
+
+  // Each way of predicting has its own scale: the probes' true error over their estimate, at
+  // least 1 (the estimate is the lower order's error, an over-estimate where the higher order is
+  // better); a way whose probes erred where it estimated nothing is not trusted at all.
+  double trueSum[kPathMethodCount] = {}, estimatedSum[kPathMethodCount] = {};
+  std::vector<double> probeError(probes.size(), -1.0); // −1: not a prediction
+  for (std::size_t q = 0; q < probes.size(); ++q)
   {
-    const RetraceChoice choice = chooseRetraceCount(n, probeRank, probeError2, targetDb);
-    done.estimatedPsnr = choice.estimatedPsnr;
-    count = choice.retrace;
+    const std::size_t p = static_cast<std::size_t>(probes[q]);
+    if (methods[p] == static_cast<std::uint8_t>(PathMethod::Retrace) ||
+        methods[p] == static_cast<std::uint8_t>(PathMethod::Key))
+      continue;
+    probeError[q] = colorError2(predicted[q].color, frame.records[p].color);
+    trueSum[methods[p]] += probeError[q];
+    estimatedSum[methods[p]] += estimates[p];
   }
-  count = std::max(count, done.mustRetrace);
-  trace(std::vector<std::int32_t>(order.begin() + done.mustRetrace, order.begin() + count));
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> calibrated(n, 0.0);
+  for (std::size_t p = 0; p < n; ++p)
+  {
+    const int m = methods[p];
+    if (m == static_cast<int>(PathMethod::Retrace) || m == static_cast<int>(PathMethod::Key))
+      continue;
+    const double scale = estimatedSum[m] > 0 ? std::max(1.0, trueSum[m] / estimatedSum[m])
+                         : trueSum[m] > 0    ? inf
+                                             : 1.0;
+    calibrated[p] = std::isinf(scale) ? inf : scale * estimates[p];
+  }
+  auto worse = [&](std::int32_t a, std::int32_t b)
+  {
+    const double ca = calibrated[static_cast<std::size_t>(a)];
+    const double cb = calibrated[static_cast<std::size_t>(b)];
+    return ca != cb ? ca > cb : a < b;
+  };
+  std::vector<std::int32_t> rest;
+  for (std::size_t p = 0; p < n; ++p)
+    if (!traced[p] && methods[p] != static_cast<std::uint8_t>(PathMethod::Key))
+      rest.push_back(static_cast<std::int32_t>(p));
+  std::sort(rest.begin(), rest.end(), worse);
+  // What re-tracing the first k of `rest` leaves, estimated twice: the calibrated estimates of the
+  // rest, and the probes' own errors (each probe stands for the untraced pixels about its place in
+  // the order: their mean times their count, unbiased however the error is spread). The larger
+  // counts: a few heavy errors that the estimate misses show in the probes, and errors spread
+  // thinner than the probes resolve show in the estimate.
+  std::vector<double> left(rest.size() + 1, 0.0), probeLeft(rest.size() + 1, 0.0);
+  std::vector<std::size_t> probesLeft(rest.size() + 1, 0);
+  for (std::size_t k = rest.size(); k-- > 0;)
+    left[k] = left[k + 1] + calibrated[static_cast<std::size_t>(rest[k])];
+  for (std::size_t q = 0; q < probes.size(); ++q)
+    if (probeError[q] >= 0)
+    {
+      const std::size_t at = static_cast<std::size_t>(
+        std::lower_bound(rest.begin(), rest.end(), probes[q], worse) - rest.begin());
+      probeLeft[at] += probeError[q];
+      ++probesLeft[at];
+    }
+  for (std::size_t k = rest.size(); k-- > 0;)
+  {
+    probeLeft[k] += probeLeft[k + 1];
+    probesLeft[k] += probesLeft[k + 1];
+  }
+  auto remaining = [&](std::size_t k)
+  {
+    const double fromProbes =
+      probesLeft[k] > 0 ? probeLeft[k] / probesLeft[k] * static_cast<double>(rest.size() - k) : 0;
+    return std::max(left[k], fromProbes) / (3.0 * static_cast<double>(n));
+  };
+  std::size_t count = rest.size();
+  for (std::size_t k = 0; k <= rest.size(); ++k)
+    if (psnrOfMse(remaining(k)) >= targetDb)
+    {
+      count = k;
+      break;
+    }
+  done.estimatedPsnr = psnrOfMse(remaining(count));
+  trace(std::vector<std::int32_t>(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(count)));
   return done;
 }
 }

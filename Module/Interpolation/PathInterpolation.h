@@ -17,6 +17,10 @@
 //    v, the Jacobians ∂(u, v)/∂(i, j), the hit point and normal, the path length and winding, and
 //    the initial ray are interpolated with the same weights. The colour is the texture filtered
 //    over the interpolated footprint (Scene::shadeFootprint), as a traced pixel's is.
+//  - Edges. A pixel that either inner key supersampled (an edge runs through it) but whose centre
+//    rays end alike shows the average over the edge's two sides, which varies with s as the edge
+//    moves inside it: its colours are interpolated themselves (EdgeBlend), the record is the
+//    nearer key's, and the estimate is at least the keys' colour step.
 //  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
 //    dropped) differs from the prediction by about the lower order's error: that squared
 //    difference, summed over the channels in levels² of 255, ranks the pixels for re-tracing.
@@ -58,9 +62,10 @@ enum class PathMethod : std::uint8_t
   Quadratic = 2, ///< 3 nodes
   Linear = 3,    ///< 2 nodes
   Retrace = 4,   ///< the keys cannot vouch for it: to be traced (its record is the nearer key's)
-  Retraced = 5   ///< traced at t
+  Retraced = 5,  ///< traced at t
+  EdgeBlend = 6  ///< an edge pixel: the keys' colours interpolated (its record is the nearer key's)
 };
-constexpr int kPathMethodCount = 6;
+constexpr int kPathMethodCount = 7;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
 
 /// A frame at parameter t of a path.
@@ -114,8 +119,10 @@ struct PathCompletion
 
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
-/// the frame traced at t to reach `targetDb`: the estimate's scale is calibrated by probes, a
-/// fixed pseudo-random `probeFraction` of the pixels traced at t (chooseRetraceCount). Re-traced
+/// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
+/// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t: per way of
+/// predicting (cubic, quadratic, linear, edge blend), the probes' true error over their estimate,
+/// at least 1; a way whose probes erred where it estimated none is re-traced whole. Re-traced
 /// records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws InvalidParameter
 /// for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,

@@ -1,0 +1,291 @@
+// Per-pixel interpolation along a movie path (PathInterpolation.h) on the mass ramp of Figs. 4–5 at
+// 200×200: for key spacings h, frames between keys made plain and to quality targets, each scored
+// against the converged picture of its view (8×8 point samples a pixel, traced here) and against
+// the frame traced at its parameters with the same settings; the estimate's rank correlation with
+// the true error; the re-trace share it needs for 35 and 40 dB against an oracle's (true error
+// first); and the cost against tracing the frame. Prints a Markdown section for bench/REPORT.md.
+// Usage: asrt_bench_path   (from the repository root)
+#include "ErrorEstimate.h"
+#include "FrameMatching.h"
+#include "FrameTracer.h"
+#include "GeodesicSceneLoading.h"
+#include "ImageQuality.h"
+#include "PathInterpolation.h"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <string>
+#include <vector>
+
+using namespace asrt;
+
+namespace
+{
+const std::string kScene = "Data/scenes/fig4-mass-start.json";
+constexpr int kSide = 200;
+constexpr int kReferenceSide = 8;
+
+double now()
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+SceneDescription rampScene(double mass, const AntialiasOptions* rendering = nullptr)
+{
+  SceneDescription d = loadSceneFile(kScene, vtkImageFileLoader());
+  d.camera.width = d.camera.height = kSide;
+  d.spacetime.mass = mass;
+  if (rendering)
+    d.rendering = *rendering;
+  return d;
+}
+
+std::vector<std::uint8_t> rgbOf(const std::vector<RayRecord>& records)
+{
+  std::vector<std::uint8_t> rgb(3 * records.size());
+  for (std::size_t p = 0; p < records.size(); ++p)
+  {
+    const auto c = imageColor(records[p].color);
+    std::copy(c.begin(), c.end(), &rgb[3 * p]);
+  }
+  return rgb;
+}
+
+double psnrOf(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b)
+{
+  return psnr(RgbView{ kSide, kSide, a.data() }, RgbView{ kSide, kSide, b.data() });
+}
+
+double error2(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b, std::size_t p)
+{
+  double s = 0;
+  for (int c = 0; c < 3; ++c)
+  {
+    const double d = double(a[3 * p + c]) - double(b[3 * p + c]);
+    s += d * d;
+  }
+  return s;
+}
+
+/// Spearman's rank correlation (average ranks for ties).
+double spearman(const std::vector<double>& x, const std::vector<double>& y)
+{
+  auto ranks = [](const std::vector<double>& v)
+  {
+    std::vector<std::size_t> order(v.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+    std::vector<double> r(v.size());
+    for (std::size_t k = 0; k < order.size();)
+    {
+      std::size_t e = k;
+      while (e + 1 < order.size() && v[order[e + 1]] == v[order[k]])
+        ++e;
+      for (std::size_t m = k; m <= e; ++m)
+        r[order[m]] = 0.5 * (k + e);
+      k = e + 1;
+    }
+    return r;
+  };
+  const std::vector<double> rx = ranks(x), ry = ranks(y);
+  const double n = static_cast<double>(x.size());
+  const double mx = std::accumulate(rx.begin(), rx.end(), 0.0) / n;
+  const double my = std::accumulate(ry.begin(), ry.end(), 0.0) / n;
+  double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t k = 0; k < rx.size(); ++k)
+  {
+    sxy += (rx[k] - mx) * (ry[k] - my);
+    sxx += (rx[k] - mx) * (rx[k] - mx);
+    syy += (ry[k] - my) * (ry[k] - my);
+  }
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+
+/// The smallest share of pixels that, re-traced in the given order after the must-re-trace ones,
+/// brings the frame to `db` against the traced frame.
+double shareFor(const std::vector<std::size_t>& order, std::size_t must,
+                const std::vector<double>& err2, double db)
+{
+  const double n = static_cast<double>(err2.size());
+  double left = 0;
+  for (std::size_t k = must; k < order.size(); ++k)
+    left += err2[order[k]];
+  for (std::size_t k = must; k <= order.size(); ++k)
+  {
+    if (psnrOfMse(left / (3.0 * n)) >= db)
+      return k / n;
+    if (k < order.size())
+      left -= err2[order[k]];
+  }
+  return 1.0;
+}
+
+std::string pct(double x)
+{
+  char s[32];
+  std::snprintf(s, sizeof s, "%.1f %%", 100 * x);
+  return s;
+}
+
+std::string dbs(double x)
+{
+  char s[32];
+  if (std::isinf(x))
+    return "∞";
+  std::snprintf(s, sizeof s, "%.1f", x);
+  return s;
+}
+
+struct Frame
+{
+  double mass = 0;
+  std::vector<RayRecord> traced; ///< same settings as the keys
+  double traceSeconds = 0;
+  std::vector<std::uint8_t> tracedRgb, reference;
+};
+}
+
+int main()
+{
+  double load[3] = { 0, 0, 0 };
+  if (getloadavg(load, 3) < 0)
+    load[0] = -1;
+  const double tStart = now();
+  const std::vector<double> spacings = { 0.11, 0.055 };
+  // Frames between keys on both spacings' lattices (0.1 + k h): midway between the h = 0.055 keys.
+  const std::vector<double> masses = { 0.3475, 0.6225, 0.8975, 1.1725 };
+  std::vector<Frame> frames;
+  AntialiasOptions referenceRendering;
+  referenceRendering.mode = AntialiasMode::None;
+  referenceRendering.supersample = kReferenceSide;
+  double referenceSeconds = 0;
+  for (double m : masses)
+  {
+    Frame f;
+    f.mass = m;
+    const SceneDescription d = rampScene(m);
+    const double t0 = now();
+    f.traced = FrameTracer(d).traceRows(0, kSide);
+    f.traceSeconds = now() - t0;
+    f.tracedRgb = rgbOf(f.traced);
+    const double t1 = now();
+    f.reference = rgbOf(FrameTracer(rampScene(m, &referenceRendering)).traceRows(0, kSide));
+    referenceSeconds += now() - t1;
+    std::fprintf(stderr, "frame M = %.4f traced (%.2f s) with its reference\n", m, f.traceSeconds);
+    frames.push_back(std::move(f));
+  }
+
+  std::printf("<!-- path:begin -->\n## Interpolation along a path, per pixel\n\n");
+  std::printf("- **Machine:** %ld CPU(s), %d OpenMP threads, load average %.1f when the run "
+              "started.\n",
+              sysconf(_SC_NPROCESSORS_ONLN), omp_get_max_threads(), load[0]);
+  std::printf("- **Regenerate:** `bench/run` (`ASRT_BENCH_ONLY=path`); it runs "
+              "`build-bench/bin/asrt_bench_path` from the repository root.\n");
+  std::printf(
+    "- **Set-up.** `%s` at %d×%d, the default rendering, its mass ramp M = 0.1 → 1.2 "
+    "with key frames every h; frames at M = 0.3475, 0.6225, 0.8975, 1.1725 (midway "
+    "between h = 0.055 keys). **Converged**: %d×%d point samples a pixel (%.0f s for the four). "
+    "**Traced**: the frame traced at its mass with the keys' settings (%.2f s a frame "
+    "on average). Each interpolated frame comes from the 4 keys around it "
+    "(`interpolateAlongPath`), then `completePathFrame` re-traces to the target (against "
+    "the traced frame); its re-traced share counts every ray traced at t (the "
+    "must-re-trace pixels, the chosen ones and the probes).\n\n",
+    kScene.c_str(), kSide, kSide, kReferenceSide, kReferenceSide, referenceSeconds,
+    [&]
+    {
+      double s = 0;
+      for (const Frame& f : frames)
+        s += f.traceSeconds;
+      return s / frames.size();
+    }());
+
+  std::printf("| h | M | traced vs converged | method | re-traced | vs traced | vs converged | "
+              "time (× trace) |\n|---|---|---|---|---|---|---|---|\n");
+  struct Ranking
+  {
+    double h, mass, spearman, must, estimate35, oracle35, estimate40, oracle40;
+  };
+  std::vector<Ranking> rankings;
+  for (double h : spacings)
+  {
+    const int K = static_cast<int>(std::lround(1.1 / h)) + 1;
+    std::vector<double> s(K);
+    std::vector<std::vector<RayRecord>> keys(K);
+    for (int k = 0; k < K; ++k)
+    {
+      s[k] = 0.1 + k * h;
+      keys[k] = FrameTracer(rampScene(s[k])).traceRows(0, kSide);
+    }
+    std::fprintf(stderr, "h = %g: %d key frames traced\n", h, K);
+    const SceneDescription shading = rampScene(0.5);
+    for (const Frame& f : frames)
+    {
+      std::vector<PathKey> path;
+      for (int k = 0; k < K; ++k)
+        path.push_back({ s[k], &keys[k] });
+      const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
+      // The plain frame, the estimate's ranking against the truth, and the oracle.
+      const PathFrame plain = interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene);
+      const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
+      std::vector<double> err2(plain.records.size()), est, truth;
+      std::size_t must = 0;
+      for (std::size_t p = 0; p < err2.size(); ++p)
+      {
+        err2[p] = error2(plainRgb, f.tracedRgb, p);
+        if (plain.method[p] == static_cast<std::uint8_t>(PathMethod::Retrace))
+        {
+          ++must;
+          continue;
+        }
+        est.push_back(plain.estimate[p]);
+        truth.push_back(err2[p]);
+      }
+      const std::vector<std::int32_t> byEstimate32 = retraceOrder(plain.estimate);
+      std::vector<std::size_t> byEstimate(byEstimate32.begin(), byEstimate32.end());
+      std::vector<std::size_t> byTruth = byEstimate;
+      std::stable_sort(byTruth.begin() + must, byTruth.end(),
+                       [&](std::size_t a, std::size_t b) { return err2[a] > err2[b]; });
+      rankings.push_back({ h, f.mass, spearman(est, truth), double(must) / err2.size(),
+                           shareFor(byEstimate, must, err2, 35), shareFor(byTruth, must, err2, 35),
+                           shareFor(byEstimate, must, err2, 40),
+                           shareFor(byTruth, must, err2, 40) });
+      std::printf("| %g | %.4f | %s | plain (nothing re-traced) | 0 | %s | %s | |\n", h, f.mass,
+                  dbs(tracedVsRef).c_str(), dbs(psnrOf(plainRgb, f.tracedRgb)).c_str(),
+                  dbs(psnrOf(plainRgb, f.reference)).c_str());
+      const SceneDescription atT = rampScene(f.mass);
+      const FrameTracer tracer(atT);
+      for (double target : { 30.0, 35.0, 40.0 })
+      {
+        PathFrame done = plain;
+        const double t0 = now();
+        const PathCompletion c = completePathFrame(done, tracer, target);
+        const double seconds = now() - t0;
+        const std::vector<std::uint8_t> rgb = rgbOf(done.records);
+        std::printf("| %g | %.4f | | --quality %.0f | %s | %s | %s | %.2f |\n", h, f.mass, target,
+                    pct(double(c.retraced) / done.records.size()).c_str(),
+                    dbs(psnrOf(rgb, f.tracedRgb)).c_str(), dbs(psnrOf(rgb, f.reference)).c_str(),
+                    seconds / f.traceSeconds);
+      }
+    }
+  }
+  std::printf(
+    "\n**The estimate against the truth** (the plain frame's pixels that the keys vouch "
+    "for; the share re-traced in all, the must-re-trace pixels first, for the frame to reach "
+    "35 or 40 dB against the traced frame when pixels are re-traced in the estimate's "
+    "order and in the true error's, the oracle):\n\n");
+  std::printf("| h | M | Spearman | must re-trace | 35 dB: estimate | 35 dB: oracle | 40 dB: "
+              "estimate | 40 dB: oracle |\n|---|---|---|---|---|---|---|---|\n");
+  for (const Ranking& r : rankings)
+    std::printf("| %g | %.4f | %.2f | %s | %s | %s | %s | %s |\n", r.h, r.mass, r.spearman,
+                pct(r.must).c_str(), pct(r.estimate35).c_str(), pct(r.oracle35).c_str(),
+                pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
+  std::printf("\nThe whole section took %.0f s.\n<!-- path:end -->\n", now() - tStart);
+  return 0;
+}
