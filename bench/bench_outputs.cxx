@@ -39,6 +39,19 @@ double megabytes(const std::string& path)
   return stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0.0;
 }
 
+/// The machine's load average over the last minute (/proc/loadavg), or -1.
+double loadAverage()
+{
+  double load = -1;
+  if (FILE* f = std::fopen("/proc/loadavg", "r"))
+  {
+    if (std::fscanf(f, "%lf", &load) != 1)
+      load = -1;
+    std::fclose(f);
+  }
+  return load;
+}
+
 struct Codec
 {
   const char* name;
@@ -163,8 +176,16 @@ int main(int argc, char** argv)
     "threads (which the load of the machine changes less); best of three for the PNG and the "
     "`.vti`, one write for the hit points.\n\n",
     threads, argv[2], threads);
+  std::string command = "asrt_bench_outputs";
+  for (int k = 1; k < argc; ++k)
+    command += std::string(" ") + argv[k];
+  std::printf("Command: `%s` (`ASRT_BENCH_ONLY=outputs bench/run` runs it).\n\n", command.c_str());
+  const double loadBefore = loadAverage();
   for (int k = 3; k < argc; ++k)
     benchScene(argv[1], argv[2], argv[k], threads);
+  std::printf("Load average (1 min) of the machine at the start %.1f, at the end %.1f, on %ld "
+              "cores: above the core count, the wall times stretch.\n\n",
+              loadBefore, loadAverage(), sysconf(_SC_NPROCESSORS_ONLN));
   std::printf("<!-- outputs:end -->\n");
   return 0;
 }
