@@ -230,9 +230,14 @@ protected:
   }
 
 private:
+  /// Arrays of fewer blocks are compressed by vtkXMLWriter itself: for them starting threads
+  /// costs more than it saves (a sequence of small frames writes thousands of arrays).
+  static constexpr std::size_t kParallelBlocks = 16;
+
   /// The size in bytes of an array written as it lies in memory (compressed binary data of a
   /// numeric array in contiguous memory, its words as wide in the file, in the machine's byte
-  /// order, whole words to a block), else 0: vtkXMLWriter converts or swaps the others itself.
+  /// order, whole words to a block, at least kParallelBlocks blocks), else 0: vtkXMLWriter
+  /// converts or swaps the others itself.
   std::size_t plainBytes(vtkAbstractArray* a)
   {
 #ifdef VTK_WORDS_BIGENDIAN
@@ -246,9 +251,11 @@ private:
         numbers->GetNumberOfValues() == 0)
       return 0;
     const std::size_t word = this->GetOutputWordTypeSize(numbers->GetDataType());
-    if (word != static_cast<std::size_t>(numbers->GetDataTypeSize()) || this->BlockSize % word != 0)
+    const std::size_t size = word * static_cast<std::size_t>(numbers->GetNumberOfValues());
+    if (word != static_cast<std::size_t>(numbers->GetDataTypeSize()) ||
+        this->BlockSize % word != 0 || size < kParallelBlocks * this->BlockSize)
       return 0;
-    return word * static_cast<std::size_t>(numbers->GetNumberOfValues());
+    return size;
   }
 };
 
