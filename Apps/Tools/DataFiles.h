@@ -21,7 +21,7 @@ namespace tools
 /// blocks of an array are compressed on every OpenMP thread, into the same bytes at any count.
 enum class XmlCompression
 {
-  LZ4,         ///< vtkLZ4DataCompressor: the fastest, files about a third larger than zlib's
+  LZ4,         ///< vtkLZ4DataCompressor: the fastest, files up to half larger than zlib's
   ZLib,        ///< vtkZLibDataCompressor at vtkXMLWriter's default level
   ZLibFastest, ///< vtkZLibDataCompressor at level 1
   None         ///< uncompressed
