@@ -43,7 +43,8 @@ paper's scenes; Data/scenes/README.md explains the format) and writes
   PREFIX.png        the picture
   PREFIX.vti        the frame as VTK image data: Colors, ObjectId, ImageOrder, PathLength and
                     Termination per pixel
-  PREFIX-hits.vtp   one point per ray where it hit, with the ray's whole record
+  PREFIX-hits.vtp   one point per ray where it hit, with the ray's whole record (by default
+                    only for frames of at most 1000000 pixels; see --formats)
   PREFIX-rays.vtp   with --polylines: the rays themselves (Lambda, R, AbsH along them)
 ParaView opens the .vti and .vtp files. A series (--sweep or --orbit) numbers its files
 PREFIX-000.png, PREFIX-001.png, ... and adds PREFIX.pvd, PREFIX-hits.pvd (and PREFIX-rays.pvd),
@@ -53,7 +54,10 @@ Output:
   -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/')
                         gets the scene's file name: -o out/ gives out/fig1-cylinders.png
                         (default: the scene's file name in the current directory)
-  --formats LIST        which of png,vti,vtp to write (default: png,vti,vtp)
+  --formats LIST        which of png,vti,vtp to write (default: png,vti,vtp for frames of
+                        at most 1000000 pixels, png,vti above: the hit points of a 1920x1080
+                        frame fill about 500 MB and take longer to write than the rest; name
+                        vtp to have them at any size)
   --polylines[=STRIDE]  also write the rays as polylines, every STRIDE-th pixel in both
                         directions (default 10)
   -q, --quiet           no progress on stderr
@@ -196,7 +200,12 @@ std::string fieldString(vtkPolyData* hits, const char* name)
 struct Formats
 {
   bool png = false, vti = false, vtp = false;
+  /// No list given: the hit points are written for frames of at most kHitsByDefaultPixels.
+  bool vtpIfSmall = false;
 };
+
+/// The largest frame whose hit points are written without --formats naming vtp (1000×1000).
+constexpr long long kHitsByDefaultPixels = 1000000;
 
 Formats parseFormats(const std::string& list)
 {
@@ -294,6 +303,11 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
 {
   FrameFiles names;
   stopIfInterrupted();
+  int dims[3] = { 0, 0, 0 };
+  source->GetImageOutput()->GetDimensions(dims);
+  const bool hits =
+    formats.vtp ||
+    (formats.vtpIfSmall && static_cast<long long>(dims[0]) * dims[1] <= kHitsByDefaultPixels);
   if (formats.png)
   {
     names.png = base + ".png";
@@ -306,7 +320,7 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
     tools::writeVti(source->GetImageOutput(), files.add(names.vti));
     stopIfInterrupted();
   }
-  if (formats.vtp)
+  if (hits)
   {
     names.hits = base + "-hits.vtp";
     tools::writeVtp(source->GetHitsOutput(), files.add(names.hits));
@@ -411,6 +425,7 @@ struct FrameOutput
   vtkGeodesicDistributedSource* distributed = nullptr;
   std::string split;
   tools::PvdCollection images, hitSeries, raySeries;
+  bool toldOfHits = false; ///< said once that the hit points were left out by default
 };
 
 /// The write phase of traced frame k. Its files and its stored copy appear together: the files
@@ -440,6 +455,13 @@ void finishFrame(vtkGeodesicSource* source, FrameOutput& output, std::size_t k,
               fieldString(hits, "IntegrationMethod").c_str());
   for (const std::string& file : files.paths())
     std::printf("  wrote %s\n", file.c_str());
+  if (output.formats.vtpIfSmall && written.hits.empty() && !output.toldOfHits)
+  {
+    std::printf("  hit points not written: the frame has more than %lld pixels (--formats "
+                "png,vti,vtp writes them)\n",
+                kHitsByDefaultPixels);
+    output.toldOfHits = true;
+  }
   if (output.distributed)
     printRankWork(output.distributed, output.split);
   if (output.store)
@@ -477,7 +499,8 @@ int runTrace(const std::vector<std::string>& args)
     throw UsageError("--polylines cannot be combined with --mpi");
   if (options.has("mpi-split") && !mpi)
     throw UsageError("--mpi-split only makes sense with --mpi");
-  const Formats formats = parseFormats(options.get("formats", mpi ? "png,vti" : "png,vti,vtp"));
+  Formats formats = parseFormats(options.get("formats", "png,vti"));
+  formats.vtpIfSmall = !mpi && !options.has("formats");
   if (mpi && formats.vtp)
     throw UsageError("--mpi writes png and vti; the hits of a distributed frame are read back "
                      "from the store (--store, then asrt show ID --vtp)");

@@ -1,10 +1,12 @@
 #include "DataFiles.h"
 
 #include "AtomicFile.h"
+#include "CompressedBlocks.h"
 #include "VtkMessages.h"
 
 #include "vtkAbstractArray.h"
 #include "vtkCellData.h"
+#include "vtkDataArray.h"
 #include "vtkErrorCode.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
@@ -191,7 +193,8 @@ private:
 };
 
 /// A VTK XML writer that writes into a stream of ours (vtkXMLWriter's protected Stream, which its
-/// OpenStream uses instead of opening a file when it is set).
+/// OpenStream uses instead of opening a file when it is set), and compresses an array's blocks on
+/// every thread (the bytes vtkXMLWriter would write one block after another).
 template<class Base>
 class StreamXMLWriter : public Base
 {
@@ -203,6 +206,57 @@ public:
     return writer;
   }
   void SetOutputStream(std::ostream* stream) { this->Stream = stream; }
+
+protected:
+  void WriteInlineData(vtkAbstractArray* a, vtkIndent indent) override
+  {
+    const std::size_t size = this->plainBytes(a);
+    if (size == 0)
+    {
+      Base::WriteInlineData(a, indent);
+      return;
+    }
+    std::ostream& os = *this->Stream;
+    os << indent;
+    if (!writeCompressedBase64(os, static_cast<const unsigned char*>(a->GetVoidPointer(0)), size,
+                               this->Compressor, this->BlockSize,
+                               this->HeaderType == vtkXMLWriter::UInt64))
+    {
+      vtkErrorWithObjectMacro(this, "cannot compress array \"" << (a->GetName() ? a->GetName() : "")
+                                                               << "\"");
+      this->SetErrorCode(vtkErrorCode::FileFormatError);
+    }
+    os << "\n";
+  }
+
+private:
+  /// Arrays of fewer blocks are compressed by vtkXMLWriter itself: for them starting threads
+  /// costs more than it saves (a sequence of small frames writes thousands of arrays).
+  static constexpr std::size_t kParallelBlocks = 16;
+
+  /// The size in bytes of an array written as it lies in memory (compressed binary data of a
+  /// numeric array in contiguous memory, its words as wide in the file, in the machine's byte
+  /// order, whole words to a block, at least kParallelBlocks blocks), else 0: vtkXMLWriter
+  /// converts or swaps the others itself.
+  std::size_t plainBytes(vtkAbstractArray* a)
+  {
+#ifdef VTK_WORDS_BIGENDIAN
+    const bool native = this->ByteOrder == vtkXMLWriter::BigEndian;
+#else
+    const bool native = this->ByteOrder == vtkXMLWriter::LittleEndian;
+#endif
+    auto* numbers = vtkDataArray::SafeDownCast(a);
+    if (this->DataMode != vtkXMLWriter::Binary || !this->Compressor || !native || !numbers ||
+        !numbers->HasStandardMemoryLayout() || numbers->GetDataType() == VTK_BIT ||
+        numbers->GetNumberOfValues() == 0)
+      return 0;
+    const std::size_t word = this->GetOutputWordTypeSize(numbers->GetDataType());
+    const std::size_t size = word * static_cast<std::size_t>(numbers->GetNumberOfValues());
+    if (word != static_cast<std::size_t>(numbers->GetDataTypeSize()) ||
+        this->BlockSize % word != 0 || size < kParallelBlocks * this->BlockSize)
+      return 0;
+    return size;
+  }
 };
 
 /// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
@@ -243,6 +297,26 @@ void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
   file.finish();
 }
 
+void setCompression(vtkXMLWriter* writer, XmlCompression compression)
+{
+  switch (compression)
+  {
+    case XmlCompression::LZ4:
+      writer->SetCompressorTypeToLZ4();
+      break;
+    case XmlCompression::ZLib:
+      writer->SetCompressorTypeToZLib();
+      break;
+    case XmlCompression::ZLibFastest:
+      writer->SetCompressorTypeToZLib();
+      writer->SetCompressionLevel(1);
+      break;
+    case XmlCompression::None:
+      writer->SetCompressorTypeToNone();
+      break;
+  }
+}
+
 /// One file written alone, atomically.
 template<class Write>
 void writeOne(const std::string& path, Write write)
@@ -258,14 +332,14 @@ void writePng(vtkImageData* image, const std::string& path)
   writeOne(path, [image](TemporaryFile& file) { writePng(image, file); });
 }
 
-void writeVti(vtkImageData* image, const std::string& path)
+void writeVti(vtkImageData* image, const std::string& path, XmlCompression compression)
 {
-  writeOne(path, [image](TemporaryFile& file) { writeVti(image, file); });
+  writeOne(path, [=](TemporaryFile& file) { writeVti(image, file, compression); });
 }
 
-void writeVtp(vtkPolyData* data, const std::string& path)
+void writeVtp(vtkPolyData* data, const std::string& path, XmlCompression compression)
 {
-  writeOne(path, [data](TemporaryFile& file) { writeVtp(data, file); });
+  writeOne(path, [=](TemporaryFile& file) { writeVtp(data, file, compression); });
 }
 
 void writePng(vtkImageData* image, TemporaryFile& file)
@@ -301,19 +375,19 @@ void writePng(vtkImageData* image, TemporaryFile& file)
 // Inline binary (base64 in the XML), never VTK's default appended data: ParaView 5.11's bundled VTK
 // cannot parse appended data with the current libexpat (2.5.0-1+deb12u5 and later), so files with
 // it open with 0 points in Debian's ParaView. Inline data parses with every expat.
-void writeVti(vtkImageData* image, TemporaryFile& file)
+void writeVti(vtkImageData* image, TemporaryFile& file, XmlCompression compression)
 {
   vtkNew<StreamXMLWriter<vtkXMLImageDataWriter>> writer;
   writer->SetDataModeToBinary();
-  writer->SetCompressorTypeToZLib();
+  setCompression(writer, compression);
   writeWith(writer.Get(), image, file);
 }
 
-void writeVtp(vtkPolyData* data, TemporaryFile& file)
+void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression)
 {
   vtkNew<StreamXMLWriter<vtkXMLPolyDataWriter>> writer;
   writer->SetDataModeToBinary();
-  writer->SetCompressorTypeToZLib();
+  setCompression(writer, compression);
   writeWith(writer.Get(), data, file);
 }
 

@@ -17,16 +17,31 @@ namespace asrt
 {
 namespace tools
 {
+/// How the arrays of a VTK XML file are compressed (VTK's compressors; ParaView reads each). The
+/// blocks of an array are compressed on every OpenMP thread, into the same bytes at any count.
+enum class XmlCompression
+{
+  LZ4,         ///< vtkLZ4DataCompressor: the fastest, files up to half larger than zlib's
+  ZLib,        ///< vtkZLibDataCompressor at vtkXMLWriter's default level
+  ZLibFastest, ///< vtkZLibDataCompressor at level 1
+  None         ///< uncompressed
+};
+/// What the programs write: LZ4 (see the README's section on outputs).
+constexpr XmlCompression kXmlCompression = XmlCompression::LZ4;
+
 /// The image's RGB(A) "Colors" (else its unsigned-char active scalars) as a PNG (row 0 of the image
 /// at the bottom of the picture).
 void writePng(vtkImageData* image, const std::string& path);
-/// The image with every array, as VTK XML image data (zlib-compressed, appended binary).
-void writeVti(vtkImageData* image, const std::string& path);
-/// Polygonal data (hit points, ray polylines) as VTK XML poly data.
-void writeVtp(vtkPolyData* data, const std::string& path);
+/// The image with every array, as VTK XML image data (inline binary, compressed).
+void writeVti(vtkImageData* image, const std::string& path,
+              XmlCompression compression = kXmlCompression);
+/// Polygonal data (hit points, ray polylines) as VTK XML poly data (inline binary, compressed).
+void writeVtp(vtkPolyData* data, const std::string& path,
+              XmlCompression compression = kXmlCompression);
 void writePng(vtkImageData* image, TemporaryFile& file);
-void writeVti(vtkImageData* image, TemporaryFile& file);
-void writeVtp(vtkPolyData* data, TemporaryFile& file);
+void writeVti(vtkImageData* image, TemporaryFile& file,
+              XmlCompression compression = kXmlCompression);
+void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression = kXmlCompression);
 
 /// The directory holding the example data (scenes/, textures/): <prefix>/share/asrt when the
 /// running program is an installed one (<prefix>/bin/asrt, in whatever prefix it was installed

@@ -20,6 +20,14 @@ fail() { echo "outputs-open-in-paraview: $*" >&2; exit 1; }
 step "trace: picture, frame, hits and rays"
 "$asrt" trace "$scenes/kerr-disk.json" -r 24x18 --polylines=6 -q -o trace/
 
+# Arrays of many compressed blocks (the largest at 200x150 spans 22 of 32 KiB), compressed on
+# every thread with the compressor asrt writes with.
+step "trace at 200x150: arrays of many LZ4 blocks"
+"$asrt" trace "$scenes/kerr-disk.json" -r 200x150 --formats vti,vtp -q -o blocks/
+for f in blocks/kerr-disk.vti blocks/kerr-disk-hits.vtp; do
+  grep -q 'compressor="vtkLZ4DataCompressor"' "$f" || fail "$f is not LZ4-compressed"
+done
+
 step "a stored series: numbered files and .pvd collections"
 "$asrt" trace "$scenes/fig4-mass-start.json" -r 24x18 --sweep mass=0.5:0.7:2 --polylines=6 \
   --store -q -o series/ramp | tee series.txt
@@ -59,6 +67,7 @@ expect_kinds() {
   done
 }
 expect_kinds trace vti vtp
+expect_kinds blocks vti vtp
 expect_kinds series vti vtp pvd
 expect_kinds show vti vtp
 expect_kinds interp vti pvd
