@@ -1,13 +1,18 @@
 // The scene's object hierarchy against brute force over the public API: random scenes of a few
 // thousand mixed objects must give, for every random segment, exactly the hit that testing every
 // object's own intersection in insertion order gives (ties to the object added first), and for
-// every point exactly the least per-object distance bound.
+// every point exactly the least per-object distance bound; a 10,000-sphere scene file traced in
+// flat space must hit, pixel by pixel, the sphere the exact pinhole ray meets first.
+#include "CameraFixtures.h"
+#include "FrameTracer.h"
 #include "Scene.h"
+#include "SceneFile.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -340,4 +345,73 @@ TEST(SceneHierarchy, QueriesFollowObjectsAddedLaterAndMoves)
   EXPECT_FALSE(scene.firstHit(straight(Vec3(-5, 0, 0), Vec3(5, 0, 0)), hit));
   scene = std::move(moved);
   EXPECT_EQ(scene.objectDistance(Vec3::Zero()), 1.5);
+}
+
+TEST(SceneHierarchy, TenThousandSpheresTraceToTheExactPinholeRender)
+{
+  // Flat space: each pixel's ray is the straight half-line of the pinhole, and its first hit is
+  // the nearest root over all spheres and the sky, found here by brute force.
+  const int W = 40, H = 30, count = 10000;
+  const double skyR = 200.0;
+  const Vec3 eye(0, -60, 0);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> pos(-12, 12), size(0.05, 0.4);
+  std::vector<Vec3> centers;
+  std::vector<double> radii;
+  std::string objects = R"([{"type": "celestialSphere", "id": 0, "radius": 200,
+                             "texture": {"color": [0, 0, 1]}})";
+  for (int k = 0; k < count; ++k)
+  {
+    centers.emplace_back(pos(rng), pos(rng), pos(rng));
+    radii.push_back(size(rng));
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  R"(, {"type": "sphere", "id": %d, "center": [%.17g, %.17g, %.17g],
+                        "radius": %.17g, "texture": {"color": [1, 1, 1]}})",
+                  k + 1, centers[k].x(), centers[k].y(), centers[k].z(), radii[k]);
+    objects += buf;
+  }
+  objects += "]";
+  const std::string text = R"({"spacetime": {"mass": 0},
+    "camera": {"position": [0, -60, 0], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1],
+               "viewAngle": 30, "resolution": [40, 30]},
+    "objects": )" + objects +
+                           "}";
+  const SceneDescription d = parseScene(text, "", nullptr);
+  ASSERT_EQ(d.scene->objects().size(), static_cast<std::size_t>(count + 1));
+  const std::vector<RayRecord> recs = FrameTracer(d).traceRows(0, H);
+  ASSERT_EQ(recs.size(), static_cast<std::size_t>(W * H));
+
+  const CameraParameters& cam = d.camera;
+  const Vec3 F = (cam.focalPoint - eye).normalized();
+  const Vec3 U = (cam.viewUp - cam.viewUp.dot(F) * F).normalized();
+  const Vec3 R = F.cross(U);
+  int spheres = 0;
+  for (const RayRecord& rec : recs)
+  {
+    const Vec3 n = rec.direction;
+    const Vec3 dir = n.x() * R + n.y() * U + n.z() * F;
+    int id = 0;
+    double tBest = -eye.dot(dir) + std::sqrt(std::pow(eye.dot(dir), 2) - eye.squaredNorm() +
+                                             skyR * skyR); // the sky, seen from inside
+    for (int k = 0; k < count; ++k)
+    {
+      const Vec3 w = eye - centers[k];
+      const double bq = w.dot(dir), disc = bq * bq - (w.squaredNorm() - radii[k] * radii[k]);
+      if (disc < 0.0)
+        continue;
+      const double t = -bq - std::sqrt(disc);
+      if (t > 0.0 && t < tBest)
+      {
+        tBest = t;
+        id = k + 1;
+      }
+    }
+    ASSERT_EQ(rec.objectId, id) << "pixel " << rec.i << "," << rec.j;
+    EXPECT_LT((rec.hitPoint - (eye + tBest * dir)).norm(), 1e-9) << rec.i << "," << rec.j;
+    spheres += id > 0;
+  }
+  // Both spheres and the sky between them are in the frame.
+  EXPECT_GT(spheres, W * H / 4);
+  EXPECT_LT(spheres, W * H);
 }
