@@ -1,8 +1,12 @@
 #include "Scene.h"
 
+#include "ObjectHierarchy.h"
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <sstream>
 
 namespace asrt
@@ -595,6 +599,72 @@ Vec3 Disk::surfacePoint(double u, double v) const
 }
 
 // ---------------------------------------------------------------------------------------------
+struct Scene::LazyHierarchy
+{
+  std::mutex lock;
+  std::atomic<bool> built{ false };
+  ObjectHierarchy tree;
+};
+
+Scene::Scene()
+  : Hierarchy(std::make_unique<LazyHierarchy>())
+{
+}
+
+Scene::~Scene() = default;
+
+Scene::Scene(Scene&& other)
+  : Scene()
+{
+  *this = std::move(other);
+}
+
+Scene& Scene::operator=(Scene&& other)
+{
+  if (this != &other)
+  {
+    this->background = other.background;
+    this->horizonColor = other.horizonColor;
+    this->Objects = std::move(other.Objects);
+    this->Bounds = std::move(other.Bounds);
+    this->Unbounded = std::move(other.Unbounded);
+    this->DenseIndex = std::move(other.DenseIndex);
+    this->SparseIndex = std::move(other.SparseIndex);
+    std::swap(this->Hierarchy, other.Hierarchy);
+    other.Objects.clear();
+    other.Bounds.clear();
+    other.Unbounded.clear();
+    other.DenseIndex.clear();
+    other.SparseIndex.clear();
+    other.Hierarchy->built.store(false);
+  }
+  return *this;
+}
+
+const ObjectHierarchy& Scene::hierarchy() const
+{
+  // Double-checked: readers of a built hierarchy take no lock; add() clears `built` and is never
+  // concurrent with queries (it is not const).
+  LazyHierarchy& h = *this->Hierarchy;
+  if (!h.built.load(std::memory_order_acquire))
+  {
+    std::lock_guard<std::mutex> guard(h.lock);
+    if (!h.built.load(std::memory_order_relaxed))
+    {
+      std::vector<ObjectHierarchy::Ball> balls;
+      for (std::size_t k = 0; k < this->Bounds.size(); ++k)
+      {
+        if (this->Bounds[k].finite)
+          balls.push_back(
+            { static_cast<std::uint32_t>(k), this->Bounds[k].center, this->Bounds[k].radius });
+      }
+      h.tree.build(std::move(balls));
+      h.built.store(true, std::memory_order_release);
+    }
+  }
+  return h.tree;
+}
+
 void Scene::add(std::unique_ptr<SceneObject> object)
 {
   if (!object)
@@ -617,8 +687,11 @@ void Scene::add(std::unique_ptr<SceneObject> object)
   }
   else
     this->SparseIndex.emplace(id, index);
+  if (!bound.finite)
+    this->Unbounded.push_back(index);
   this->Bounds.push_back(bound);
   this->Objects.push_back(std::move(object));
+  this->Hierarchy->built.store(false, std::memory_order_release);
 }
 
 const SceneObject* Scene::find(int id) const
@@ -641,12 +714,13 @@ bool Scene::firstHit(const Segment& seg, SurfaceHit& hit) const
   const Vec3 mid = 0.5 * (a + b);
   const double half = 0.5 * (b - a).norm();
   bool found = false;
+  std::size_t foundIndex = 0;
   SurfaceHit candidate;
-  for (std::size_t k = 0; k < this->Objects.size(); ++k)
+  auto test = [&](std::size_t k)
   {
     const Bound& bound = this->Bounds[k];
     if (seg.farField && !bound.sky)
-      continue; // the segment lies outside every other object's reach
+      return; // the segment lies outside every other object's reach
     if (bound.finite)
     {
       // The chord lies in the ball of radius `half` about its midpoint; the margin absorbs
@@ -654,14 +728,34 @@ bool Scene::firstHit(const Segment& seg, SurfaceHit& hit) const
       const double reach = (bound.radius + half) * (1.0 + 1e-9);
       if ((mid - bound.center).squaredNorm() > reach * reach ||
           this->Objects[k]->distanceFrom(mid) > half * (1.0 + 1e-9) + 1e-12 * (1.0 + half))
-        continue;
+        return;
     }
-    if (this->Objects[k]->intersect(seg, candidate) && (!found || candidate.tau < hit.tau))
+    // Objects come in no particular order: on equal τ the lower index wins, as in index order.
+    if (this->Objects[k]->intersect(seg, candidate) &&
+        (!found || candidate.tau < hit.tau || (candidate.tau == hit.tau && k < foundIndex)))
     {
       hit = candidate;
+      foundIndex = k;
       found = true;
     }
-  }
+  };
+  for (const std::size_t k : this->Unbounded)
+    test(k);
+  if (seg.farField)
+    return found; // no bounded object is a celestial sphere
+  // The interpolant less the chord is Σ basis × (end tangent − chord, end acceleration), the basis
+  // functions of the tangents bounded by 0.2 on [0, 1] (quintic; 4/27 cubic), those of the
+  // accelerations by 0.0174: a hit lies within `bend` of the chord.
+  ObjectHierarchy::Chord chord;
+  chord.a = a;
+  chord.b = b;
+  chord.mid = mid;
+  chord.half = half;
+  const Vec3 delta = b - a;
+  chord.bend = 0.25 * ((seg.d0.tail<3>() - delta).norm() + (seg.d1.tail<3>() - delta).norm());
+  if (seg.quintic)
+    chord.bend += 0.025 * (seg.a0.tail<3>().norm() + seg.a1.tail<3>().norm());
+  this->hierarchy().visitNear(chord, test);
   return found;
 }
 
@@ -691,12 +785,21 @@ double Scene::celestialRadius() const
 double Scene::objectDistance(const Vec3& x) const
 {
   double d = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < this->Objects.size(); ++k)
+  for (const std::size_t k : this->Unbounded)
   {
     if (!this->Bounds[k].sky)
       d = std::min(d, this->Objects[k]->distanceFrom(x));
   }
-  return d;
+  // The ball's distance bounds the object's as distanceFrom does, and may be the tighter (a
+  // cylinder's bound, from its axis segment less its radius, falls below its ball's beyond its
+  // ends). Taking the larger lets the hierarchy prune by box distance, which is below the ball's.
+  auto bounded = [this, &x](std::size_t k)
+  {
+    const Bound& bound = this->Bounds[k];
+    const double ball = std::max(0.0, (x - bound.center).norm() - bound.radius);
+    return std::max(this->Objects[k]->distanceFrom(x), ball);
+  };
+  return this->hierarchy().minimum(x, d, bounded);
 }
 
 FarField Scene::farField() const

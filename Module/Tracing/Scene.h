@@ -211,17 +211,30 @@ private:
 /// n = +z this is (x̂, ŷ), so angles about +z are the usual φ.
 ASRTTRACING_EXPORT void perpendicularBasis(const Vec3& n, Vec3& e1, Vec3& e2);
 
+class ObjectHierarchy;
+
 /// The objects of a scene. Ids are unique; the first hit along a segment is the one with the
-/// smallest τ.
+/// smallest τ. The bounded objects are searched through a bounding-volume hierarchy over their
+/// bounding balls, built at the first query after objects were added.
 class ASRTTRACING_EXPORT Scene
 {
 public:
+  Scene();
+  ~Scene();
+  /// The moved-from scene is left empty.
+  Scene(Scene&& other);
+  Scene& operator=(Scene&& other);
   /// Throws InvalidParameter for a null object or if an object with the same id is already there.
   void add(std::unique_ptr<SceneObject> object);
   const std::vector<std::unique_ptr<SceneObject>>& objects() const { return this->Objects; }
   /// The object with this id, nullptr if none. O(1): an index cached at add().
   const SceneObject* find(int id) const;
-  /// The nearest hit along the segment over all objects. Thread-safe and allocation-free.
+  /// The nearest hit along the segment over all objects; on equal τ the object added first. Each
+  /// object is tested as if alone (its bounding ball, its distance from the chord's midpoint, then
+  /// its intersection), but only those the hierarchy cannot rule out (a box out of the chord's
+  /// ball's reach, or farther from the chord than the interpolant strays): the answer is the one a
+  /// loop over every object gives. Thread-safe and allocation-free once the hierarchy is
+  /// built (the first query builds it, under a lock).
   bool firstHit(const Segment& seg, SurfaceHit& hit) const;
   /// The hit object's colour at the hit; the background if the id is unknown.
   Color shade(const SurfaceHit& hit) const { return this->shade(hit.objectId, hit.u, hit.v); }
@@ -242,7 +255,10 @@ public:
   /// scene: the scene must outlive the FarField.
   FarField farField() const;
   /// A lower bound on the distance from x to every object but the celestial spheres (infinite if
-  /// there are none).
+  /// there are none): the least over those objects of max(distanceFrom(x), the distance from x to
+  /// the object's bounding ball), both lower bounds on the object's distance (an unbounded object
+  /// has only the first). Bounded objects are searched through the hierarchy; the result is that
+  /// minimum exactly. Thread-safe and allocation-free once the hierarchy is built.
   double objectDistance(const Vec3& x) const;
 
 private:
@@ -259,6 +275,13 @@ private:
   static constexpr int kDenseIds = 4096;
   std::vector<std::unique_ptr<SceneObject>> Objects;
   std::vector<Bound> Bounds;
+  /// Indices of the objects without a bounding ball (celestial spheres, planes, strips), ascending:
+  /// they are tested one by one.
+  std::vector<std::size_t> Unbounded;
+  /// The hierarchy over the bounded objects, built on demand behind a lock.
+  struct LazyHierarchy;
+  std::unique_ptr<LazyHierarchy> Hierarchy;
+  const ObjectHierarchy& hierarchy() const;
   std::vector<int> DenseIndex; ///< id → index into Objects, −1 for none
   std::unordered_map<int, std::size_t> SparseIndex;
 };

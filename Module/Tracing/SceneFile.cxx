@@ -773,8 +773,7 @@ private:
     array(j, "objects", 0, "an array of objects");
     if (j.size() > kMaxSceneObjects)
       fail("objects", "holds " + std::to_string(j.size()) + " objects; a scene may have at most " +
-                        std::to_string(kMaxSceneObjects) +
-                        " (every integration step tests each one)");
+                        std::to_string(kMaxSceneObjects));
     std::map<long long, std::size_t> ids;
     for (std::size_t i = 0; i < j.size(); ++i)
     {

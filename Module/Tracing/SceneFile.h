@@ -29,10 +29,13 @@ constexpr std::size_t kMaxSceneBytes = std::size_t(64) << 20;
 /// documents are refused while parsing, before the nested value is built: printing or copying
 /// nlohmann's values recurses once a level.
 constexpr int kMaxSceneNesting = 64;
-/// The most objects a scene may hold. Every integration step of every ray tests its segment
-/// against each object (their bounding balls first), so the cost of a frame grows with the count:
-/// 100,000 spheres took 0.8 s a ray. Paper-like scenes hold a handful.
-constexpr std::size_t kMaxSceneObjects = 1024;
+/// The most objects a scene may hold. A segment is tested only against the objects that the
+/// scene's bounding-volume hierarchy cannot rule out (Scene.h), so objects spread through the
+/// scene cost little each; but objects that overlap along a ray are each tested there, and
+/// parsing grows with the square of the count (nlohmann's checked parse scans an array for
+/// discarded values at the end of each element). README's limits give the costs measured at this
+/// bound. Paper-like scenes hold a handful.
+constexpr std::size_t kMaxSceneObjects = 20000;
 
 /// Pixels of an image file: RGB, 8 bits a channel, row-major, row 0 at the bottom (VTK's order).
 struct ImagePixels

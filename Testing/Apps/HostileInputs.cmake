@@ -175,8 +175,9 @@ set_tests_properties(CLI.Hostile.Inputs.Series.OrbitToInfinityWritesNothing
 asrt_hostile_input_test(Scene.HandWrittenSubset 4 "subset: is written by the program"
   SETUP "sed -e '1s/^{/{\"subset\": {\"pixels\": 3, \"digest\": \"0123456789abcdef\"},/' -e 's|\\.\\./textures|${scenes}/../textures|' '${scenes}/fig2-no-hole.json' > s.json"
   trace s.json -r 8x8 -o out)
-# A scene of 100000 spheres (10 MB) is refused at once: the count is bounded.
+# A scene of 100000 coincident spheres (10 MB), five times the bound, is refused before any
+# object is built.
 asrt_hostile_input_test(Scene.HundredThousandObjects 4
-  "objects: holds 100000 objects; a scene may have at most 1024"
+  "objects: holds 100000 objects; a scene may have at most 20000"
   SETUP "python3 -c \"import json; print(json.dumps({'spacetime': {'mass': 1}, 'camera': {'position': [0, -30, 8], 'focalPoint': [0, 0, 0], 'resolution': [32, 32]}, 'objects': [{'type': 'sphere', 'id': k + 1, 'center': [0, 20, 0], 'radius': 0.5, 'texture': {'color': [1, 1, 1]}} for k in range(100000)]}))\" > s.json"
   trace s.json -o out)
