@@ -4,10 +4,12 @@
 # beside the 3D ray bundle (the rays as polylines, with the horizon and the disk from the scene
 # geometry) in two render views of one layout, saves a screenshot of the layout, and plays an
 # interpolated movie (the hole's mass from 0.9 to 1.1 M, through the frame interpolator's time
-# steps) into PNGs. Run it under a display (pvpython renders through X; xvfb-run gives one):
+# steps) into PNGs. Run it under a display (pvpython renders through X; xvfb-run gives one, and
+# -noreset keeps its server from resetting between ParaView's OpenGL probe and its first view):
 #
 #     PV_PLUGIN_PATH=build/lib/paraview-5.11/plugins/ASRT \
-#         xvfb-run -a pvpython Examples/paraview_kerr_disk.py OUTPUT_DIR [WIDTH [STATE.pvsm]]
+#         xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
+#         pvpython Examples/paraview_kerr_disk.py OUTPUT_DIR [WIDTH [STATE.pvsm]]
 #
 # The plugin is loaded from PV_PLUGIN_PATH (or give its ASRT.so as ASRT_PLUGIN). Outputs, in
 # OUTPUT_DIR: kerr-disk-paraview.png (the two views), kerr-disk-movie.NNNN.png (the movie); with

@@ -52,7 +52,7 @@ step "bundle: the rays as poly data"
 display=()
 if [ -z "${DISPLAY:-}" ]; then
   command -v xvfb-run > /dev/null || fail "bundle needs an X display: DISPLAY is unset, no xvfb-run"
-  display=(xvfb-run -a)
+  display=(xvfb-run -a -s "-screen 0 1280x1024x24 -noreset")
 fi
 "${display[@]}" "$asrt" bundle "$scenes/kerr-disk.json" -r 5x5 --size 160x120 \
   --vtp bundle/rays.vtp -q -o bundle/
