@@ -296,8 +296,13 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
   };
   // u is periodic on closed surfaces: a difference is taken as the short way round.
   auto du = [](double a, double b) { return (a - b) - std::round(a - b); };
-  for (RayRecord& r : records)
+  // Each record reads only the lookup and writes only itself: the records are shared among the
+  // threads in any way, with the same result.
+  const long n = static_cast<long>(records.size());
+#pragma omp parallel for schedule(static) if (n > 16384)
+  for (long k = 0; k < n; ++k)
   {
+    RayRecord& r = records[static_cast<std::size_t>(k)];
     // An interpolated record keeps the Jacobian of its interpolant (AdaptiveGrid.h).
     if (!r.traced)
       continue;

@@ -20,9 +20,12 @@ class PixelLookup
 public:
   PixelLookup(const std::vector<RayRecord>& records, const std::vector<JacobianSample>& extra)
   {
-    this->Samples.reserve(records.size() + extra.size());
-    for (const RayRecord& r : records)
-      this->Samples.push_back(jacobianSample(r));
+    this->Samples.resize(records.size());
+    const long n = static_cast<long>(records.size());
+#pragma omp parallel for schedule(static) if (n > 16384)
+    for (long k = 0; k < n; ++k)
+      this->Samples[static_cast<std::size_t>(k)] =
+        jacobianSample(records[static_cast<std::size_t>(k)]);
     this->Samples.insert(this->Samples.end(), extra.begin(), extra.end());
     if (this->Samples.empty())
       return;
