@@ -13,9 +13,6 @@ namespace asrt
 {
 namespace
 {
-/// The failure colour of FrameTracer: a ray that ended neither on an object nor cleanly.
-const Color failureColor(1.0, 0.0, 1.0);
-
 /// u differences the short way round, as the Jacobians take them: u is periodic on closed
 /// surfaces.
 double shortWay(double a, double b)
@@ -257,17 +254,9 @@ RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, d
 
 Color shadePrediction(const Scene& scene, const RayRecord& r)
 {
-  if (r.objectId >= 0)
-    return scene.shadeFootprint(r.objectId, r.u, r.v, { r.dudi, r.dvdi, r.dudj, r.dvdj });
-  switch (r.termination)
-  {
-    case Termination::Captured:
-      return scene.horizonColor;
-    case Termination::Escaped:
-      return scene.background;
-    default:
-      return failureColor;
-  }
+  return r.objectId >= 0
+           ? scene.shadeFootprint(r.objectId, r.u, r.v, { r.dudi, r.dvdi, r.dudj, r.dvdj })
+           : scene.endColor(r.termination);
 }
 
 PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,

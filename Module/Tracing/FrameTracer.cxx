@@ -17,8 +17,6 @@ double angleBetween(const Vec3& a, const Vec3& b)
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-/// Diagnostic colour of rays the integrator lost: never a colour of a real scene.
-const Color failureColor(1.0, 0.0, 1.0);
 }
 
 FrameTracer::FrameTracer(const SceneDescription& scene)
@@ -108,17 +106,7 @@ RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOpti
   else
   {
     rec.hitPoint = res.final.x.tail<3>();
-    switch (res.termination)
-    {
-      case Termination::Captured:
-        rec.color = scene.horizonColor;
-        break;
-      case Termination::Escaped:
-        rec.color = scene.background;
-        break;
-      default:
-        rec.color = failureColor;
-    }
+    rec.color = scene.endColor(res.termination);
   }
   rec.imageOrder = static_cast<std::int32_t>(std::floor(rec.winding / M_PI));
   if (path)
@@ -154,17 +142,7 @@ RayRecord FrameTracer::traceThrough(Propagator& prop, double x, double y) const
 Color FrameTracer::pointColor(const JacobianSample& s) const
 {
   const Scene& scene = *this->Desc.scene;
-  if (s.objectId >= 0)
-    return scene.shade(s.objectId, s.u, s.v);
-  switch (s.termination)
-  {
-    case Termination::Captured:
-      return scene.horizonColor;
-    case Termination::Escaped:
-      return scene.background;
-    default:
-      return failureColor;
-  }
+  return s.objectId >= 0 ? scene.shade(s.objectId, s.u, s.v) : scene.endColor(s.termination);
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,

@@ -247,6 +247,14 @@ public:
   Color shadeFootprint(int objectId, double u, double v, const TextureFootprint& f) const;
   Color background = Color(0, 0, 0);   ///< for rays that escape without hitting anything
   Color horizonColor = Color(0, 0, 0); ///< for rays captured by the hole
+  /// The colour of a ray that hit nothing: the horizon's if the hole captured it, the background
+  /// if it escaped, else (the integrator lost it) magenta, a diagnostic colour of no real scene.
+  Color endColor(Termination t) const
+  {
+    return t == Termination::Captured  ? this->horizonColor
+           : t == Termination::Escaped ? this->background
+                                       : Color(1.0, 0.0, 1.0);
+  }
   /// Radius of the largest celestial sphere, 0 if none: rays farther out can hit nothing.
   double celestialRadius() const;
   /// The far field of this scene about the origin: the radius of the smallest ball about the origin
