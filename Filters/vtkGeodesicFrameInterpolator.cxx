@@ -6,6 +6,7 @@
 #include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
+#include "InterpolatorPipeline.h"
 #include "RayStore.h"
 #include "SceneFile.h"
 #include "StoreConnection.h"
@@ -357,12 +358,7 @@ int vtkGeodesicFrameInterpolator::RequestInformation(vtkInformation*,
     return 0;
   }
   const asrt::CameraParameters& c = this->Impl->Scene[0].camera;
-  const int ext[6] = { 0, c.width - 1, 0, c.height - 1, 0, 0 };
-  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
-  outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
-  outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
-  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_UNSIGNED_CHAR, 3);
+  asrt::declareFrameImage(outInfo, c.width, c.height);
   const int n = this->NumberOfIntermediateFrames;
   std::vector<double> steps(static_cast<std::size_t>(n) + 2);
   for (int k = 0; k <= n + 1; ++k)
@@ -379,17 +375,8 @@ int vtkGeodesicFrameInterpolator::RequestUpdateExtent(vtkInformation*,
                                                       vtkInformationVector** inputVector,
                                                       vtkInformationVector*)
 {
-  // The frames are not temporal and are needed whole, whatever time or piece is asked of us.
   for (int k = 0; k < 2; ++k)
-  {
-    vtkInformation* in = inputVector[k]->GetInformationObject(0);
-    if (!in)
-      continue;
-    in->Remove(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
-  }
+    asrt::requestWholeUntimed(inputVector[k]);
   return 1;
 }
 
@@ -499,11 +486,7 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     retraced->InsertNextValue(this->LastRetracedCount);
     fd->AddArray(retraced);
     const asrt::FrameParameters p = this->Impl->At(t, this->CameraPath);
-    asrt::setSpacetimeFieldData(p.spacetime, fd);
-    asrt::addDoubleField(fd, "CameraPosition", { p.position.x(), p.position.y(), p.position.z() });
-    asrt::addDoubleField(fd, "FocalPoint",
-                         { p.focalPoint.x(), p.focalPoint.y(), p.focalPoint.z() });
-    asrt::addDoubleField(fd, "ViewUp", { p.viewUp.x(), p.viewUp.y(), p.viewUp.z() });
+    asrt::setParametersFieldData(p, fd);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), t);
     this->UpdateProgress(1.0);
   }

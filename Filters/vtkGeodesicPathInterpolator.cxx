@@ -7,6 +7,7 @@
 #include "FrameTracer.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
+#include "InterpolatorPipeline.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 
@@ -272,12 +273,7 @@ int vtkGeodesicPathInterpolator::RequestInformation(vtkInformation*,
     return 0;
   }
   const asrt::CameraParameters& c = this->Impl->Scenes[0].camera;
-  const int ext[6] = { 0, c.width - 1, 0, c.height - 1, 0, 0 };
-  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
-  outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
-  outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
-  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_UNSIGNED_CHAR, 3);
+  asrt::declareFrameImage(outInfo, c.width, c.height);
   const int n = this->NumberOfIntermediateFrames;
   const int keys = static_cast<int>(this->Impl->Scenes.size());
   std::vector<double> steps;
@@ -296,15 +292,7 @@ int vtkGeodesicPathInterpolator::RequestUpdateExtent(vtkInformation*,
                                                      vtkInformationVector** inputVector,
                                                      vtkInformationVector*)
 {
-  // The keys are not temporal and are needed whole, whatever time or piece is asked of us.
-  for (int k = 0; k < inputVector[0]->GetNumberOfInformationObjects(); ++k)
-  {
-    vtkInformation* in = inputVector[0]->GetInformationObject(k);
-    in->Remove(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
-  }
+  asrt::requestWholeUntimed(inputVector[0]);
   return 1;
 }
 
@@ -404,11 +392,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     fd->AddArray(retraced);
     if (this->QualityTarget > 0.0)
       asrt::addDoubleField(fd, "EstimatedPsnr", { this->LastEstimatedPsnr });
-    asrt::setSpacetimeFieldData(p.spacetime, fd);
-    asrt::addDoubleField(fd, "CameraPosition", { p.position.x(), p.position.y(), p.position.z() });
-    asrt::addDoubleField(fd, "FocalPoint",
-                         { p.focalPoint.x(), p.focalPoint.y(), p.focalPoint.z() });
-    asrt::addDoubleField(fd, "ViewUp", { p.viewUp.x(), p.viewUp.y(), p.viewUp.z() });
+    asrt::setParametersFieldData(p, fd);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
     this->UpdateProgress(1.0);
   }

@@ -13,13 +13,6 @@ namespace asrt
 {
 namespace
 {
-/// u differences the short way round, as the Jacobians take them: u is periodic on closed
-/// surfaces.
-double shortWay(double a, double b)
-{
-  return (a - b) - std::round(a - b);
-}
-
 [[noreturn]] void invalid(const std::string& what)
 {
   throw InvalidParameter("path interpolation: " + what);
@@ -226,7 +219,7 @@ RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, d
   {
     const RayRecord& r = *nodes[k];
     if (k > 0)
-      u += shortWay(r.u, nodes[k - 1]->u);
+      u += shortUDifference(r.u, nodes[k - 1]->u);
     out.u += w[k] * u;
     out.v += w[k] * r.v;
     out.origin += w[k] * r.origin;

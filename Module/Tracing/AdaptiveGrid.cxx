@@ -15,12 +15,6 @@ namespace asrt
 {
 namespace
 {
-/// u is periodic on closed surfaces: differences are taken the short way round.
-double shortDu(double a, double b)
-{
-  return (a - b) - std::round(a - b);
-}
-
 bool endsAlike(const RayRecord& a, const RayRecord& b)
 {
   return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
@@ -99,15 +93,15 @@ bool blockIsSmooth(const GridBlock& b, const std::array<const RayRecord*, 9>& p,
     return true;
   // The bilinear map of the 4 corners at the 5 other points.
   const RayRecord &c00 = *p[0], &c10 = *p[2], &c01 = *p[6], &c11 = *p[8];
-  const double d10 = shortDu(c10.u, c00.u), d01 = shortDu(c01.u, c00.u),
-               d11 = shortDu(c11.u, c00.u);
+  const double d10 = shortUDifference(c10.u, c00.u), d01 = shortUDifference(c01.u, c00.u),
+               d11 = shortUDifference(c11.u, c00.u);
   for (int k : { 1, 3, 4, 5, 7 })
   {
     const RayRecord& r = *p[static_cast<std::size_t>(k)];
     const Bilinear at{ fraction(r.i, b.x0, b.x1), fraction(r.j, b.y0, b.y1) };
     const double u = c00.u + at(0.0, d10, d01, d11);
     const double v = at(c00.v, c10.v, c01.v, c11.v);
-    if (!(std::abs(shortDu(u, r.u)) <= tolerance && std::abs(v - r.v) <= tolerance))
+    if (!(std::abs(shortUDifference(u, r.u)) <= tolerance && std::abs(v - r.v) <= tolerance))
       return false;
   }
   return true;
@@ -149,8 +143,8 @@ RayRecord interpolateRecord(const GridBlock& b, const std::array<const RayRecord
   const Vec3 n = at(c00.hitNormal, c10.hitNormal, c01.hitNormal, c11.hitNormal);
   r.hitNormal = n.norm() > 0 ? Vec3(n.normalized()) : c00.hitNormal;
   // u unwrapped from the first corner the short way; back in [0, 1) if that crossed the seam.
-  const double d10 = shortDu(c10.u, c00.u), d01 = shortDu(c01.u, c00.u),
-               d11 = shortDu(c11.u, c00.u);
+  const double d10 = shortUDifference(c10.u, c00.u), d01 = shortUDifference(c01.u, c00.u),
+               d11 = shortUDifference(c11.u, c00.u);
   r.u = c00.u + at(0.0, d10, d01, d11);
   if (r.u < 0.0 || r.u >= 1.0)
     r.u -= std::floor(r.u);

@@ -38,8 +38,7 @@ double footprintMisfit(const RayRecord& r, const JacobianSample& s, int di, int 
   const double scale = std::max({ std::abs(a), std::abs(b), std::abs(c), std::abs(d) });
   if (!(std::abs(det) > 1e-12 * scale * scale))
     return std::numeric_limits<double>::infinity();
-  // u differences the short way round, as the Jacobians take them.
-  const double du = (s.u - r.u) - std::round(s.u - r.u) - (a * di + b * dj);
+  const double du = shortUDifference(s.u, r.u) - (a * di + b * dj);
   const double dv = (s.v - r.v) - (c * di + d * dj);
   const double x = (d * du - b * dv) / det, y = (-c * du + a * dv) / det;
   return std::hypot(x, y);

@@ -272,8 +272,6 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
     return b && b->termination != Termination::Running && b->objectId == a.objectId &&
            b->imageOrder == a.imageOrder;
   };
-  // u is periodic on closed surfaces: a difference is taken as the short way round.
-  auto du = [](double a, double b) { return (a - b) - std::round(a - b); };
   // Each record reads only the lookup and writes only itself: the records are shared among the
   // threads in any way, with the same result.
   const long n = static_cast<long>(records.size());
@@ -295,17 +293,17 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
       const bool m = same(r, minus), p = same(r, plus);
       if (m && p)
       {
-        dU = 0.5 * du(plus->u, minus->u);
+        dU = 0.5 * shortUDifference(plus->u, minus->u);
         dV = 0.5 * (plus->v - minus->v);
       }
       else if (p)
       {
-        dU = du(plus->u, r.u);
+        dU = shortUDifference(plus->u, r.u);
         dV = plus->v - r.v;
       }
       else if (m)
       {
-        dU = du(r.u, minus->u);
+        dU = shortUDifference(r.u, minus->u);
         dV = r.v - minus->v;
       }
       else

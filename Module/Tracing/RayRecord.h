@@ -7,6 +7,7 @@
 #include "AsrtTypes.h"
 #include "Scene.h"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -42,6 +43,13 @@ struct RayRecord
   /// object in the same image order (u differences taken modulo 1); NaN where no neighbour does.
   double dudi = 0, dudj = 0, dvdi = 0, dvdj = 0;
 };
+
+/// u(a) − u(b) the short way round, in [−½, ½]: u is periodic on closed surfaces (the sky, spheres,
+/// cylinders, disks), so neighbouring rays across the seam differ by a little, not by almost 1.
+inline double shortUDifference(double a, double b)
+{
+  return (a - b) - std::round(a - b);
+}
 
 /// What the Jacobians of a pixel's neighbours read of its record.
 struct JacobianSample
