@@ -346,7 +346,7 @@ struct vtkGeodesicDistributedSource::DataRequest
         // then works through its own lattice blocks (AdaptiveGrid.h), not through every block
         // its rows cross. The frame is the same either way.
         int rowsPerBlock = this->source->RowsPerBlock;
-        const int lattice = this->scene->rendering.gridLattice;
+        const int lattice = asrt::effectiveGridLattice(this->scene->rendering);
         if (lattice > 1)
           rowsPerBlock = (rowsPerBlock + lattice - 1) / lattice * lattice;
         this->partition.emplace(this->scene->camera.height, this->run.Size,

@@ -254,6 +254,9 @@ struct vtkGeodesicFrameInterpolator::Internals
     source->SetViewUp(p.viewUp.data());
     if (this->MethodsDiffer)
       source->SetIntegrationMethod("auto"); // each end resolved "auto" for its own spacetime
+    // Re-traced pixels lie scattered along edges: each takes its own ray, where the adaptive grid
+    // would process the whole lattice block around it.
+    source->SetGridLattice(1);
     vtkNew<vtkIntArray> subset;
     subset->SetNumberOfComponents(2);
     subset->SetNumberOfTuples(static_cast<vtkIdType>(pixels.size()));

@@ -369,6 +369,9 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       asrt::applyParameters(p, atT);
       if (in.Scenes[a].integrator.method != in.Scenes[a + 1].integrator.method)
         atT.integrator.method = "auto"; // each key resolved "auto" for its own spacetime
+      // Re-traced pixels lie scattered along edges: each takes its own ray, where the adaptive
+      // grid would process the whole lattice block around it.
+      atT.rendering.gridLattice = 1;
       const asrt::FrameTracer tracer(atT);
       const asrt::PathCompletion done =
         asrt::completePathFrame(f, tracer, this->QualityTarget, this->ProbeFraction);

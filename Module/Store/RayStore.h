@@ -46,6 +46,11 @@
 // so that such a frame is found (findFrame, writeFrame's duplicate check) by its description with
 // that rendering.
 //
+// The adaptive ray grid (schema version 7): a frame's rendering section always names its
+// lattice ("gridLattice"), since a text without one reads as the default grid. Migration 7 gave
+// the texts stored before, whose frames traced every pixel, "gridLattice": 1, their scene rows and
+// hashes following as in migration 5.
+//
 // Plain C++: no VTK types, no libpq types in this header.
 #ifndef asrt_RayStore_h
 #define asrt_RayStore_h
@@ -180,7 +185,7 @@ class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 6;
+  static constexpr int kSchemaVersion = 7;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
   /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5).

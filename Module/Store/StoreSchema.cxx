@@ -276,9 +276,15 @@ void runMigration(PGconn* conn, int version)
   {
     setUpPredicateRole(conn, what, version);
   }
-  else
+  else if (version == 5)
   {
     migrateToVersion5(conn, what);
+  }
+  else
+  {
+    // Migration 7: the texts of frames that traced every pixel name their lattice, since a text
+    // without one now reads as the default grid.
+    addGridLattices(conn, what);
   }
 }
 }

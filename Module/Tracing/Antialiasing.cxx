@@ -49,6 +49,7 @@ AntialiasOptions renderingPreset(const std::string& name)
   {
     o.mode = AntialiasMode::Adaptive;
     o.maxRaysPerPixel = 25;
+    o.gridLattice = 1;
   }
   else
     throw InvalidParameter("unknown preset \"" + name.substr(0, 40) +

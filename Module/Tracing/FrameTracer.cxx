@@ -200,7 +200,7 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
 std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int, int>>& pixels,
                                                  const std::function<bool(double)>& progress) const
 {
-  if (this->Desc.rendering.gridLattice > 1)
+  if (effectiveGridLattice(this->Desc.rendering) > 1)
   {
     std::vector<RayRecord> grid = this->traceGrid(pixels, progress);
     computeJacobians(grid);

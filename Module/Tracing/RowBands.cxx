@@ -66,7 +66,7 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
   std::vector<RayRecord> held;
   std::vector<JacobianSample> below, edge;
   std::vector<std::pair<int, int>> pixels;
-  const int lattice = tracer.description().rendering.gridLattice;
+  const int lattice = effectiveGridLattice(tracer.description().rendering);
   for (int b = first; b < last;)
   {
     // On the adaptive grid a band ends on the lattice where it can: a lattice block is then

@@ -959,13 +959,12 @@ std::string effectiveSceneText(const SceneDescription& d)
                      { "maxRaysPerPixel", a.maxRaysPerPixel },
                      { "supersample", a.supersample },
                      { "colorThreshold", a.colorThreshold } };
-  // Written only where a grid is used: the texts (and the stored frames' identities) of frames
-  // that trace every pixel stay as they were.
-  if (a.gridLattice > 1)
-  {
-    j["rendering"]["gridLattice"] = a.gridLattice;
+  // The lattice is always written: a text without it reads as the default grid, which frames
+  // stored before the grid existed (their texts gain "gridLattice": 1 in schema version 7) were
+  // not traced with. The tolerance means nothing without a grid.
+  j["rendering"]["gridLattice"] = effectiveGridLattice(a);
+  if (effectiveGridLattice(a) > 1)
     j["rendering"]["gridTolerance"] = a.gridTolerance;
-  }
   // Whole frames keep exactly the text they always had; a subset frame is a frame of its own.
   if (d.subset.count > 0)
     j["subset"] = { { "pixels", d.subset.count }, { "digest", d.subset.digest } };

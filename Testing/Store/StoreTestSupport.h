@@ -370,10 +370,29 @@ std::string pollUntil(Db& db, const std::string& sql, P&& done, double timeoutSe
 // bytea column per field, the values of a block of up to 4096 rays as big-endian words; version 2
 // added tiles. Their texts had no rendering section.
 
-/// The rendering section that effectiveSceneText() writes for singleRayRendering(), written out
-/// here: what the texts of versions 1 to 4 lacked, and migration 5 gives them.
-inline const std::string SingleRaySection =
+/// The rendering section that versions 5 and 6 wrote for singleRayRendering(), written out here:
+/// what the texts of versions 1 to 4 lacked, and migration 5 gives them.
+inline const std::string SingleRaySectionV5 =
   R"("rendering":{"antialias":"none","colorThreshold":1.0,"maxRaysPerPixel":1,"supersample":1})";
+/// The section effectiveSceneText() writes for singleRayRendering() since version 7, which also
+/// names the lattice (every pixel traced); migration 7 adds it to every text without one.
+inline const std::string SingleRaySection = R"("rendering":{"antialias":"none","colorThreshold":1.0,)"
+                                            R"("gridLattice":1,"maxRaysPerPixel":1,"supersample":1})";
+
+/// A frame's effective text as versions 5 and 6 wrote it for a frame that traced every pixel:
+/// without "gridLattice" (a grid did not exist).
+inline std::string textBeforeGrid(const std::string& text)
+{
+  nlohmann::json j = nlohmann::json::parse(text);
+  if (j.contains("rendering"))
+  {
+    if (j["rendering"].value("gridLattice", 1) != 1)
+      throw std::logic_error("textBeforeGrid: the text's frame was traced on the grid");
+    j["rendering"].erase("gridLattice");
+    j["rendering"].erase("gridTolerance");
+  }
+  return j.dump();
+}
 
 /// The texts a writer of schema version 4 or earlier stored for a frame of `d` (whose rendering
 /// must be singleRayRendering(), the only one there was): its effective text, which had no
@@ -399,12 +418,12 @@ inline StoredTexts legacyTexts(asrt::SceneDescription d)
 {
   // A frame stored before anti-aliasing was one ray a pixel.
   d.rendering = asrt::singleRayRendering();
-  std::string frame = asrt::effectiveSceneText(d);
+  std::string frame = textBeforeGrid(asrt::effectiveSceneText(d));
   // Keys sorted: "spacetime" always follows the section.
-  const std::size_t at = frame.find(SingleRaySection + ",");
+  const std::size_t at = frame.find(SingleRaySectionV5 + ",");
   if (at == std::string::npos)
     throw std::logic_error("legacyTexts: the scene's text has no single-ray rendering section");
-  frame.erase(at, SingleRaySection.size() + 1);
+  frame.erase(at, SingleRaySectionV5.size() + 1);
   return storedTexts(frame);
 }
 

@@ -384,10 +384,10 @@ TEST(RenderingMigration, Version4FramesKeepTheirRaysAndGetTheRenderingTheyWereTr
   SceneDescription sd = scene(42, 30);
   sd.rendering.mode = asrt::AntialiasMode::Filter;
   Version4Frame d{ sd, { rays(4, 0, 100, 42) } };
-  d.text = asrt::effectiveSceneText(sd);
+  d.text = textBeforeGrid(asrt::effectiveSceneText(sd));
   const SceneDescription se = scene(40, 30, 1.5);
   Version4Frame e{ se, { rays(5, 0, 50, 40) } };
-  e.text = asrt::effectiveSceneText(se);
+  e.text = textBeforeGrid(asrt::effectiveSceneText(se));
   // A tiled frame whose second tile a writer of version 4 was loading when the migration came:
   // its table, made LIKE the old layout, is not attached yet.
   Version4Frame g{ scene(43, 30), { rays(7, 0, 40, 43), rays(7, 40, 40, 43) } };
@@ -511,7 +511,7 @@ TEST(RenderingMigration, AFrameStoredTwiceIsRefusedLeavingVersion4AsItWas)
   const Version4Frame old{ s, { rays(1, 0, 600, 30) } };
   Version4Frame again{ s, { rays(2, 0, 600, 30) } };
   again.label = "again";
-  again.text = asrt::effectiveSceneText(s);
+  again.text = textBeforeGrid(asrt::effectiveSceneText(s));
   const std::int64_t ido = insertVersion4Frame(db, old), ida = insertVersion4Frame(db, again);
   const std::string before = version4State(db);
 
@@ -600,4 +600,40 @@ TEST(RenderingMigration, AFrameOf200By200Migrates)
   std::printf("[ migration 5 ] a version 4 database with one 200x200 frame (40000 rays) migrated "
               "in %.3f s\n",
               seconds);
+}
+
+TEST(RenderingMigration, Version6TextsNameTheLatticeTheirFramesWereTracedWith)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate(4);
+  Db db(ci);
+  const SceneDescription s = scene(30, 20);
+  const Version4Frame old{ s, { rays(1, 0, 600, 30) } };
+  const std::int64_t id = insertVersion4Frame(db, old);
+  store.migrate(6);
+  // Versions 5 and 6 wrote no lattice: every frame traced every pixel.
+  const std::string before = db.value("SELECT effective_text FROM frames WHERE id = " +
+                                      std::to_string(id));
+  EXPECT_NE(before.find(SingleRaySectionV5), std::string::npos) << before;
+
+  store.migrate();
+  ASSERT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
+  // The text now says so, and the frame is found by its description, which names lattice 1...
+  const std::string text = asrt::effectiveSceneText(s);
+  EXPECT_NE(text.find(SingleRaySection), std::string::npos) << text;
+  EXPECT_EQ(store.frameSceneText(id), text);
+  EXPECT_EQ(store.frameInfo(id).frameHash, sha256Of(db, text));
+  EXPECT_EQ(store.findFrame(s), id);
+  EXPECT_EQ(firstDifference(store.readFrame(id), singleRay(old.tiles[0])), -1);
+  // ...and not by the same view on the default grid, which it was not traced with.
+  SceneDescription onGrid = s;
+  onGrid.rendering.gridLattice = asrt::AntialiasOptions().gridLattice;
+  ASSERT_GT(onGrid.rendering.gridLattice, 1);
+  EXPECT_FALSE(store.findFrame(onGrid).has_value());
+  // The scene row followed: the frame's scene text parses back to lattice 1.
+  const std::string sceneText = db.value(
+    "SELECT s.description_text FROM scenes s JOIN frames f ON f.scene_id = s.id WHERE f.id = " +
+    std::to_string(id));
+  EXPECT_NE(sceneText.find("\"gridLattice\":1"), std::string::npos) << sceneText;
 }

@@ -208,6 +208,8 @@ TEST(AdaptiveGrid, ThinObjectsBesideTheHoleKeepEveryPixel)
   const int W = 96, H = 72;
   SceneDescription d = checkerWall(1.0, W, H);
   d.camera = looking(Vec3(0, -30, 0), Vec3(0, 0, 0), Vec3(0, 0, 1), 40, W, H);
+  // The loosest tolerance measured (bench/REPORT.md): no object is lost there either.
+  d.rendering.gridTolerance = 1e-3;
   d.scene->add(std::make_unique<Cylinder>(
     2, "rod", std::make_shared<CheckerTexture>(8, 4, Color(1, 1, 0), Color(0, 1, 0)),
     Vec3(-6, -8, -9), Vec3(0.3, 0, 1).normalized(), 0.08, 18.0));
@@ -247,6 +249,8 @@ TEST(AdaptiveGrid, Fig1FrameMatchesTheFullTrace)
                                      [](const std::string& path) { return readPngTexture(path); });
   d.camera.width = 96;
   d.camera.height = 96;
+  // The loosest tolerance measured (bench/REPORT.md): the bounds hold there too.
+  d.rendering.gridTolerance = 1e-3;
   const std::vector<RayRecord> full = traceFrame(d, 1), grid = traceFrame(d, 16);
   long wrong = 0;
   for (std::size_t k = 0; k < full.size(); ++k)
@@ -318,8 +322,16 @@ TEST(AdaptiveGrid, OptionsRoundTripThroughTheSceneText)
   const std::string text = R"({"spacetime": {"mass": 1},
     "camera": {"position": [0, -30, 0], "focalPoint": [0, 0, 0]}, "objects": []})";
   SceneDescription d = parseScene(text, ".", nullptr);
-  const std::string plain = effectiveSceneText(d);
-  EXPECT_EQ(plain.find("grid"), std::string::npos) << "a frame without a grid keeps its text";
+  // A text that names no lattice reads as the default grid, and the frame's text names it...
+  ASSERT_GT(d.rendering.gridLattice, 1);
+  EXPECT_NE(effectiveSceneText(d).find("\"gridLattice\":" + std::to_string(d.rendering.gridLattice)),
+            std::string::npos);
+  // ...and a frame of every pixel says so, with no tolerance, which means nothing there.
+  d.rendering.gridLattice = 1;
+  const std::string every = effectiveSceneText(d);
+  EXPECT_NE(every.find("\"gridLattice\":1"), std::string::npos) << every;
+  EXPECT_EQ(every.find("gridTolerance"), std::string::npos) << every;
+  EXPECT_EQ(parseSceneWithoutImages(every).rendering.gridLattice, 1);
   d.rendering.gridLattice = 16;
   d.rendering.gridTolerance = 2.5e-4;
   const SceneDescription back = parseSceneWithoutImages(effectiveSceneText(d));

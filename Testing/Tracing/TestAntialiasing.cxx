@@ -84,6 +84,8 @@ AntialiasOptions options(AntialiasMode mode, int cap = 16, int supersample = 1)
   o.mode = mode;
   o.maxRaysPerPixel = cap;
   o.supersample = supersample;
+  // The anti-aliasing of every pixel's own centre ray; the grid's records are TestAdaptiveGrid's.
+  o.gridLattice = 1;
   return o;
 }
 }

@@ -375,6 +375,7 @@ TEST(SceneHierarchy, TenThousandSpheresTraceToTheExactPinholeRender)
   const std::string text = R"({"spacetime": {"mass": 0},
     "camera": {"position": [0, -60, 0], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1],
                "viewAngle": 30, "resolution": [40, 30]},
+    "rendering": {"gridLattice": 1},
     "objects": )" + objects +
                            "}";
   const SceneDescription d = parseScene(text, "", nullptr);

@@ -29,6 +29,8 @@ SceneDescription diskScene()
   d.spacetime.mass = 1.0;
   d.camera = looking(Vec3(0, -20, 3), Vec3(0, 0, 0), Vec3(0, 0, 1), 40, kW, kH);
   d.scene = std::make_shared<Scene>();
+  // Bands of any number of rows: on the grid they would end on its lattice (TestAdaptiveGrid).
+  d.rendering.gridLattice = 1;
   d.scene->add(std::make_unique<CelestialSphere>(
     0, "sky", std::make_shared<SolidTexture>(Color(0.1, 0.1, 0.3)), 500.0));
   d.scene->add(std::make_unique<Disk>(1, "disk",
