@@ -217,6 +217,7 @@ int runTrace(const std::vector<std::string>& args);
 int runList(const std::vector<std::string>& args);
 int runShow(const std::vector<std::string>& args);
 int runInterpolate(const std::vector<std::string>& args);
+int runMovie(const std::vector<std::string>& args);
 int runBundle(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
 int runDb(const std::vector<std::string>& args);
