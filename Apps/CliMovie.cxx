@@ -628,7 +628,16 @@ int runMovie(const std::vector<std::string>& args)
 
   const SceneDescription shading = sceneWithTextures(run, run.frames.front());
   std::vector<FrameReport> reports;
-  makeFrames(run, plan, *shading.scene, settings, files, *movie, prefix, reports);
+  try
+  {
+    makeFrames(run, plan, *shading.scene, settings, files, *movie, prefix, reports);
+  }
+  catch (const StoreError&)
+  {
+    // Ctrl-C cancels the store's statement under way: that is the interrupt, not the database.
+    stopIfInterrupted();
+    throw;
+  }
   std::printf("movie of %zu frames along the %s, quality target %s dB%s\n", run.frames.size(),
               path.parameter.c_str(), formatNumber(settings.quality).c_str(),
               run.store ? ", accumulated in the store" : "");
