@@ -18,6 +18,7 @@
 
 #include "AtomicFile.h"
 #include "CameraOrbit.h"
+#include "CameraPath.h"
 #include "DataFiles.h"
 #include "MovieWriter.h"
 #include "Progress.h"
@@ -84,6 +85,10 @@ The path (one of):
   --orbit DEGREES       the camera (eye, focal point and up) turned about the hole's axis (z)
                         through DEGREES (as asrt trace --orbit FRAMES:DEGREES; 360 is a closed
                         orbit whose last frame is one step short of the first)
+  --cameras FILE        the camera through key cameras, a JSON file {"keys": [{"position":
+                        [x, y, z], "focalPoint": [x, y, z], "viewUp": [x, y, z]}, ...]} of two
+                        or more keys: eye, focal point and view-up each on the Catmull-Rom
+                        spline through the keys, frame k at key (K - 1) k / (FRAMES - 1)
 
 Options:
   -n, --frames N        frames of the movie, at least 2 (default 24)
@@ -102,6 +107,7 @@ Examples:
   asrt movie Data/scenes/fig4-mass-start.json --ramp mass=0.1:1.2 -n 30 -r 200x200 -o ramp/
   asrt movie Data/scenes/fig1-cylinders.json --orbit 90 -n 24 -r 200x200 --store -o orbit/
   asrt movie Data/scenes/kerr-disk.json --ramp spin=0:0.99 -n 24 --quality 40 --store --plan
+  asrt movie Data/scenes/fig1-cylinders.json --cameras flight.json -n 48 -r 200x200 -o flight/
 )";
 
 constexpr int kMaxMovieFrames = 10000;
@@ -200,6 +206,24 @@ PathFrames orbitPath(const std::string& spec, int n, const std::string& sceneTex
     const tools::CameraPose turned = tools::turnedAboutZ(pose, angle);
     path.s.push_back(angle);
     path.apply.push_back([turned](vtkGeodesicSource* src) { tools::setCamera(src, turned); });
+  }
+  return path;
+}
+
+PathFrames cameraPath(const std::string& file, int n)
+{
+  const std::vector<tools::CameraPose> keys = tools::parseCameraKeys(readSceneFile(file), file);
+  PathFrames path;
+  path.parameter = "camera key";
+  const double last = static_cast<double>(keys.size() - 1);
+  for (int k = 0; k < n; ++k)
+  {
+    // Frame k at u = (K - 1) k / (n - 1): the keys at u = 0 ... K - 1, the first and last frames
+    // the first and last keys.
+    const double u = last * k / (n - 1);
+    const tools::CameraPose pose = tools::cameraOnPath(keys, u);
+    path.s.push_back(u);
+    path.apply.push_back([pose](vtkGeodesicSource* src) { tools::setCamera(src, pose); });
   }
   return path;
 }
@@ -447,8 +471,8 @@ MovieSettings movieSettings(const Options& options)
   m.plan = options.has("plan");
   m.quiet = options.has("quiet");
   m.store = options.has("store");
-  if (options.has("ramp") == options.has("orbit"))
-    throw UsageError("give one path: --ramp P=FROM:TO or --orbit DEGREES");
+  if (options.has("ramp") + options.has("orbit") + options.has("cameras") != 1)
+    throw UsageError("give one path: --ramp P=FROM:TO, --orbit DEGREES or --cameras FILE.json");
   return m;
 }
 
@@ -545,6 +569,7 @@ int runMovie(const std::vector<std::string>& args)
 {
   const Options options(std::vector<OptionSpec>{ { "ramp", OptionSpec::Value },
                                                  { "orbit", OptionSpec::Value },
+                                                 { "cameras", OptionSpec::Value },
                                                  { "frames", OptionSpec::Value, 'n' },
                                                  { "quality", OptionSpec::Value },
                                                  { "fps", OptionSpec::Value },
@@ -577,6 +602,13 @@ int runMovie(const std::vector<std::string>& args)
   setSceneFile(source, scenePath);
   if (options.has("orbit"))
     path = orbitPath(options.get("orbit"), settings.count, source->GetSceneText(), options);
+  if (options.has("cameras"))
+  {
+    if (options.has("camera") || options.has("focal") || options.has("view-up"))
+      throw UsageError("--cameras sets the camera of every frame: it cannot be combined with "
+                       "--camera, --focal or --view-up");
+    path = cameraPath(options.get("cameras"), settings.count);
+  }
 
   // The movie's format and rate are checked before any work is done; the whole movie is one set.
   const std::string prefix = outputPrefix(options, scenePath);

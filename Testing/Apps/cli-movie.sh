@@ -67,6 +67,21 @@ out="$("$expect" 0 "rays traced: [1-9]" -- "$asrt" movie "$scene" "${longer[@]}"
 grep -Eq "^ +[0-9]+ +[0-9.]+ +reused " <<< "$out" ||
   { echo "nothing stored before the interrupt was reused" >&2; exit 1; }
 
+step "a camera path through three key cameras: frame 0 is the first key as asrt trace sees it"
+cat > cams.json <<'JSON'
+{"keys": [
+  {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+  {"position": [6, -29, 9], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+  {"position": [12, -27, 10], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]}
+JSON
+"$expect" 0 "movie of 5 frames along the camera key" -- "$asrt" movie \
+  "$scenes/fig1-cylinders.json" --cameras cams.json -n 5 -r 48x48 -q -o flight/
+"$check" flight/fig1-cylinders-004.png=48x48 flight/fig1-cylinders.pvd=5 \
+  flight/fig1-cylinders.ogv=5
+"$asrt" trace "$scenes/fig1-cylinders.json" --camera 12,-27,10 -r 48x48 --formats png -q \
+  -o flight-end > /dev/null
+cmp flight/fig1-cylinders-004.png flight-end.png
+
 step "refusals: exit codes, one clear line, nothing written"
 for q in 0 -3 nan 101 inf; do
   "$expect" 2 "^asrt movie: --quality: " -- "$asrt" movie "$scene" "${movie[@]}" --quality "$q" \
@@ -74,11 +89,25 @@ for q in 0 -3 nan 101 inf; do
 done
 "$expect" 2 "--ramp: unknown parameter 'temperature' \(mass, spin or charge\)" -- \
   "$asrt" movie "$scene" --ramp temperature=1:2 -n 3 -r 48x48 -o bad/
-"$expect" 2 "give one path: --ramp P=FROM:TO or --orbit DEGREES" -- \
+"$expect" 2 "give one path: --ramp P=FROM:TO, --orbit DEGREES or --cameras FILE.json" -- \
   "$asrt" movie "$scene" -n 3 -r 48x48 -o bad/
 "$expect" 3 "^asrt movie: database: " -- "$asrt" movie "$scene" "${movie[@]}" --store \
   --db "host=$work/no-server-here port=1 connect_timeout=2" -o bad/
 "$expect" 4 "frame 2 \(spin = 1\.5\)" -- "$asrt" movie "$scenes/kerr-disk.json" \
   --ramp spin=0.3:1.5 -n 3 -r 48x48 -o bad/
+cat > one-key.json <<'JSON'
+{"keys": [{"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]}
+JSON
+"$expect" 4 "one-key.json: keys: a path needs at least 2 key cameras, got 1" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras one-key.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[6, 1e999, 9]/' cams.json > overflow.json
+"$expect" 4 "overflow.json: not valid JSON .*number overflow parsing '1e999'" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras overflow.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[6, NaN, 9]/' cams.json > nan.json
+"$expect" 4 "nan.json: not valid JSON" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras nan.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[0.5, 0.5, 0.5]/' cams.json > inside.json
+"$expect" 4 "frame 2 \(camera key = 1\): .*horizon" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras inside.json -n 5 -r 48x48 -o bad/
 "$check" '!bad/fig4-mass-start-000.png' '!bad/fig4-mass-start.pvd' '!bad/fig4-mass-start.ogv' \
-  '!bad/kerr-disk-000.png'
+  '!bad/kerr-disk-000.png' '!bad/fig1-cylinders-000.png' '!bad/fig1-cylinders.ogv'
