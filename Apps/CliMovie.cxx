@@ -57,7 +57,7 @@ namespace cli
 namespace
 {
 const char* const kHelp =
-  R"(Usage: asrt movie SCENE.json (--ramp P=FROM:TO | --orbit DEGREES) [options]
+  R"(Usage: asrt movie SCENE.json (--ramp P=FROM:TO | --orbit DEGREES | --cameras FILE) [options]
 
 Makes a movie of FRAMES frames along a path, each meeting a quality target (its estimated PSNR
 against the frame traced at its parameters), for as few traced rays as a plan can manage: some
@@ -76,8 +76,8 @@ the share of its pixels re-traced, and the rays traced against tracing every fra
 
 With --store, every frame traced whole and every set of pixels re-traced is accumulated in
 PostgreSQL, and whatever is stored already is read instead of traced (whole frames whoever stored
-them: asrt trace --store, --sweep and --orbit store the same frames). Running the same movie again
-traces nothing and writes the same bytes.
+them: asrt trace --store with --sweep or --orbit of the same frame count stores the same frames).
+Running the same movie again traces nothing and writes the same bytes.
 
 The path (one of):
   --ramp P=FROM:TO      P (mass, spin or charge) from FROM to TO, frame k at
