@@ -70,7 +70,9 @@ tracing every frame. Writes, for frames 0 ... FRAMES - 1,
   PREFIX-000.vti ...  the frames as VTK image data
   PREFIX.pvd          a ParaView time series of the .vti files (time = frame number)
   PREFIX.ogv          the movie (or the file --movie names)
-as one set of files: an error or Ctrl-C before the end leaves the previous set as it was. Then
+as one set of files: an error or Ctrl-C before the end leaves the previous set as it was (the
+frames PREFIX-NNN.png and .vti of an earlier, longer movie, numbered beyond this one, go in the
+same step). Then
 prints a table: per frame its method (key, traced, interpolated, reused), its estimated PSNR and
 the share of its pixels re-traced, and the rays traced against tracing every frame.
 
@@ -532,6 +534,9 @@ void makeFrames(MovieRun& run, const MoviePlan& plan, const Scene& shading,
   }
   series.write(files.add(prefix + ".pvd"));
   movie.close();
+  // Frames of an earlier, longer movie at this prefix would look like part of this one.
+  for (const std::string& path : staleFrames(prefix, n))
+    files.remove(path);
   stopIfInterrupted();
   files.commit();
   bar.finish("-> " + prefix + "-*.png");

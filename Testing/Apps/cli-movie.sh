@@ -67,6 +67,14 @@ out="$("$expect" 0 "rays traced: [1-9]" -- "$asrt" movie "$scene" "${longer[@]}"
 grep -Eq "^ +[0-9]+ +[0-9.]+ +reused " <<< "$out" ||
   { echo "nothing stored before the interrupt was reused" >&2; exit 1; }
 
+step "a shorter movie over a longer one: the longer one's frames beyond it go, others stay"
+touch first/notes.txt first/fig4-mass-start-7.png
+"$expect" 0 "rays traced: " -- "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 4 -r 48x48 -q \
+  -o first/
+"$check" first/fig4-mass-start-003.png=48x48 '!first/fig4-mass-start-004.png' \
+  '!first/fig4-mass-start-006.vti' first/fig4-mass-start.pvd=4 first/fig4-mass-start.ogv=4
+test -e first/notes.txt && test -e first/fig4-mass-start-7.png
+
 step "a camera path through three key cameras: frame 0 is the first key as asrt trace sees it"
 cat > cams.json <<'JSON'
 {"keys": [
