@@ -15,6 +15,7 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <dirent.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -23,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 
 namespace asrt
@@ -519,6 +521,39 @@ std::string outputPrefix(const Options& options, const std::string& scenePath)
                      ": give a folder or a file-name prefix (the files are PREFIX.png, "
                      "PREFIX.vti, ...)");
   return prefix;
+}
+
+std::vector<std::string> staleFrames(const std::string& prefix, int count)
+{
+  const std::filesystem::path p(prefix);
+  const std::string dir = p.parent_path().string();
+  const std::string base = p.filename().string() + "-";
+  std::vector<std::string> stale;
+  DIR* listing = opendir(dir.empty() ? "." : dir.c_str());
+  if (!listing)
+    return stale;
+  while (const dirent* entry = readdir(listing))
+  {
+    const std::string name = entry->d_name;
+    const std::size_t dot = name.rfind('.');
+    if (name.compare(0, base.size(), base) != 0 || dot == std::string::npos || dot <= base.size() ||
+        (name.substr(dot) != ".png" && name.substr(dot) != ".vti"))
+      continue;
+    const std::string digits = name.substr(base.size(), dot - base.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    const int number = std::stoi(digits);
+    char canonical[32];
+    std::snprintf(canonical, sizeof canonical, "%03d", number);
+    const std::string path = (dir.empty() ? std::string() : dir + "/") + name;
+    struct stat st;
+    if (digits == canonical && number >= count && lstat(path.c_str(), &st) == 0 &&
+        S_ISREG(st.st_mode))
+      stale.push_back(path);
+  }
+  closedir(listing);
+  std::sort(stale.begin(), stale.end());
+  return stale;
 }
 
 std::string readSceneFile(const std::string& path)

@@ -163,6 +163,11 @@ std::string outputPath(const Options& options, const std::string& scenePath,
 /// naming --output when the prefix itself is a device, a FIFO or a socket, which several files
 /// cannot be written through one by one (-o /dev/null would otherwise make /dev/null.png).
 std::string outputPrefix(const Options& options, const std::string& scenePath);
+/// The frames of an earlier sequence at `prefix` beyond a new one of `count` frames: regular
+/// files named PREFIX-NNN.png and PREFIX-NNN.vti (NNN the frame's number, "%03d"), numbered
+/// `count` or more. Nothing else is ever taken. A new sequence removes them in the commit of its
+/// set: they would look like part of it.
+std::vector<std::string> staleFrames(const std::string& prefix, int count);
 
 /// Scene files are read whole by the program itself, at most kMaxSceneBytes (SceneFile.h).
 /// The scene file's text, read so that Ctrl-C or SIGTERM stops even a read that blocks (a FIFO).
@@ -217,6 +222,7 @@ int runTrace(const std::vector<std::string>& args);
 int runList(const std::vector<std::string>& args);
 int runShow(const std::vector<std::string>& args);
 int runInterpolate(const std::vector<std::string>& args);
+int runMovie(const std::vector<std::string>& args);
 int runBundle(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
 int runDb(const std::vector<std::string>& args);

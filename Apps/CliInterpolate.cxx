@@ -25,13 +25,9 @@
 
 #include <vtksys/SystemTools.hxx>
 
-#include <dirent.h>
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -160,42 +156,6 @@ std::vector<vtkSmartPointer<vtkAlgorithm>> readKeyFrames(const Options& options,
     ends[k] = reader;
   }
   return ends;
-}
-
-/// The frames of an earlier sequence at `prefix` beyond a new one of `count` frames: regular
-/// files named as this command names its frames, PREFIX-NNN.png and PREFIX-NNN.vti (NNN the
-/// frame's number, "%03d"), numbered `count` or more. Nothing else is ever taken.
-std::vector<std::string> staleFrames(const std::string& prefix, int count)
-{
-  const std::filesystem::path p(prefix);
-  const std::string dir = p.parent_path().string();
-  const std::string base = p.filename().string() + "-";
-  std::vector<std::string> stale;
-  DIR* listing = opendir(dir.empty() ? "." : dir.c_str());
-  if (!listing)
-    return stale;
-  while (const dirent* entry = readdir(listing))
-  {
-    const std::string name = entry->d_name;
-    const std::size_t dot = name.rfind('.');
-    if (name.compare(0, base.size(), base) != 0 || dot == std::string::npos || dot <= base.size() ||
-        (name.substr(dot) != ".png" && name.substr(dot) != ".vti"))
-      continue;
-    const std::string digits = name.substr(base.size(), dot - base.size());
-    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
-      continue;
-    const int number = std::stoi(digits);
-    char canonical[32];
-    std::snprintf(canonical, sizeof canonical, "%03d", number);
-    const std::string path = (dir.empty() ? std::string() : dir + "/") + name;
-    struct stat st;
-    if (digits == canonical && number >= count && lstat(path.c_str(), &st) == 0 &&
-        S_ISREG(st.st_mode))
-      stale.push_back(path);
-  }
-  closedir(listing);
-  std::sort(stale.begin(), stale.end());
-  return stale;
 }
 
 /// Where and how the sequence is written.

@@ -35,6 +35,8 @@ const Command kCommands[] = {
   { "show", "show a stored frame's parameters; export it to PNG, VTI, VTP", runShow },
   { "interpolate", "the movie frames between two stored frames: PNG, VTI, .pvd, a movie",
     runInterpolate },
+  { "movie", "a movie along a path at a quality target: key frames planned, stored and reused",
+    runMovie },
   { "bundle", "render a 3D view of rays around the hole (PNG, or a window)", runBundle },
   { "bench", "measure time and accuracy of the integrator presets on a small frame", runBench },
   { "db", "start, inspect, stop or delete the private PostgreSQL server; init a schema", runDb },

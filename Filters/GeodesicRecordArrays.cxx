@@ -112,6 +112,7 @@ struct HitsBuilder::Arrays
   vtkSmartPointer<vtkDoubleArray> origin, direction, momentum, normal, uv, chord, length, winding,
     maxH, color, jacobian;
   vtkSmartPointer<vtkLongLongArray> steps;
+  vtkSmartPointer<vtkUnsignedCharArray> traced;
 };
 
 HitsBuilder::HitsBuilder(vtkPolyData* hits, vtkIdType count)
@@ -139,6 +140,7 @@ HitsBuilder::HitsBuilder(vtkPolyData* hits, vtkIdType count)
   a.color = makeArray<vtkDoubleArray>("Color", 3, m);
   a.raysPerPixel = makeArray<vtkIntArray>("RaysPerPixel", 1, m);
   a.jacobian = makeArray<vtkDoubleArray>("Jacobian", 4, m);
+  a.traced = makeArray<vtkUnsignedCharArray>("Traced", 1, m);
 }
 
 HitsBuilder::~HitsBuilder() = default;
@@ -173,6 +175,7 @@ void HitsBuilder::add(const RayRecord* records, std::size_t count)
     a.raysPerPixel->SetValue(k, r->raysPerPixel);
     const double jac[4] = { r->dudi, r->dudj, r->dvdi, r->dvdj };
     a.jacobian->SetTypedTuple(k, jac);
+    a.traced->SetValue(k, r->traced ? 1 : 0);
   }
 }
 
@@ -202,7 +205,8 @@ void HitsBuilder::finish()
   hits->SetVerts(verts);
   for (vtkDataArray* array : std::initializer_list<vtkDataArray*>{
          a.pixel, a.origin, a.direction, a.momentum, a.term, a.object, a.normal, a.uv, a.chord,
-         a.length, a.winding, a.imageOrder, a.steps, a.maxH, a.color, a.raysPerPixel, a.jacobian })
+         a.length, a.winding, a.imageOrder, a.steps, a.maxH, a.color, a.raysPerPixel, a.jacobian,
+         a.traced })
     hits->GetPointData()->AddArray(array);
 }
 
@@ -292,6 +296,9 @@ std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
   vtkDataArray* raysPerPixel = hits->GetPointData()->GetArray("RaysPerPixel")
                                  ? requirePointArray(hits, "RaysPerPixel", 1)
                                  : nullptr;
+  // Hit points made before the adaptive grid have no Traced: every ray of theirs was traced.
+  vtkDataArray* traced =
+    hits->GetPointData()->GetArray("Traced") ? requirePointArray(hits, "Traced", 1) : nullptr;
   std::vector<RayRecord> records(static_cast<size_t>(m));
   for (vtkIdType k = 0; k < m; ++k)
   {
@@ -319,6 +326,11 @@ std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
     r.maxAbsH = maxH->GetComponent(k, 0);
     color->GetTuple(k, r.color.data());
     r.raysPerPixel = raysPerPixel ? static_cast<std::int32_t>(raysPerPixel->GetComponent(k, 0)) : 1;
+    const double flag = traced ? traced->GetComponent(k, 0) : 1.0;
+    if (flag != 0.0 && flag != 1.0)
+      throw InvalidParameter("hit point " + std::to_string(k) + " has a \"Traced\" value of " +
+                             std::to_string(flag) + ", neither 0 (interpolated) nor 1 (traced)");
+    r.traced = flag == 1.0;
     double jac[4];
     jacobian->GetTuple(k, jac);
     r.dudi = jac[0];

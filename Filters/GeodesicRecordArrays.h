@@ -39,7 +39,8 @@ vtkDataArray* requirePointArray(vtkPolyData* hits, const char* name, int compone
 void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
                     vtkImageData* image);
 /// One vertex per record at its hit point, every record field as point data (raysPerPixel as the
-/// int32 "RaysPerPixel").
+/// int32 "RaysPerPixel", traced as the unsigned char "Traced": 1 traced, 0 interpolated by the
+/// adaptive grid).
 void recordsToPolyData(const std::vector<RayRecord>& records, vtkPolyData* hits);
 
 /// recordsToPolyData a run of records at a time: the arrays of `count` records are made at once,
@@ -80,7 +81,8 @@ private:
 };
 
 /// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
-/// Without a "RaysPerPixel" array (hit points made before anti-aliasing) every record gets 1.
+/// Without a "RaysPerPixel" array (hit points made before anti-aliasing) every record gets 1;
+/// without a "Traced" array (made before the adaptive grid) every record is traced.
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
 /// Ray paths as polylines, one per path in order, double points with point data "Lambda", "R",
 /// "AbsH" and cell data "Pixel" (i, j) and "Termination": vtkGeodesicSource's port 2.

@@ -160,10 +160,10 @@ std::vector<RayRecord> plausibleFrame(int width, int height)
 }
 
 // ---------------------------------------------------------------------------------------------
-// The raw file: the same fields the store sends (6 int32, 1 int64 and 29 float64 words, 264
+// The raw file: the same fields the store sends (7 int32, 1 int64 and 29 float64 words, 268
 // bytes per record), packed in native byte order.
 
-constexpr std::size_t RecordBytes = 6 * 4 + 8 + 29 * 8;
+constexpr std::size_t RecordBytes = 7 * 4 + 8 + 29 * 8;
 
 template<class T>
 char* put(char* p, T v)
@@ -204,6 +204,7 @@ void pack(const RayRecord& r, char* p)
   p = put(p, r.raysPerPixel);
   for (double v : { r.dudi, r.dudj, r.dvdi, r.dvdj })
     p = put(p, v);
+  p = put(p, std::int32_t(r.traced ? 1 : 0));
 }
 
 void unpack(const char* p, RayRecord& r)
@@ -234,6 +235,9 @@ void unpack(const char* p, RayRecord& r)
   p = get(p, r.raysPerPixel);
   for (double* v : { &r.dudi, &r.dudj, &r.dvdi, &r.dvdj })
     p = get(p, *v);
+  std::int32_t traced;
+  p = get(p, traced);
+  r.traced = traced != 0;
 }
 
 constexpr std::size_t ChunkRecords = 4096;
@@ -410,8 +414,8 @@ SceneDescription frameScene(int width, int height, double mass)
 // RayRecords (checked bit-exact once).
 
 /// Field sizes in pack() order, which is also the order of the store's columns.
-constexpr int FieldSizes[] = { 4, 4, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 4, 4, 8, 8, 8, 8,
-                               8, 8, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8 };
+constexpr int FieldSizes[] = { 4, 4, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 4, 4, 8, 8, 8, 8, 8,
+                               8, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8, 8, 4, 8, 8, 8, 8, 4 };
 constexpr int fieldBytes()
 {
   int n = 0;

@@ -317,6 +317,19 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
 PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, double targetDb,
                                  double probeFraction)
 {
+  const CameraParameters& cam = tracer.description().camera;
+  if (cam.width != frame.width || cam.height != frame.height)
+    invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
+            std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
+            std::to_string(frame.height));
+  return completePathFrame(
+    frame, [&tracer](const std::vector<std::pair<int, int>>& ij) { return tracer.tracePixels(ij); },
+    targetDb, probeFraction);
+}
+
+PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixels, double targetDb,
+                                 double probeFraction)
+{
   if (!(targetDb > 0.0 && targetDb <= kMaxQualityTargetDb))
   {
     std::ostringstream os;
@@ -324,11 +337,6 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
        << "] dB, got " << targetDb;
     throw InvalidParameter(os.str());
   }
-  const CameraParameters& cam = tracer.description().camera;
-  if (cam.width != frame.width || cam.height != frame.height)
-    invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
-            std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
-            std::to_string(frame.height));
   const std::size_t n = frame.records.size();
   PathCompletion done;
   done.estimatedPsnr = std::numeric_limits<double>::infinity();
@@ -348,7 +356,10 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
         which.push_back(p);
         ij.emplace_back(p % frame.width, p / frame.width);
       }
-    const std::vector<RayRecord> records = tracer.tracePixels(ij);
+    const std::vector<RayRecord> records = tracePixels(ij);
+    if (records.size() != ij.size())
+      invalid("the pixel tracer returned " + std::to_string(records.size()) + " records for " +
+              std::to_string(ij.size()) + " pixels");
     for (std::size_t k = 0; k < which.size(); ++k)
     {
       const std::size_t p = static_cast<std::size_t>(which[k]);

@@ -37,6 +37,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <utility>
 #include <vector>
 
 namespace asrt
@@ -128,6 +130,19 @@ struct PathCompletion
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
+                                                          double probeFraction = 0.01);
+
+/// Traces the given pixels (i, j) at the frame's parameters and returns their records in the
+/// order given, each the whole frame's record of that pixel (FrameTracer::tracePixels's).
+using PixelTracer =
+  std::function<std::vector<RayRecord>(const std::vector<std::pair<int, int>>& pixels)>;
+
+/// As above, the pixels got from `trace` (called twice: the must-retrace pixels with the probes,
+/// then the chosen ones; each list is a function of the frame as predicted and of the records
+/// traced before, so the same keys and the same records choose the same lists). A caller may
+/// serve them from a store of pixels traced before, provided they are the traced records.
+ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
+                                                          const PixelTracer& trace, double targetDb,
                                                           double probeFraction = 0.01);
 }
 

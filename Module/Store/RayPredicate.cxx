@@ -527,6 +527,7 @@ const std::vector<std::string>& rayPredicateColumns()
                                                     "dudj",
                                                     "dvdi",
                                                     "dvdj",
+                                                    "traced",
                                                     "record_bytes" };
   return columns;
 }

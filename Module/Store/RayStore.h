@@ -1,20 +1,19 @@
 // Accumulation of traced frames in PostgreSQL: scenes, frames and their rays, written in one
 // transaction each with binary COPY and read back bit-exact.
 //
-// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"; version 5
-// added a word to the record). A ray is a packed record of kRecordBytes bytes, its fields as
-// big-endian 32/64-bit words in the column order of the view rays_v (big-endian so that SQL can
-// decode them with bit(n) casts). Rows of ray_blocks hold kBlockSize consecutive records in one
-// bytea kept inline (STORAGE PLAIN: one row fills one 8 kB page, so nothing goes through TOAST).
-// ray_blocks is partitioned by (frame, tile):
-// each tile's rows go into a table of their own, created in the transaction that writes them,
-// loaded with COPY FREEZE and attached to ray_blocks before the commit. A table created in the
-// writing transaction is what lets PostgreSQL skip the WAL under wal_level = minimal (the
-// embedded server's setting) and fsync the table at commit instead, writing the rays once rather
-// than twice; with wal_level replica or logical (a server with replication) the same statements
-// are WAL-logged as usual. Either way the commit is durable. SQL sees one row per ray through the
-// view rays_v, which decodes the words; a predicate given to readFrame is evaluated there, on the
-// server, and only the selected rays travel.
+// Layout (schema version 3, chosen by measurement: bench/REPORT.md, "store layouts"; versions 5
+// and 7 each added a word to the record). A ray is a packed record of kRecordBytes bytes, its
+// fields as big-endian 32/64-bit words in the column order of the view rays_v (big-endian so that
+// SQL can decode them with bit(n) casts). Rows of ray_blocks hold kBlockSize consecutive records in
+// one bytea kept inline (STORAGE PLAIN: one row fills one 8 kB page, so nothing goes through
+// TOAST). ray_blocks is partitioned by (frame, tile): each tile's rows go into a table of their
+// own, created in the transaction that writes them, loaded with COPY FREEZE and attached to
+// ray_blocks before the commit. A table created in the writing transaction is what lets PostgreSQL
+// skip the WAL under wal_level = minimal (the embedded server's setting) and fsync the table at
+// commit instead, writing the rays once rather than twice; with wal_level replica or logical (a
+// server with replication) the same statements are WAL-logged as usual. Either way the commit is
+// durable. SQL sees one row per ray through the view rays_v, which decodes the words; a predicate
+// given to readFrame is evaluated there, on the server, and only the selected rays travel.
 //
 // Predicates (schema version 4): they are evaluated with the rights of the role asrt_predicate
 // (kPredicateRole) alone, whatever the rights of the role that connected: it may read the views
@@ -46,10 +45,14 @@
 // so that such a frame is found (findFrame, writeFrame's duplicate check) by its description with
 // that rendering.
 //
-// The adaptive ray grid (schema version 7): a frame's rendering section always names its
-// lattice ("gridLattice"), since a text without one reads as the default grid. Migration 7 gave
-// the texts stored before, whose frames traced every pixel, "gridLattice": 1, their scene rows and
-// hashes following as in migration 5.
+// Traced rays and the grid (schema version 7): each record also says whether its centre ray was
+// traced or interpolated by the adaptive grid (RayRecord::traced, rays_v's boolean traced), a
+// word of its own after dvdj (268-byte records, still 30 to a row); and a frame's rendering
+// section always names its lattice ("gridLattice"), since a text without one reads as the
+// default grid. Migration 7 gave the records stored before, all traced, traced = true, and their
+// texts "gridLattice": 1, their scene rows and hashes following as in migration 5. (Builds that
+// traced on the grid before schema 7 stored its interpolated records unmarked: those read back as
+// traced.)
 //
 // Plain C++: no VTK types, no libpq types in this header.
 #ifndef asrt_RayStore_h
@@ -188,10 +191,11 @@ public:
   static constexpr int kSchemaVersion = 7;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
-  /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5).
-  static constexpr int kRecordBytes = 264;
+  /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5, 264
+  /// before version 7).
+  static constexpr int kRecordBytes = 268;
   /// Rays per stored row of ray_blocks: as many as fit, inline, in one 8 kB heap page (31 of the
-  /// 260-byte records before version 5).
+  /// 260-byte records before version 5; 30 of the 264- and 268-byte ones).
   static constexpr int kBlockSize = 30;
   /// A parallel write gives each connection at least this many rays (smaller frames are written
   /// over one: another connection's table and commit would cost more than they save).

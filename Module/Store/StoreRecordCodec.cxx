@@ -10,8 +10,9 @@ namespace
 {
 // The per-ray fields, in storage order: column name, word kind, record member. This one list
 // makes the encoder and the decoder, so that they cannot disagree; the columns of rays_v (schema
-// version 5, StoreSchemaHistory.cxx) name the same fields in the same order. Versions 3 and 4
-// stored the same words without rays_per_pixel.
+// version 7, StoreSchemaHistory.cxx) name the same fields in the same order. Versions 3 and 4
+// stored the same words without rays_per_pixel, versions 5 and 6 without traced. traced is a
+// whole word, 1 or 0 (a bool written as an int32 is 1 or 0, and any non-zero word reads as true).
 #define ASRT_RAY_FIELDS(X)                                                                         \
   X(i, I32, r.i)                                                                                   \
   X(j, I32, r.j)                                                                                   \
@@ -48,7 +49,8 @@ namespace
   X(dudi, F64, r.dudi)                                                                             \
   X(dudj, F64, r.dudj)                                                                             \
   X(dvdi, F64, r.dvdi)                                                                             \
-  X(dvdj, F64, r.dvdj)
+  X(dvdj, F64, r.dvdj)                                                                             \
+  X(traced, I32, r.traced)
 
 constexpr int wordBytesI32 = 4;
 constexpr int wordBytesI64 = 8;

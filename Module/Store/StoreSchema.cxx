@@ -51,29 +51,38 @@ void migrateToVersion3(PGconn* conn, const std::string& what)
   pg::execScript(conn, SchemaV3Finish, what);
 }
 
-/// Migration 5: every tile of version 4 whose frame exists re-packed into a table of its own of
-/// the new layout, which takes the old one's name and is attached to the new ray_blocks; then the
-/// texts (StoreLegacyTexts.h). The tables of frames deleted with plain SQL go with the old
-/// ray_blocks.
-void migrateToVersion5(PGconn* conn, const std::string& what)
+/// Every tile attached to `oldParent` whose frame exists re-packed into a table of its own of the
+/// new layout (`stage` makes it, `convert` fills it), which takes the old one's name (`replace`)
+/// and is attached to the new ray_blocks. The tables of frames deleted with plain SQL are left
+/// to go with the old parent.
+void repackTiles(PGconn* conn, const std::string& what, const std::string& oldParent,
+                 const char* stage, const char* convert, const char* replace)
 {
-  pg::execScript(conn, SchemaV5Tables, what);
-  pg::Result tiles = pg::exec(
+  pg::Result tiles = pg::Params().text(oldParent).exec(
     conn,
     "SELECT m[1]::bigint, m[2]::integer FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid "
     "CROSS JOIN LATERAL regexp_match(c.relname::text, '^ray_blocks_([0-9]+)_([0-9]+)$') AS m "
-    "WHERE i.inhparent = 'ray_blocks_v4'::regclass AND EXISTS (SELECT 1 FROM frames f WHERE f.id "
-    "= m[1]::bigint) ORDER BY 1, 2",
+    "WHERE i.inhparent = $1::regclass AND EXISTS (SELECT 1 FROM frames f WHERE f.id = "
+    "m[1]::bigint) ORDER BY 1, 2",
     what);
   for (int row = 0; row < PQntuples(tiles.get()); ++row)
   {
     const std::int64_t frame = pg::getI64(tiles.get(), row, 0);
     const std::int32_t tile = pg::getI32(tiles.get(), row, 1);
-    pg::exec(conn, tileStatement(SchemaV5StageTile, frame, tile), what);
-    pg::exec(conn, tileStatement(SchemaV5ConvertTile, frame, tile), what);
-    pg::execScript(conn, tileStatement(SchemaV5ReplaceTile, frame, tile), what);
+    pg::exec(conn, tileStatement(stage, frame, tile), what);
+    pg::exec(conn, tileStatement(convert, frame, tile), what);
+    pg::execScript(conn, tileStatement(replace, frame, tile), what);
     pg::exec(conn, tileStatement(AttachTileV3, frame, tile, "ray_blocks"), what);
   }
+}
+
+/// Migration 5: every tile of version 4 re-packed into the layout with rays_per_pixel, then the
+/// texts (StoreLegacyTexts.h).
+void migrateToVersion5(PGconn* conn, const std::string& what)
+{
+  pg::execScript(conn, SchemaV5Tables, what);
+  repackTiles(conn, what, "ray_blocks_v4", SchemaV5StageTile, SchemaV5ConvertTile,
+              SchemaV5ReplaceTile);
   pg::execScript(conn, SchemaV5Finish, what);
   addRenderingSections(conn, what);
 }
@@ -113,13 +122,19 @@ struct RoleProblem
   bool fixable;
 };
 
+/// The body of the function that evaluates predicates at schema `version` (6 or later).
+const char* selectedRaysBody(int version)
+{
+  return version >= 7 ? SelectedRaysBodyV7 : SelectedRaysBodyV6;
+}
+
 /// At schema `version` (4 or later).
 std::optional<RoleProblem> findRoleProblem(PGconn* conn, int version)
 {
   const bool checksTokens = version >= 6;
   pg::Result r =
     pg::Params()
-      .text(checksTokens ? SelectedRaysBodyV6 : "")
+      .text(checksTokens ? selectedRaysBody(version) : "")
       .exec(
         conn,
         "SELECT r.oid IS NOT NULL, concat_ws(', ', CASE WHEN r.rolsuper THEN 'SUPERUSER' END, "
@@ -201,8 +216,8 @@ void runRoleStatement(PGconn* conn, const std::string& sql, const std::string& w
 
 /// Creates the role that evaluates predicates if it is missing, lets the migrating role act as it,
 /// refuses a role that may do more than read the rays, then gives it the views and the function
-/// of schema `version` (SchemaV4, then SchemaV6's from version 6 on). Idempotent: migrations 4
-/// and 6, and the repair of what something undid since.
+/// of schema `version` (SchemaV4, then SchemaV6's from version 6 on, SchemaV7's from version 7
+/// on). Idempotent: migrations 4, 6 and 7, and the repair of what something undid since.
 void setUpPredicateRole(PGconn* conn, const std::string& what, int version)
 {
   pg::Result me = pg::exec(conn,
@@ -252,8 +267,23 @@ void setUpPredicateRole(PGconn* conn, const std::string& what, int version)
                  what);
   if (version >= 6)
   {
-    pg::execScript(conn, filled(SchemaV6, { { "{schema}", quotedSchema } }), what);
+    pg::execScript(
+      conn, filled(version >= 7 ? SchemaV7 : SchemaV6, { { "{schema}", quotedSchema } }), what);
   }
+}
+
+/// Migration 7: every tile of version 6 re-packed into the layout with traced (every record
+/// traced), then the function that evaluates predicates, whose tokens may now name traced; then
+/// the texts of those frames, which traced every pixel, name their lattice, since a text without
+/// one now reads as the default grid (StoreLegacyTexts.h).
+void migrateToVersion7(PGconn* conn, const std::string& what)
+{
+  pg::execScript(conn, SchemaV7Tables, what);
+  repackTiles(conn, what, "ray_blocks_v6", SchemaV7StageTile, SchemaV7ConvertTile,
+              SchemaV7ReplaceTile);
+  pg::execScript(conn, SchemaV7Finish, what);
+  setUpPredicateRole(conn, what, 7);
+  addGridLattices(conn, what);
 }
 
 /// Migration `version` takes version − 1 to `version`, inside migrateSchema()'s transaction.
@@ -282,9 +312,7 @@ void runMigration(PGconn* conn, int version)
   }
   else
   {
-    // Migration 7: the texts of frames that traced every pixel name their lattice, since a text
-    // without one now reads as the default grid.
-    addGridLattices(conn, what);
+    migrateToVersion7(conn, what);
   }
 }
 }

@@ -54,6 +54,24 @@ extern const char* const RenderingSectionV5;
 extern const char* const SchemaV6;
 /// The body of version 6's function, as pg_proc.prosrc holds it.
 extern const char* const SelectedRaysBodyV6;
+/// Migration 7 (version 6 to 7), first step: the old ray_blocks and layout renamed, the new
+/// layout of 268-byte records (the word traced after dvdj) and its partitioned ray_blocks. A
+/// script.
+extern const char* const SchemaV7Tables;
+/// Migration 7, once per tile of version 6: its new table made beside the old one, its rays
+/// re-packed into it (each record traced), then the old one replaced by it (attached with
+/// AttachTileV3). Tile statements; the last a tile script.
+extern const char* const SchemaV7StageTile;
+extern const char* const SchemaV7ConvertTile;
+extern const char* const SchemaV7ReplaceTile;
+/// Migration 7, last step of the rays: the old tables gone, rays_v with traced. A script.
+extern const char* const SchemaV7Finish;
+/// Migration 7, once the migrating role may act as the predicate role: the function that
+/// evaluates predicates, replaced by one whose tokens may name traced. A script with {schema};
+/// also what repairs an older function at version 7 and later.
+extern const char* const SchemaV7;
+/// The body of version 7's function, as pg_proc.prosrc holds it.
+extern const char* const SelectedRaysBodyV7;
 }
 }
 

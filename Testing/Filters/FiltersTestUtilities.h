@@ -110,7 +110,7 @@ inline const std::vector<std::string>& recordArrayNames()
   static const std::vector<std::string> names = {
     "Pixel",     "Origin",  "Direction",  "Momentum",     "Termination", "ObjectId",
     "HitNormal", "UV",      "ChordError", "PathLength",   "Winding",     "ImageOrder",
-    "Steps",     "MaxAbsH", "Color",      "RaysPerPixel", "Jacobian"
+    "Steps",     "MaxAbsH", "Color",      "RaysPerPixel", "Jacobian",    "Traced"
   };
   return names;
 }
@@ -178,11 +178,11 @@ inline std::string describeDifference(const RecordBits& a, const RecordBits& b)
   std::string out;
   // Layout as in recordsByPixel: hit point, then each array's components.
   static const std::vector<std::pair<std::string, int>> layout = {
-    { "hit point", 3 },  { "Pixel", 2 },       { "Origin", 3 },     { "Direction", 3 },
-    { "Momentum", 4 },   { "Termination", 1 }, { "ObjectId", 1 },   { "HitNormal", 3 },
-    { "UV", 2 },         { "ChordError", 1 },  { "PathLength", 1 }, { "Winding", 1 },
-    { "ImageOrder", 1 }, { "Steps", 1 },       { "MaxAbsH", 1 },    { "Color", 3 },
-    { "Jacobian", 4 }
+    { "hit point", 3 },    { "Pixel", 2 },       { "Origin", 3 },     { "Direction", 3 },
+    { "Momentum", 4 },     { "Termination", 1 }, { "ObjectId", 1 },   { "HitNormal", 3 },
+    { "UV", 2 },           { "ChordError", 1 },  { "PathLength", 1 }, { "Winding", 1 },
+    { "ImageOrder", 1 },   { "Steps", 1 },       { "MaxAbsH", 1 },    { "Color", 3 },
+    { "RaysPerPixel", 1 }, { "Jacobian", 4 },    { "Traced", 1 }
   };
   size_t k = 0;
   for (const auto& [name, n] : layout)

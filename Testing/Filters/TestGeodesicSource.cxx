@@ -221,7 +221,8 @@ TEST(GeodesicSource, HitsPortHasOneVertexAndRecordPerPixel)
     { "Pixel", 2 },       { "Origin", 3 },     { "Direction", 3 }, { "Momentum", 4 },
     { "Termination", 1 }, { "ObjectId", 1 },   { "HitNormal", 3 }, { "UV", 2 },
     { "ChordError", 1 },  { "PathLength", 1 }, { "Winding", 1 },   { "ImageOrder", 1 },
-    { "Steps", 1 },       { "MaxAbsH", 1 },    { "Color", 3 },     { "Jacobian", 4 }
+    { "Steps", 1 },       { "MaxAbsH", 1 },    { "Color", 3 },     { "Jacobian", 4 },
+    { "Traced", 1 }
   };
   for (const auto& [name, components] : arrays)
   {

@@ -68,6 +68,7 @@ RecordBits bitsOfRecord(const asrt::RayRecord& r)
   add3(r.color);
   add({ static_cast<double>(r.raysPerPixel) });
   add({ r.dudi, r.dudj, r.dvdi, r.dvdj });
+  add({ r.traced ? 1.0 : 0.0 });
   return b;
 }
 }
@@ -98,7 +99,7 @@ TEST(GeodesicSourceBands, PortsHoldTheRecordsOfTheWholeFrameTracedTogether)
     { "HitNormal", VTK_DOUBLE },  { "UV", VTK_DOUBLE },       { "ChordError", VTK_DOUBLE },
     { "PathLength", VTK_DOUBLE }, { "Winding", VTK_DOUBLE },  { "ImageOrder", VTK_INT },
     { "Steps", VTK_LONG_LONG },   { "MaxAbsH", VTK_DOUBLE },  { "Color", VTK_DOUBLE },
-    { "RaysPerPixel", VTK_INT },  { "Jacobian", VTK_DOUBLE }
+    { "RaysPerPixel", VTK_INT },  { "Jacobian", VTK_DOUBLE }, { "Traced", VTK_UNSIGNED_CHAR }
   };
   for (const auto& [name, type] : types)
   {

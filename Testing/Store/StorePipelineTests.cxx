@@ -17,6 +17,7 @@
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
+#include "vtkUnsignedCharArray.h"
 
 #include <gtest/gtest.h>
 
@@ -166,6 +167,106 @@ TEST(StorePipeline, RaysPerPixelGoThroughTheWriterAndTheReader)
   ASSERT_EQ(read->GetNumberOfTuples(), n);
   for (vtkIdType k = 0; k < read->GetNumberOfTuples(); ++k)
     EXPECT_EQ(read->GetComponent(k, 0), 1) << k;
+}
+
+// The adaptive grid fills smooth blocks with interpolated records: each record's "Traced" flag
+// goes through the writer, the store and the reader as the source traced it.
+TEST(StorePipeline, TracedFlagsOfTheAdaptiveGridGoThroughTheWriterAndTheReader)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
+  source->SetResolution(48, 36);
+  source->SetAntialias("none");
+  source->SetGridLattice(8);
+  source->Update();
+  vtkPolyData* traced = source->GetHitsOutput();
+  auto* flags = vtkUnsignedCharArray::SafeDownCast(traced->GetPointData()->GetArray("Traced"));
+  ASSERT_TRUE(flags);
+  ASSERT_EQ(flags->GetNumberOfTuples(), 48 * 36);
+  std::map<std::pair<int, int>, int> byPixel;
+  vtkDataArray* pixel = traced->GetPointData()->GetArray("Pixel");
+  int interpolated = 0;
+  for (vtkIdType k = 0; k < flags->GetNumberOfTuples(); ++k)
+  {
+    ASSERT_LE(flags->GetValue(k), 1) << k;
+    interpolated += flags->GetValue(k) == 0;
+    byPixel[{ int(pixel->GetComponent(k, 0)), int(pixel->GetComponent(k, 1)) }] =
+      flags->GetValue(k);
+  }
+  ASSERT_GT(interpolated, 0) << "the grid interpolated no record";
+  ASSERT_LT(interpolated, flags->GetNumberOfTuples()) << "the grid traced no record";
+
+  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+  writer->SetInputConnection(source->GetOutputPort(1));
+  writer->SetConnectionString(server().conninfo().c_str());
+  ASSERT_EQ(writer->Write(), 1);
+  vtkNew<vtkGeodesicPostgreSQLReader> reader;
+  reader->SetConnectionString(server().conninfo().c_str());
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(bitsByPixel(reader->GetHitsOutput()), bitsByPixel(traced));
+  vtkPolyData* read = reader->GetHitsOutput();
+  auto* readFlags = vtkUnsignedCharArray::SafeDownCast(read->GetPointData()->GetArray("Traced"));
+  ASSERT_TRUE(readFlags);
+  vtkDataArray* readPixel = read->GetPointData()->GetArray("Pixel");
+  int readInterpolated = 0;
+  for (vtkIdType k = 0; k < readFlags->GetNumberOfTuples(); ++k)
+  {
+    const std::pair<int, int> ij(int(readPixel->GetComponent(k, 0)),
+                                 int(readPixel->GetComponent(k, 1)));
+    EXPECT_EQ(int(readFlags->GetValue(k)), byPixel.at(ij)) << ij.first << ", " << ij.second;
+    readInterpolated += readFlags->GetValue(k) == 0;
+  }
+  EXPECT_EQ(readInterpolated, interpolated);
+  // The store itself, without the filters: the records' flags.
+  asrt::RayStore store(server().conninfo());
+  int stored = 0;
+  for (const asrt::RayRecord& r : store.readFrame(writer->GetFrameId()))
+  {
+    EXPECT_EQ(r.traced ? 1 : 0, byPixel.at({ r.i, r.j })) << r.i << ", " << r.j;
+    stored += !r.traced;
+  }
+  EXPECT_EQ(stored, interpolated);
+}
+
+// Hit points made before the adaptive grid have no "Traced" array: every ray of theirs was
+// traced. A value other than 0 or 1 is refused, naming the array.
+TEST(StorePipeline, HitPointsWithoutTracedFlagsWereTracedAndBadFlagsAreRefused)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig2-no-hole.json").c_str());
+  source->SetResolution(7, 5);
+  source->SetAntialias("none");
+  source->Update();
+  vtkNew<vtkPolyData> hits;
+  hits->DeepCopy(source->GetHitsOutput());
+  hits->GetPointData()->RemoveArray("Traced");
+  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+  writer->SetInputData(hits);
+  writer->SetConnectionString(server().conninfo().c_str());
+  writer->SetLabel("no traced flags");
+  ASSERT_EQ(writer->Write(), 1);
+  asrt::RayStore store(server().conninfo());
+  const std::vector<asrt::RayRecord> records = store.readFrame(writer->GetFrameId());
+  ASSERT_EQ(records.size(), std::size_t(35));
+  for (const asrt::RayRecord& r : records)
+    EXPECT_TRUE(r.traced) << r.i << ", " << r.j;
+
+  vtkNew<vtkPolyData> bad;
+  bad->DeepCopy(source->GetHitsOutput());
+  vtkDataArray* flags = bad->GetPointData()->GetArray("Traced");
+  ASSERT_TRUE(flags);
+  flags->SetComponent(3, 0, 2);
+  vtkNew<vtkGeodesicPostgreSQLWriter> refusing;
+  refusing->SetInputData(bad);
+  refusing->SetConnectionString(server().conninfo().c_str());
+  refusing->SetLabel("bad traced flags");
+  refusing->ReplaceExistingOn();
+  vtkNew<ErrorLog> log;
+  refusing->AddObserver(vtkCommand::ErrorEvent, log);
+  refusing->Write();
+  ASSERT_EQ(log->Messages.size(), 1u);
+  EXPECT_NE(log->Messages.front().find("\"Traced\""), std::string::npos) << log->Messages.front();
 }
 
 TEST(StorePipeline, DuplicatesAreRefusedUnlessReplaced)

@@ -106,20 +106,36 @@ inline RayRecord syntheticRecord(std::uint64_t seed, std::size_t k, int width)
   // One ray, a supersampled grid, the most a pixel may take, and widths a narrower word loses.
   const std::int32_t rays[] = { 1, 9, 1024, 65537, std::numeric_limits<std::int32_t>::max() };
   r.raysPerPixel = rays[splitmix(s) % 5];
+  // Interpolated by the adaptive grid one time in three.
+  r.traced = splitmix(s) % 3 != 0;
   return r;
 }
 
+/// `r` as a store of schema version 6 or earlier kept it, read back by the current version:
+/// traced (migration 7).
+inline RayRecord tracedRay(RayRecord r)
+{
+  r.traced = true;
+  return r;
+}
+inline std::vector<RayRecord> tracedRay(std::vector<RayRecord> records)
+{
+  for (RayRecord& r : records)
+    r.traced = true;
+  return records;
+}
+
 /// `r` as a store of schema version 4 or earlier kept it, read back by the current version: one
-/// ray a pixel (migration 5).
+/// ray a pixel (migration 5), traced (migration 7).
 inline RayRecord singleRay(RayRecord r)
 {
   r.raysPerPixel = 1;
-  return r;
+  return tracedRay(r);
 }
 inline std::vector<RayRecord> singleRay(std::vector<RayRecord> records)
 {
   for (RayRecord& r : records)
-    r.raysPerPixel = 1;
+    r = singleRay(r);
   return records;
 }
 
@@ -131,7 +147,8 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
                                    std::uint64_t(std::uint32_t(r.objectId)),
                                    std::uint64_t(std::uint32_t(r.imageOrder)),
                                    std::uint64_t(r.steps),
-                                   std::uint64_t(std::uint32_t(r.raysPerPixel)) };
+                                   std::uint64_t(std::uint32_t(r.raysPerPixel)),
+                                   std::uint64_t(r.traced) };
   const double d[] = { r.origin.x(),
                        r.origin.y(),
                        r.origin.z(),
@@ -170,7 +187,8 @@ inline std::vector<std::uint64_t> recordBits(const RayRecord& r)
 /// of its record_bytes), with their size in bytes and their value as a word: written out here
 /// independently of RayStore. LegacyRecordFields: those of schema versions 1 to 4 (the bytea
 /// columns of versions 1 and 2, the 260-byte records of versions 3 and 4), without
-/// rays_per_pixel.
+/// rays_per_pixel and traced; Version6RecordFields: those of versions 5 and 6 (264-byte
+/// records), without traced.
 struct RecordField
 {
   const char* name;
@@ -231,12 +249,21 @@ inline const RecordField RecordFields[] = {
   ASRT_RECORD_FIELD("dudj", 8, r.dudj),
   ASRT_RECORD_FIELD("dvdi", 8, r.dvdi),
   ASRT_RECORD_FIELD("dvdj", 8, r.dvdj),
+  ASRT_RECORD_FIELD("traced", 4, std::int32_t(r.traced ? 1 : 0)),
 };
 #undef ASRT_RECORD_FIELD
-inline const std::vector<RecordField> LegacyRecordFields = []
+inline const std::vector<RecordField> Version6RecordFields = []
 {
   std::vector<RecordField> fields;
   for (const RecordField& f : RecordFields)
+    if (std::strcmp(f.name, "traced") != 0)
+      fields.push_back(f);
+  return fields;
+}();
+inline const std::vector<RecordField> LegacyRecordFields = []
+{
+  std::vector<RecordField> fields;
+  for (const RecordField& f : Version6RecordFields)
     if (std::strcmp(f.name, "rays_per_pixel") != 0)
       fields.push_back(f);
   return fields;
@@ -280,6 +307,11 @@ inline std::string packedRecord(const RayRecord& r)
 inline std::string legacyPackedRecord(const RayRecord& r)
 {
   return packedFields(r, LegacyRecordFields);
+}
+/// The packed record of schema versions 5 and 6 (264 bytes, no traced).
+inline std::string version6PackedRecord(const RayRecord& r)
+{
+  return packedFields(r, Version6RecordFields);
 }
 
 inline double secondsSince(Clock::time_point t0)

@@ -273,7 +273,7 @@ TEST(RayPredicates, VersionFiveGetsTheServersCheck)
   // Version 5's function runs whatever it is given (there is no frame 1 yet: no rays).
   EXPECT_EQ(serverSelects(db, 1, version), "count:0");
   store.migrate();
-  EXPECT_EQ(store.schemaVersion(), 6);
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   const std::int64_t id = store.writeFrame(scene(), "target", frameRecords());
   EXPECT_EQ(serverSelects(db, id, version).find("error:ERROR:  the predicate may not use version"),
             0u);

@@ -493,7 +493,7 @@ TEST(RenderingMigration, Version4FramesKeepTheirRaysAndGetTheRenderingTheyWereTr
                            { std::to_string(heavier), legacyPackedRecord(RayRecord()) },
                            { false, true });
               })
-              .find("ray_block_records_v5"),
+              .find("ray_block_records_v"),
             std::string::npos);
   store.migrate();
   EXPECT_EQ(store.listFrames().size(), 6u);

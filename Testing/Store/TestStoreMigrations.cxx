@@ -197,13 +197,18 @@ TEST(StoreMigrations, FrozenLayoutsKeepTheirColumns)
             "frame_id,tile,block,ray,tile_ray," + fields + ",record_bytes");
   store.migrate(5);
   EXPECT_EQ(columnsOf(db, "ray_blocks"), "frame_id,tile,block,first_ray,n,data");
-  EXPECT_EQ(columnsOf(db, "rays_v"),
-            "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
+  EXPECT_EQ(columnsOf(db, "rays_v"), "frame_id,tile,block,ray,tile_ray," +
+                                       fieldNames(Version6RecordFields) + ",record_bytes");
   EXPECT_EQ(columnsOf(db, "path_points_v"), "frame_id,i,j,path,point,x,y,z,lambda,r,abs_h");
   // Version 6 changes the function that evaluates predicates only.
   store.migrate(6);
+  EXPECT_EQ(columnsOf(db, "rays_v"), "frame_id,tile,block,ray,tile_ray," +
+                                       fieldNames(Version6RecordFields) + ",record_bytes");
+  store.migrate(7);
+  EXPECT_EQ(columnsOf(db, "ray_blocks"), "frame_id,tile,block,first_ray,n,data");
   EXPECT_EQ(columnsOf(db, "rays_v"),
             "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
+  EXPECT_EQ(columnsOf(db, "path_points_v"), "frame_id,i,j,path,point,x,y,z,lambda,r,abs_h");
 }
 
 TEST(StoreMigrations, VersionOneRaysComeBackBitExact)
@@ -287,6 +292,8 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
   store.migrate(5);
   EXPECT_EQ(store.schemaVersion(), 5);
   store.migrate(6);
+  EXPECT_EQ(store.schemaVersion(), 6);
+  store.migrate(7);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
 }
 

@@ -1,0 +1,241 @@
+#include "MoviePlan.h"
+
+#include "AsrtTypes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace asrt
+{
+const char* toString(FrameMethod m)
+{
+  switch (m)
+  {
+    case FrameMethod::Reused:
+      return "reused";
+    case FrameMethod::Key:
+      return "key";
+    case FrameMethod::Traced:
+      return "traced";
+    case FrameMethod::Interpolated:
+      return "interpolated";
+  }
+  return "?";
+}
+
+std::vector<int> MoviePlan::keys() const
+{
+  std::vector<int> k;
+  for (std::size_t f = 0; f < this->frames.size(); ++f)
+    if (this->frames[f].method != FrameMethod::Interpolated)
+      k.push_back(static_cast<int>(f));
+  return k;
+}
+
+namespace
+{
+void checkInput(const std::vector<double>& s, const std::vector<bool>& stored,
+                const MovieCostModel& model)
+{
+  if (s.empty())
+    throw InvalidParameter("movie plan: no frames");
+  if (!stored.empty() && stored.size() != s.size())
+    throw InvalidParameter("movie plan: " + std::to_string(stored.size()) + " stored flags for " +
+                           std::to_string(s.size()) + " frames");
+  if (!(model.frameRays > 0 && std::isfinite(model.frameRays)))
+  {
+    std::ostringstream os;
+    os << "movie plan: frameRays must be positive and finite, got " << model.frameRays;
+    throw InvalidParameter(os.str());
+  }
+  if (!model.retraceShare)
+    throw InvalidParameter("movie plan: no retraceShare estimate");
+  for (std::size_t k = 0; k < s.size(); ++k)
+    if (!std::isfinite(s[k]))
+      throw InvalidParameter("movie plan: the parameter of frame " + std::to_string(k) +
+                             " is not finite");
+  const double direction = s.size() > 1 && s[1] < s[0] ? -1.0 : 1.0;
+  for (std::size_t k = 1; k < s.size(); ++k)
+    if (!(direction * (s[k] - s[k - 1]) > 0))
+      throw InvalidParameter("movie plan: the frames' parameters must change strictly "
+                             "monotonically, frames " +
+                             std::to_string(k - 1) + " and " + std::to_string(k) + " do not");
+}
+
+/// The planning of one movie: the best plan of each segment between two keys, by bisection.
+struct Planner
+{
+  const std::vector<double>& s;
+  const std::vector<bool>& stored;
+  const MovieCostModel& model;
+  std::vector<FramePlan>& frames;
+
+  bool isStored(int k) const { return !this->stored.empty() && this->stored[k]; }
+  double keyRays(int k) const { return this->isStored(k) ? 0.0 : this->model.frameRays; }
+
+  /// The frames strictly between keys i and j, each the cheaper of interpolating and tracing;
+  /// returns their cost and writes them.
+  double withoutKeys(int i, int j)
+  {
+    double total = 0;
+    for (int k = i + 1; k < j; ++k)
+    {
+      const double share = this->model.retraceShare(this->s[i], this->s[j], this->s[k]);
+      FramePlan f;
+      if (share >= 0 && share < 1)
+      {
+        f.method = FrameMethod::Interpolated;
+        f.keyBefore = i;
+        f.keyAfter = j;
+        f.share = share;
+        f.rays = share * this->model.frameRays;
+      }
+      else
+      {
+        f.method = FrameMethod::Traced;
+        f.share = 1;
+        f.rays = this->model.frameRays;
+      }
+      this->frames[static_cast<std::size_t>(k)] = f;
+      total += f.rays;
+    }
+    return total;
+  }
+
+  /// The cheapest plan of the frames strictly between keys i and j, written; returns its cost.
+  double segment(int i, int j)
+  {
+    if (j - i < 2)
+      return 0;
+    // A stored frame in between is a key for free: split there first.
+    for (int k = i + 1; k < j; ++k)
+      if (this->isStored(k))
+      {
+        this->frames[static_cast<std::size_t>(k)] = reused();
+        return this->segment(i, k) + this->segment(k, j);
+      }
+    const double flat = this->withoutKeys(i, j);
+    const std::vector<FramePlan> flatPlan(this->frames.begin() + i + 1, this->frames.begin() + j);
+    if (j - i < 3)
+      return flat;
+    const int m = i + (j - i) / 2;
+    FramePlan key;
+    key.method = FrameMethod::Key;
+    key.share = 1;
+    key.rays = this->keyRays(m);
+    this->frames[static_cast<std::size_t>(m)] = key;
+    const double split = key.rays + this->segment(i, m) + this->segment(m, j);
+    if (split < flat)
+      return split;
+    std::copy(flatPlan.begin(), flatPlan.end(), this->frames.begin() + i + 1);
+    return flat;
+  }
+
+  static FramePlan reused()
+  {
+    FramePlan f;
+    f.method = FrameMethod::Reused;
+    return f;
+  }
+};
+}
+
+namespace
+{
+/// One bisection plan: keys at the ends, at the stored frames and where splitting pays.
+MoviePlan planOnce(const std::vector<double>& s, const std::vector<bool>& stored,
+                   const MovieCostModel& model)
+{
+  const int n = static_cast<int>(s.size());
+  MoviePlan plan;
+  plan.frames.assign(s.size(), FramePlan());
+  Planner planner{ s, stored, model, plan.frames };
+  for (int k : { 0, n - 1 })
+  {
+    FramePlan& f = plan.frames[static_cast<std::size_t>(k)];
+    if (planner.isStored(k))
+      f = Planner::reused();
+    else
+    {
+      f.method = FrameMethod::Key;
+      f.share = 1;
+      f.rays = model.frameRays;
+    }
+  }
+  planner.segment(0, n - 1);
+  return plan;
+}
+}
+
+MoviePlan planMovie(const std::vector<double>& s, const std::vector<bool>& stored,
+                    const MovieCostModel& model)
+{
+  checkInput(s, stored, model);
+  const std::size_t n = s.size();
+  // A frame traced whole is stored whole, and then is a key for free: planned again with it
+  // stored, the movie must come out the same, or running it again would plan other keys and
+  // interpolate other frames. So the frames to trace whole join the stored ones until the plan
+  // adds none (they only grow: at most n rounds); `joined` keeps why each was traced.
+  std::vector<bool> whole = stored.empty() ? std::vector<bool>(n, false) : stored;
+  std::vector<FrameMethod> joined(n, FrameMethod::Reused);
+  MoviePlan inner;
+  for (;;)
+  {
+    inner = planOnce(s, whole, model);
+    bool grew = false;
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      const FrameMethod m = inner.frames[k].method;
+      if ((m == FrameMethod::Key || m == FrameMethod::Traced) && !whole[k])
+      {
+        whole[k] = true;
+        joined[k] = m;
+        grew = true;
+      }
+    }
+    if (!grew)
+      break;
+  }
+  MoviePlan plan;
+  plan.frames = inner.frames;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const bool wasStored = !stored.empty() && stored[k];
+    FramePlan& f = plan.frames[k];
+    if (whole[k] && !wasStored)
+    {
+      f = FramePlan();
+      f.method = joined[k];
+      f.share = 1;
+      f.rays = model.frameRays;
+    }
+    plan.estimatedRays += f.rays;
+    plan.tracedAllRays += model.frameRays;
+    plan.directRays += wasStored ? 0.0 : model.frameRays;
+  }
+  return plan;
+}
+
+double SpacingShareModel::share(double keyA, double keyB) const
+{
+  const double spacing = std::abs(keyB - keyA) / (this->pathLength > 0 ? this->pathLength : 1.0);
+  return std::min(1.0, this->floor + this->slope * spacing);
+}
+
+void SpacingShareModel::observe(double keyA, double keyB, double measuredShare)
+{
+  const double spacing = std::abs(keyB - keyA) / (this->pathLength > 0 ? this->pathLength : 1.0);
+  if (!(spacing > 0) || !std::isfinite(measuredShare))
+    return;
+  this->measuredSlopeSum += std::max(0.0, measuredShare - this->floor) / spacing;
+  ++this->measured;
+  this->slope = this->measuredSlopeSum / this->measured;
+}
+
+RetraceShare SpacingShareModel::function() const
+{
+  const SpacingShareModel copy = *this;
+  return [copy](double keyA, double keyB, double) { return copy.share(keyA, keyB); };
+}
+}

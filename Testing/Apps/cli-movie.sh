@@ -1,0 +1,121 @@
+#!/usr/bin/env bash
+# asrt movie against a throwaway server, which asrtWithThrowawayPostgres started and named in the
+# PG* variables: a small mass ramp of Figs. 4-5 at --quality 35, every frame checked against the
+# frame this script traces itself at that frame's parameters; the same movie again traces no ray
+# and writes the same bytes; and the refusals, each with its exit code and nothing written.
+# Usage: cli-movie.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
+set -euo pipefail
+asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
+rm -rf "$work"; mkdir -p "$work"; cd "$work"
+step() { echo "== $*"; }
+scene="$scenes/fig4-mass-start.json"
+movie=(--ramp mass=0.65:0.8 -n 7 -r 48x48 --quality 35 -q)
+
+step "--plan: the plan and its cost, nothing traced or written"
+"$expect" 0 "plan: 3 key frames .* estimated [0-9]+ rays against 16128 " -- \
+  "$asrt" movie "$scene" "${movie[@]}" --plan --store -o plan/
+"$check" '!plan/fig4-mass-start-000.png' '!plan/fig4-mass-start.pvd'
+test "$("$asrt" list | tail -n +2 | wc -l)" -eq 0
+
+step "the first run traces its key frames and the pixels the target needs, and stores them"
+out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" "${movie[@]}" --store=movie \
+  -o first/)"
+echo "$out"
+grep -Eq "^ +1 +0\.675 +interpolated " <<< "$out"
+grep -Eq "^ +3 +0\.725 +key " <<< "$out"
+"$check" first/fig4-mass-start-006.png=48x48 first/fig4-mass-start-003.vti=48x48 \
+  first/fig4-mass-start.pvd=7 first/fig4-mass-start.ogv=7 '!first/fig4-mass-start-007.png'
+
+step "every frame meets the target - 1 dB against the frame traced at its parameters"
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:7 -r 48x48 --formats png -q -o truth > /dev/null
+for k in 0 1 2 3 4 5 6; do
+  "$check" "first/fig4-mass-start-00$k.png:truth-00$k.png>=34"
+done
+step "key frames are the traced frames themselves"
+for k in 0 3 6; do cmp "first/fig4-mass-start-00$k.png" "truth-00$k.png"; done
+
+step "the same movie again traces no ray, reuses every frame, and writes the same bytes"
+out="$("$expect" 0 "rays traced: 0$" -- "$asrt" movie "$scene" "${movie[@]}" --store -o second/)"
+echo "$out"
+grep -Eq "^ +3 +0\.725 +reused " <<< "$out"
+if grep -Eq "^ +[0-9]+ +[0-9.]+ +(key|traced) " <<< "$out"; then echo "the second run traced a frame" >&2; exit 1; fi
+for k in 0 1 2 3 4 5 6; do
+  cmp "first/fig4-mass-start-00$k.png" "second/fig4-mass-start-00$k.png"
+  cmp "first/fig4-mass-start-00$k.vti" "second/fig4-mass-start-00$k.vti"
+done
+
+step "Ctrl-C a quarter into another movie: exit 130, the previous set intact, the keys kept"
+snapshot() { (cd first && ls -A | LC_ALL=C sort && md5sum ./*); }
+snapshot > before.txt
+longer=(--ramp mass=0.3:0.6 -n 24 -r 48x48 --quality 35 --store -o first/)
+"$asrt" movie "$scene" "${longer[@]}" > run.txt 2> progress.txt &
+pid=$!
+quarter() { grep -Eq "movie of 24 frames: [0-9]+%" progress.txt; }
+for _ in $(seq 1 1200); do quarter && break; sleep 0.05; done
+quarter || { kill -KILL "$pid"; echo "no progress: $(cat progress.txt)" >&2; exit 1; }
+kill -INT "$pid"
+rc=0
+wait "$pid" || rc=$?
+cat progress.txt
+test "$rc" -eq 130 || { echo "exit code $rc, expected 130" >&2; exit 1; }
+grep -q "interrupted; nothing half-written was left" progress.txt
+if grep -q "wrote" run.txt; then echo "success printed for an interrupted run" >&2; exit 1; fi
+snapshot > after.txt
+diff before.txt after.txt
+test -z "$(find first -name '.*' -print)"
+out="$("$expect" 0 "rays traced: [1-9]" -- "$asrt" movie "$scene" "${longer[@]}" -q -o longer/)"
+grep -Eq "^ +[0-9]+ +[0-9.]+ +reused " <<< "$out" ||
+  { echo "nothing stored before the interrupt was reused" >&2; exit 1; }
+
+step "a shorter movie over a longer one: the longer one's frames beyond it go, others stay"
+touch first/notes.txt first/fig4-mass-start-7.png
+"$expect" 0 "rays traced: " -- "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 4 -r 48x48 -q \
+  -o first/
+"$check" first/fig4-mass-start-003.png=48x48 '!first/fig4-mass-start-004.png' \
+  '!first/fig4-mass-start-006.vti' first/fig4-mass-start.pvd=4 first/fig4-mass-start.ogv=4
+test -e first/notes.txt && test -e first/fig4-mass-start-7.png
+
+step "a camera path through three key cameras: frame 0 is the first key as asrt trace sees it"
+cat > cams.json <<'JSON'
+{"keys": [
+  {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+  {"position": [6, -29, 9], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+  {"position": [12, -27, 10], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]}
+JSON
+"$expect" 0 "movie of 5 frames along the camera key" -- "$asrt" movie \
+  "$scenes/fig1-cylinders.json" --cameras cams.json -n 5 -r 48x48 -q -o flight/
+"$check" flight/fig1-cylinders-004.png=48x48 flight/fig1-cylinders.pvd=5 \
+  flight/fig1-cylinders.ogv=5
+"$asrt" trace "$scenes/fig1-cylinders.json" --camera 12,-27,10 -r 48x48 --formats png -q \
+  -o flight-end > /dev/null
+cmp flight/fig1-cylinders-004.png flight-end.png
+
+step "refusals: exit codes, one clear line, nothing written"
+for q in 0 -3 nan 101 inf; do
+  "$expect" 2 "^asrt movie: --quality: " -- "$asrt" movie "$scene" "${movie[@]}" --quality "$q" \
+    -o bad/
+done
+"$expect" 2 "--ramp: unknown parameter 'temperature' \(mass, spin or charge\)" -- \
+  "$asrt" movie "$scene" --ramp temperature=1:2 -n 3 -r 48x48 -o bad/
+"$expect" 2 "give one path: --ramp P=FROM:TO, --orbit DEGREES or --cameras FILE.json" -- \
+  "$asrt" movie "$scene" -n 3 -r 48x48 -o bad/
+"$expect" 3 "^asrt movie: database: " -- "$asrt" movie "$scene" "${movie[@]}" --store \
+  --db "host=$work/no-server-here port=1 connect_timeout=2" -o bad/
+"$expect" 4 "frame 2 \(spin = 1\.5\)" -- "$asrt" movie "$scenes/kerr-disk.json" \
+  --ramp spin=0.3:1.5 -n 3 -r 48x48 -o bad/
+cat > one-key.json <<'JSON'
+{"keys": [{"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]}
+JSON
+"$expect" 4 "one-key.json: keys: a path needs at least 2 key cameras, got 1" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras one-key.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[6, 1e999, 9]/' cams.json > overflow.json
+"$expect" 4 "overflow.json: not valid JSON .*number overflow parsing '1e999'" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras overflow.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[6, NaN, 9]/' cams.json > nan.json
+"$expect" 4 "nan.json: not valid JSON" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras nan.json -n 3 -r 48x48 -o bad/
+sed 's/\[6, -29, 9\]/[0.5, 0.5, 0.5]/' cams.json > inside.json
+"$expect" 4 "frame 2 \(camera key = 1\): .*horizon" -- \
+  "$asrt" movie "$scenes/fig1-cylinders.json" --cameras inside.json -n 5 -r 48x48 -o bad/
+"$check" '!bad/fig4-mass-start-000.png' '!bad/fig4-mass-start.pvd' '!bad/fig4-mass-start.ogv' \
+  '!bad/kerr-disk-000.png' '!bad/fig1-cylinders-000.png' '!bad/fig1-cylinders.ogv'

@@ -1,0 +1,287 @@
+// The movie planner on synthetic costs: what it chooses is checked against the cost model
+// evaluated again here, and against the cheapest plan found by trying every set of keys.
+#include "MoviePlan.h"
+
+#include "AsrtTypes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace
+{
+using asrt::FrameMethod;
+
+std::vector<double> evenPath(int n, double from = 0.0, double to = 1.0)
+{
+  std::vector<double> s;
+  for (int k = 0; k < n; ++k)
+    s.push_back(from + (to - from) * k / (n - 1));
+  return s;
+}
+
+/// The plan's cost, evaluated again from its methods and keys with the model, and its
+/// consistency: every interpolated frame lies between its keys, with no key between them.
+double recomputedCost(const asrt::MoviePlan& plan, const std::vector<double>& s,
+                      const asrt::MovieCostModel& model)
+{
+  double total = 0;
+  for (std::size_t k = 0; k < plan.frames.size(); ++k)
+  {
+    const asrt::FramePlan& f = plan.frames[k];
+    switch (f.method)
+    {
+      case FrameMethod::Reused:
+        break;
+      case FrameMethod::Key:
+      case FrameMethod::Traced:
+        total += model.frameRays;
+        break;
+      case FrameMethod::Interpolated:
+      {
+        EXPECT_LT(f.keyBefore, static_cast<int>(k));
+        EXPECT_GT(f.keyAfter, static_cast<int>(k));
+        for (int between = f.keyBefore + 1; between < f.keyAfter; ++between)
+        {
+          const FrameMethod m = plan.frames[static_cast<std::size_t>(between)].method;
+          EXPECT_EQ(m, FrameMethod::Interpolated)
+            << "frame " << between << " is a key between the keys of frame " << k;
+        }
+        const double share = model.retraceShare(s[static_cast<std::size_t>(f.keyBefore)],
+                                                s[static_cast<std::size_t>(f.keyAfter)], s[k]);
+        EXPECT_LT(share, 1.0) << "frame " << k << " interpolated where the pair cannot";
+        total += share * model.frameRays;
+        break;
+      }
+    }
+  }
+  return total;
+}
+
+/// The cheapest cost over every set of keys (ends and stored frames always keys), each other
+/// frame the cheaper of interpolating and tracing: the brute-force optimum for small movies.
+double bruteForceOptimum(const std::vector<double>& s, const std::vector<bool>& stored,
+                         const asrt::MovieCostModel& model)
+{
+  const int n = static_cast<int>(s.size());
+  double best = std::numeric_limits<double>::infinity();
+  for (std::uint32_t mask = 0; mask < (1u << (n - 2)); ++mask)
+  {
+    std::vector<bool> key(s.size(), false);
+    key[0] = key[s.size() - 1] = true;
+    for (int k = 1; k < n - 1; ++k)
+      key[static_cast<std::size_t>(k)] =
+        ((mask >> (k - 1)) & 1u) != 0 || stored[static_cast<std::size_t>(k)];
+    double cost = 0;
+    int before = 0;
+    for (int k = 0; k < n; ++k)
+    {
+      if (key[static_cast<std::size_t>(k)])
+      {
+        cost += stored[static_cast<std::size_t>(k)] ? 0.0 : model.frameRays;
+        before = k;
+        continue;
+      }
+      int after = k + 1;
+      while (!key[static_cast<std::size_t>(after)])
+        ++after;
+      const double share =
+        model.retraceShare(s[static_cast<std::size_t>(before)], s[static_cast<std::size_t>(after)],
+                           s[static_cast<std::size_t>(k)]);
+      cost += share >= 0 && share < 1 ? share * model.frameRays : model.frameRays;
+    }
+    best = std::min(best, cost);
+  }
+  return best;
+}
+
+TEST(MoviePlan, TracesDirectlyWhenInterpolationCostsMore)
+{
+  const std::vector<double> s = evenPath(12);
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double, double, double) { return 1.2; }; // worse than tracing
+  const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+  ASSERT_EQ(plan.frames.size(), s.size());
+  for (std::size_t k = 1; k + 1 < s.size(); ++k)
+    EXPECT_EQ(plan.frames[k].method, FrameMethod::Traced) << "frame " << k;
+  EXPECT_EQ(plan.frames.front().method, FrameMethod::Key);
+  EXPECT_EQ(plan.frames.back().method, FrameMethod::Key);
+  EXPECT_DOUBLE_EQ(plan.estimatedRays, 12 * 1000.0);
+  EXPECT_DOUBLE_EQ(plan.directRays, 12 * 1000.0);
+}
+
+TEST(MoviePlan, InterpolatesWhenCheapAndAddsNoKeyItDoesNotNeed)
+{
+  const std::vector<double> s = evenPath(10);
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double, double, double) { return 0.05; };
+  const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+  EXPECT_EQ(plan.keys(), (std::vector<int>{ 0, 9 }));
+  EXPECT_NEAR(plan.estimatedRays, 2000 + 8 * 50.0, 1e-9);
+  EXPECT_NEAR(plan.estimatedRays, recomputedCost(plan, s, model), 1e-9);
+}
+
+TEST(MoviePlan, AddsAKeyWhereAPairCannotMeetTheTarget)
+{
+  // Interpolation meets the target only between keys at most 0.25 apart.
+  const std::vector<double> s = evenPath(17);
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double a, double b, double)
+  { return std::abs(b - a) <= 0.25 + 1e-12 ? 0.1 : std::numeric_limits<double>::infinity(); };
+  const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+  const std::vector<int> keys = plan.keys();
+  EXPECT_GT(keys.size(), 2u) << "no key was added between the ends";
+  for (std::size_t k = 1; k < keys.size(); ++k)
+    EXPECT_LE(s[static_cast<std::size_t>(keys[k])] - s[static_cast<std::size_t>(keys[k - 1])],
+              0.25 + 1e-12);
+  for (const asrt::FramePlan& f : plan.frames)
+    EXPECT_NE(f.method, FrameMethod::Traced);
+  EXPECT_NEAR(plan.estimatedRays, recomputedCost(plan, s, model), 1e-9);
+  EXPECT_LT(plan.estimatedRays, 0.5 * plan.directRays);
+}
+
+TEST(MoviePlan, AddsAKeyOnlyWhereThePathIsHard)
+{
+  // Frames near s = 0.8 can only be interpolated between keys at most half the path apart;
+  // elsewhere any pair does it cheaply. One key at the middle makes every frame interpolable.
+  const std::vector<double> s = evenPath(21);
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double a, double b, double t)
+  { return std::abs(t - 0.8) < 0.06 && std::abs(b - a) > 0.5 + 1e-12 ? 2.0 : 0.02; };
+  const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+  EXPECT_EQ(plan.keys(), (std::vector<int>{ 0, 10, 20 }));
+  for (std::size_t k = 0; k < s.size(); ++k)
+  {
+    if (k % 10 != 0)
+    {
+      EXPECT_EQ(plan.frames[k].method, FrameMethod::Interpolated) << "frame " << k;
+    }
+  }
+  EXPECT_NEAR(plan.estimatedRays, recomputedCost(plan, s, model), 1e-9);
+  EXPECT_NEAR(plan.estimatedRays, bruteForceOptimum(s, std::vector<bool>(s.size()), model), 1e-9);
+}
+
+TEST(MoviePlan, StoredFramesCostNothingAndAreKeys)
+{
+  const std::vector<double> s = evenPath(11);
+  std::vector<bool> stored(s.size(), false);
+  stored[0] = stored[5] = stored[10] = true;
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double, double, double) { return 1.5; };
+  const asrt::MoviePlan plan = asrt::planMovie(s, stored, model);
+  for (int k : { 0, 5, 10 })
+  {
+    EXPECT_EQ(plan.frames[static_cast<std::size_t>(k)].method, FrameMethod::Reused);
+    EXPECT_EQ(plan.frames[static_cast<std::size_t>(k)].rays, 0.0);
+  }
+  EXPECT_DOUBLE_EQ(plan.estimatedRays, 8 * 1000.0);
+  EXPECT_DOUBLE_EQ(plan.directRays, 8 * 1000.0);
+  EXPECT_DOUBLE_EQ(plan.tracedAllRays, 11 * 1000.0);
+
+  std::vector<bool> all(s.size(), true);
+  EXPECT_DOUBLE_EQ(asrt::planMovie(s, all, model).estimatedRays, 0.0);
+}
+
+TEST(MoviePlan, NeverCostsMoreThanTracingEveryFrameAndComesNearTheOptimum)
+{
+  // Pseudo-random share functions of the pair and the frame, with random stored frames.
+  std::uint64_t state = 0x2545f4914f6cdd1dULL;
+  auto next = [&state]()
+  {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int trial = 0; trial < 200; ++trial)
+  {
+    const int n = 2 + static_cast<int>(next() * 11);
+    const std::vector<double> s = evenPath(n, next(), 2 + next());
+    std::vector<bool> stored(s.size());
+    for (std::size_t k = 0; k < s.size(); ++k)
+      stored[k] = next() < 0.15;
+    const double steepness = 0.2 + 3 * next(), bump = next();
+    asrt::MovieCostModel model;
+    model.frameRays = 100 + 1000 * next();
+    model.retraceShare = [steepness, bump](double a, double b, double t)
+    { return steepness * std::abs(b - a) * (1 + std::sin(7 * t + bump)) / 2; };
+    const asrt::MoviePlan plan = asrt::planMovie(s, stored, model);
+    const double cost = recomputedCost(plan, s, model);
+    EXPECT_NEAR(plan.estimatedRays, cost, 1e-6 * plan.directRays);
+    EXPECT_LE(plan.estimatedRays, plan.directRays * (1 + 1e-12)) << "trial " << trial;
+    const double optimum = bruteForceOptimum(s, stored, model);
+    EXPECT_GE(plan.estimatedRays, optimum - 1e-6 * model.frameRays) << "trial " << trial;
+    for (std::size_t k = 0; k < s.size(); ++k)
+    {
+      if (stored[k])
+      {
+        EXPECT_EQ(plan.frames[k].method, FrameMethod::Reused);
+      }
+    }
+    // Run again with every frame it traces whole stored: the same keys, the same interpolations.
+    std::vector<bool> after = stored;
+    for (int k : plan.keys())
+      after[static_cast<std::size_t>(k)] = true;
+    const asrt::MoviePlan again = asrt::planMovie(s, after, model);
+    EXPECT_EQ(again.keys(), plan.keys()) << "trial " << trial;
+    for (std::size_t k = 0; k < s.size(); ++k)
+    {
+      EXPECT_EQ(again.frames[k].method == FrameMethod::Reused, after[k]);
+      if (plan.frames[k].method == FrameMethod::Interpolated)
+      {
+        EXPECT_EQ(again.frames[k].method, FrameMethod::Interpolated);
+        EXPECT_EQ(again.frames[k].keyBefore, plan.frames[k].keyBefore);
+        EXPECT_EQ(again.frames[k].keyAfter, plan.frames[k].keyAfter);
+      }
+    }
+    double interpolatedRays = 0;
+    for (const asrt::FramePlan& f : again.frames)
+      interpolatedRays += f.method == FrameMethod::Interpolated ? f.rays : 0;
+    EXPECT_DOUBLE_EQ(again.estimatedRays, interpolatedRays) << "trial " << trial;
+  }
+}
+
+TEST(MoviePlan, RefusesBadInputNamingIt)
+{
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double, double, double) { return 0.1; };
+  EXPECT_THROW(asrt::planMovie({}, {}, model), asrt::InvalidParameter);
+  EXPECT_THROW(asrt::planMovie({ 0, 1, 1 }, {}, model), asrt::InvalidParameter);
+  EXPECT_THROW(asrt::planMovie({ 0, 2, 1 }, {}, model), asrt::InvalidParameter);
+  EXPECT_THROW(asrt::planMovie({ 0, std::nan(""), 1 }, {}, model), asrt::InvalidParameter);
+  EXPECT_THROW(asrt::planMovie({ 0, 1 }, { true }, model), asrt::InvalidParameter);
+  asrt::MovieCostModel none = model;
+  none.retraceShare = nullptr;
+  EXPECT_THROW(asrt::planMovie({ 0, 1 }, {}, none), asrt::InvalidParameter);
+  none = model;
+  none.frameRays = 0;
+  EXPECT_THROW(asrt::planMovie({ 0, 1 }, {}, none), asrt::InvalidParameter);
+  // Decreasing parameters are a path too.
+  EXPECT_NO_THROW(asrt::planMovie({ 1, 0.5, 0 }, {}, model));
+  EXPECT_EQ(asrt::planMovie({ 3.0 }, {}, model).frames.size(), 1u);
+}
+
+TEST(MoviePlan, SpacingModelLearnsTheMeasuredSlope)
+{
+  asrt::SpacingShareModel m;
+  m.pathLength = 2;
+  m.floor = 0.01;
+  m.slope = 1;
+  EXPECT_NEAR(m.share(0, 1), 0.51, 1e-12);
+  m.observe(0, 0.5, 0.06); // (0.06 - 0.01) / 0.25
+  EXPECT_NEAR(m.slope, 0.2, 1e-12);
+  m.observe(0, 1, 0.31); // (0.31 - 0.01) / 0.5 = 0.6
+  EXPECT_NEAR(m.slope, 0.4, 1e-12);
+  EXPECT_NEAR(m.function()(0, 2, 1), 0.41, 1e-12);
+  EXPECT_EQ(m.share(0, 100), 1.0);
+}
+}
