@@ -60,7 +60,7 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
   --max-rays N          the most rays an adaptively sampled pixel takes (1 to 1024)
   --supersample N       N x N rays in every pixel (1 to 32), for reference pictures
   --grid N              trace every Nth pixel's ray (1 to 256) and refine where rays
-                        disagree, interpolating the rest (default 16, the fast and
+                        disagree, interpolating the rest (default 8, the fast and
                         balanced presets' too; 1 traces every pixel, as the accurate
                         preset does; a supersample always does)
   --grid-tolerance T    the largest error of the interpolated surface (u, v) that leaves a

@@ -408,8 +408,9 @@ inline const std::string SingleRaySectionV5 =
   R"("rendering":{"antialias":"none","colorThreshold":1.0,"maxRaysPerPixel":1,"supersample":1})";
 /// The section effectiveSceneText() writes for singleRayRendering() since version 7, which also
 /// names the lattice (every pixel traced); migration 7 adds it to every text without one.
-inline const std::string SingleRaySection = R"("rendering":{"antialias":"none","colorThreshold":1.0,)"
-                                            R"("gridLattice":1,"maxRaysPerPixel":1,"supersample":1})";
+inline const std::string SingleRaySection =
+  R"("rendering":{"antialias":"none","colorThreshold":1.0,)"
+  R"("gridLattice":1,"maxRaysPerPixel":1,"supersample":1})";
 
 /// A frame's effective text as versions 5 and 6 wrote it for a frame that traced every pixel:
 /// without "gridLattice" (a grid did not exist).

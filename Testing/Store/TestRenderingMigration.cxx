@@ -613,8 +613,8 @@ TEST(RenderingMigration, Version6TextsNameTheLatticeTheirFramesWereTracedWith)
   const std::int64_t id = insertVersion4Frame(db, old);
   store.migrate(6);
   // Versions 5 and 6 wrote no lattice: every frame traced every pixel.
-  const std::string before = db.value("SELECT effective_text FROM frames WHERE id = " +
-                                      std::to_string(id));
+  const std::string before =
+    db.value("SELECT effective_text FROM frames WHERE id = " + std::to_string(id));
   EXPECT_NE(before.find(SingleRaySectionV5), std::string::npos) << before;
 
   store.migrate();
