@@ -66,6 +66,30 @@ bool singleRay(const RayRecord& r)
   return r.raysPerPixel <= 1;
 }
 
+/// The estimate of a prediction `out` from its lower order `lower`: the squared colour difference
+/// between them, or more where the texture changes within the orders' disagreement about (u, v).
+/// Two predictions may land on like colours while a small bright feature (a star) lies between or
+/// beside them; a ray sweeping across it between keys is missed by both. So the colour is also
+/// sampled one disagreement further on, and one to either side of it.
+float predictionError(const Scene& scene, const RayRecord& out, const RayRecord& lower)
+{
+  const Color lowerColor = shadePrediction(scene, lower);
+  float estimate = colorError2(out.color, lowerColor);
+  if (out.objectId < 0)
+    return estimate;
+  const double du = shortUDifference(out.u, lower.u), dv = out.v - lower.v;
+  const TextureFootprint footprint{ out.dudi, out.dvdi, out.dudj, out.dvdj };
+  const double offsets[3][2] = { { du, dv }, { -dv, du }, { dv, -du } };
+  for (const auto& d : offsets)
+  {
+    const double u = out.u + d[0];
+    const double v = std::clamp(out.v + d[1], 0.0, 1.0);
+    const Color c = scene.shadeFootprint(out.objectId, u - std::floor(u), v, footprint);
+    estimate = std::max(estimate, colorError2(out.color, c));
+  }
+  return estimate;
+}
+
 /// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike;
 /// sets `estimate` as the header says.
 RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
@@ -89,8 +113,12 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   out.color = shadePrediction(scene, out);
   if (n == 2)
   {
+    // One order lower is the nearer key itself: its (u, v) shows how far the pixel moved on the
+    // texture, and the keys' colour step what lies along the way.
     method = PathMethod::Linear;
-    estimate = colorError2(inner[0]->color, inner[1]->color);
+    const RayRecord& nearer = t - keys[a].s <= keys[a + 1].s - t ? *inner[0] : *inner[1];
+    estimate =
+      std::max(colorError2(inner[0]->color, inner[1]->color), predictionError(scene, out, nearer));
     return out;
   }
   method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
@@ -98,15 +126,34 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   const int offset = dropLeft ? 1 : 0;
   const RayRecord lower = predictRecord(nodes + offset, s + offset, n - 1, t);
-  estimate = colorError2(out.color, shadePrediction(scene, lower));
+  estimate = predictionError(scene, out, lower);
   return out;
+}
+
+/// The largest squared colour difference between pixel p of a key and its 4 neighbours there: what
+/// an edge through the pixel that moves by a pixel between the keys can change its colour by. The
+/// blend of an edge pixel's colours follows the edge's coverage only while the edge stays inside
+/// it; keys far apart let it move further.
+float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, int height)
+{
+  const int i = static_cast<int>(p % width), j = static_cast<int>(p / width);
+  const int di[4] = { -1, 1, 0, 0 }, dj[4] = { 0, 0, -1, 1 };
+  float contrast = 0.0f;
+  for (int k = 0; k < 4; ++k)
+  {
+    const int x = i + di[k], y = j + dj[k];
+    if (x >= 0 && x < width && y >= 0 && y < height)
+      contrast = std::max(
+        contrast, colorError2(key[p].color, key[static_cast<std::size_t>(y) * width + x].color));
+  }
+  return contrast;
 }
 
 /// A pixel that a key supersampled (an edge runs through it) but whose topology holds between the
 /// keys: its colour, the average over the edge's two sides, varies smoothly with s while the edge
 /// stays inside it, so the colours themselves are interpolated; the record is the nearer key's.
 RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                           PathMethod& method, float& estimate)
+                           int width, int height, PathMethod& method, float& estimate)
 {
   const RayRecord& ra = (*keys[a].records)[p];
   const RayRecord& rb = (*keys[a + 1].records)[p];
@@ -129,12 +176,14 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
       out += w[k] * c[offset + k];
     return Color(out.cwiseMax(0.0).cwiseMin(1.0));
   };
-  RayRecord out = t - keys[a].s <= keys[a + 1].s - t ? ra : rb;
+  const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
+  RayRecord out = (*keys[nearerKey].records)[p];
   out.color = blend(0, n);
   method = PathMethod::EdgeBlend;
   if (n == 2)
   {
-    estimate = colorError2(ra.color, rb.color);
+    estimate = std::max(colorError2(ra.color, rb.color),
+                        edgeContrast(*keys[nearerKey].records, p, width, height));
     return out;
   }
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
@@ -142,7 +191,154 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   // roughly: the keys' colour step bounds what the edge's motion can change in between.
   estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1)),
                       colorError2(ra.color, rb.color));
+  estimate = std::max(estimate, edgeContrast(*keys[nearerKey].records, p, width, height));
   return out;
+}
+
+/// Probes a way of predicting gets at least, however few its pixels' share (all if fewer): a
+/// sample of the frame's fraction alone leaves a way of predicting that covers a few per cent of
+/// the frame with a handful of probes, too few to see errors that are rare but large.
+constexpr std::size_t kProbesPerMethod = 32;
+/// The probes below a place in the re-tracing order that stand for the untraced pixels there, at
+/// least (the lowest ranked of their way of predicting when fewer lie below).
+constexpr std::size_t kTailProbes = 16;
+/// Standard errors added to a tail's mean probe error: one frame in forty or so exceeds it.
+constexpr double kConfidence = 2.0;
+
+bool isPrediction(std::uint8_t m)
+{
+  return m != static_cast<std::uint8_t>(PathMethod::Retrace) &&
+         m != static_cast<std::uint8_t>(PathMethod::Key) &&
+         m != static_cast<std::uint8_t>(PathMethod::Retraced);
+}
+
+std::uint64_t pixelHash(std::uint64_t x)
+{
+  x += 0x9e3779b97f4a7c15ULL; // splitmix64
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+/// The probes: the frame's fixed pseudo-random share, topped up per way of predicting to
+/// kProbesPerMethod of its pixels (the lowest hashes among them), in increasing order.
+std::vector<std::int32_t> stratifiedProbes(const std::vector<std::uint8_t>& methods,
+                                           double fraction)
+{
+  const std::size_t n = methods.size();
+  std::vector<std::int32_t> probes = probePixels(n, fraction, 64, 0x9e3779b97f4a7c15ULL);
+  std::vector<char> chosen(n, 0);
+  std::size_t have[kPathMethodCount] = {};
+  for (std::int32_t p : probes)
+  {
+    chosen[static_cast<std::size_t>(p)] = 1;
+    ++have[methods[static_cast<std::size_t>(p)]];
+  }
+  for (int m = 0; m < kPathMethodCount; ++m)
+  {
+    if (!isPrediction(static_cast<std::uint8_t>(m)) || have[m] >= kProbesPerMethod)
+      continue;
+    std::vector<std::pair<std::uint64_t, std::int32_t>> pool;
+    for (std::size_t p = 0; p < n; ++p)
+      if (methods[p] == m && !chosen[p])
+        pool.emplace_back(pixelHash(p), static_cast<std::int32_t>(p));
+    const std::size_t more = std::min(pool.size(), kProbesPerMethod - have[m]);
+    std::partial_sort(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(more), pool.end());
+    for (std::size_t k = 0; k < more; ++k)
+      probes.push_back(pool[k].second);
+  }
+  std::sort(probes.begin(), probes.end());
+  return probes;
+}
+
+/// Sums of the true errors of a sample of probes.
+struct ProbeSample
+{
+  double count = 0, sum = 0, sum2 = 0;
+  void add(double e)
+  {
+    count += 1;
+    sum += e;
+    sum2 += e * e;
+  }
+  /// A bound on the mean error of the pixels the sample stands for: its mean plus kConfidence
+  /// standard errors, and one more probe of error `missed` (the typical size of an error of this
+  /// way of predicting): a sample in which no probe erred does not show that none of the pixels
+  /// does, only that few do.
+  double meanBound(double missed) const
+  {
+    if (count <= 0)
+      return missed;
+    const double mean = sum / count;
+    const double variance = std::max(0.0, sum2 / count - mean * mean);
+    return (sum + missed) / (count + 1) + kConfidence * std::sqrt(variance / count);
+  }
+};
+
+/// A probe: where its calibrated estimate places it in the order of re-tracing, its way of
+/// predicting and its true error.
+struct PlacedProbe
+{
+  std::size_t at = 0;
+  int method = 0;
+  double error = 0;
+};
+
+/// What re-tracing the first k of `rest` (the order of re-tracing) leaves, for every k: per way of
+/// predicting, the larger of its calibrated estimates' sum and its probes' bound times its
+/// untraced pixels, summed. The probes placed at or after k stand for those pixels; where fewer
+/// than kTailProbes lie there, the next ones before k join them (higher estimates: an over-
+/// rather than an under-statement).
+std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
+                                   const std::vector<double>& calibrated,
+                                   const std::vector<std::uint8_t>& methods,
+                                   std::vector<PlacedProbe> probes)
+{
+  constexpr int M = kPathMethodCount;
+  std::stable_sort(probes.begin(), probes.end(),
+                   [](const PlacedProbe& a, const PlacedProbe& b) { return a.at > b.at; });
+  // The typical error of each way of predicting where it errs (else the frame's, else a level a
+  // channel): what a probe that the sample happened to miss would have shown.
+  ProbeSample erring[M], erringAll, lowest[M];
+  for (const PlacedProbe& q : probes)
+  {
+    if (q.error > 0)
+    {
+      erring[q.method].add(q.error);
+      erringAll.add(q.error);
+    }
+    if (lowest[q.method].count < kTailProbes)
+      lowest[q.method].add(q.error);
+  }
+  double missed[M];
+  for (int m = 0; m < M; ++m)
+    missed[m] = erring[m].count > 0   ? erring[m].sum / erring[m].count
+                : erringAll.count > 0 ? erringAll.sum / erringAll.count
+                                      : 3.0;
+  std::vector<double> remaining(rest.size() + 1, 0.0);
+  double count[M] = {}, left[M] = {};
+  ProbeSample tail[M];
+  std::size_t next = 0;
+  for (std::size_t k = rest.size() + 1; k-- > 0;)
+  {
+    if (k < rest.size())
+    {
+      const std::size_t p = static_cast<std::size_t>(rest[k]);
+      count[methods[p]] += 1;
+      left[methods[p]] += calibrated[p];
+    }
+    for (; next < probes.size() && probes[next].at >= k; ++next)
+      tail[probes[next].method].add(probes[next].error);
+    double sum = 0;
+    for (int m = 0; m < M; ++m)
+      if (count[m] > 0)
+      {
+        const ProbeSample& sample = tail[m].count >= kTailProbes ? tail[m] : lowest[m];
+        sum += std::max(left[m], count[m] * sample.meanBound(missed[m]));
+      }
+    remaining[k] = sum;
+  }
+  return remaining;
 }
 }
 
@@ -306,7 +502,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       }
       PathMethod m;
       if (!singleRay(ka[p]) || !singleRay(kb[p]))
-        f.records[p] = predictEdgePixel(keys, a, p, t, m, f.estimate[p]);
+        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, m, f.estimate[p]);
       else
         f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
       f.method[p] = static_cast<std::uint8_t>(m);
@@ -371,7 +567,7 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
   };
 
   // The pixels the keys cannot vouch for, and the probes, in one pass.
-  const std::vector<std::int32_t> probes = probePixels(n, probeFraction, 64, 0x9e3779b97f4a7c15ULL);
+  const std::vector<std::int32_t> probes = stratifiedProbes(methods, probeFraction);
   std::vector<std::int32_t> first;
   for (std::size_t p = 0; p < n; ++p)
     if (methods[p] == static_cast<std::uint8_t>(PathMethod::Retrace))
@@ -386,30 +582,24 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
 
   // Each way of predicting has its own scale: the probes' true error over their estimate, at
   // least 1 (the estimate is the lower order's error, an over-estimate where the higher order is
-  // better); a way whose probes erred where it estimated nothing is not trusted at all.
+  // better). Where a way's estimate misses errors altogether, its probes' bound below sees them.
   double trueSum[kPathMethodCount] = {}, estimatedSum[kPathMethodCount] = {};
   std::vector<double> probeError(probes.size(), -1.0); // −1: not a prediction
   for (std::size_t q = 0; q < probes.size(); ++q)
   {
     const std::size_t p = static_cast<std::size_t>(probes[q]);
-    if (methods[p] == static_cast<std::uint8_t>(PathMethod::Retrace) ||
-        methods[p] == static_cast<std::uint8_t>(PathMethod::Key))
+    if (!isPrediction(methods[p]))
       continue;
     probeError[q] = colorError2(predicted[q].color, frame.records[p].color);
     trueSum[methods[p]] += probeError[q];
     estimatedSum[methods[p]] += estimates[p];
   }
-  const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> calibrated(n, 0.0);
   for (std::size_t p = 0; p < n; ++p)
   {
     const int m = methods[p];
-    if (m == static_cast<int>(PathMethod::Retrace) || m == static_cast<int>(PathMethod::Key))
-      continue;
-    const double scale = estimatedSum[m] > 0 ? std::max(1.0, trueSum[m] / estimatedSum[m])
-                         : trueSum[m] > 0    ? inf
-                                             : 1.0;
-    calibrated[p] = std::isinf(scale) ? inf : scale * estimates[p];
+    if (isPrediction(methods[p]) && estimatedSum[m] > 0)
+      calibrated[p] = std::max(1.0, trueSum[m] / estimatedSum[m]) * estimates[p];
   }
   auto worse = [&](std::int32_t a, std::int32_t b)
   {
@@ -422,34 +612,19 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
     if (!traced[p] && methods[p] != static_cast<std::uint8_t>(PathMethod::Key))
       rest.push_back(static_cast<std::int32_t>(p));
   std::sort(rest.begin(), rest.end(), worse);
-  // What re-tracing the first k of `rest` leaves, estimated twice: the calibrated estimates of the
-  // rest, and the probes' own errors (each probe stands for the untraced pixels about its place in
-  // the order: their mean times their count, unbiased however the error is spread). The larger
-  // counts: a few heavy errors that the estimate misses show in the probes, and errors spread
-  // thinner than the probes resolve show in the estimate.
-  std::vector<double> left(rest.size() + 1, 0.0), probeLeft(rest.size() + 1, 0.0);
-  std::vector<std::size_t> probesLeft(rest.size() + 1, 0);
-  for (std::size_t k = rest.size(); k-- > 0;)
-    left[k] = left[k + 1] + calibrated[static_cast<std::size_t>(rest[k])];
+  // What re-tracing the first k of `rest` leaves is bounded twice, per way of predicting: by the
+  // calibrated estimates, and by the probes' own errors (each probe stands for the untraced pixels
+  // about its place in the order), with a confidence margin, so that a sample that happened to
+  // miss a way's rare large errors does not pass for a clean one.
+  std::vector<PlacedProbe> placed;
   for (std::size_t q = 0; q < probes.size(); ++q)
     if (probeError[q] >= 0)
-    {
-      const std::size_t at = static_cast<std::size_t>(
-        std::lower_bound(rest.begin(), rest.end(), probes[q], worse) - rest.begin());
-      probeLeft[at] += probeError[q];
-      ++probesLeft[at];
-    }
-  for (std::size_t k = rest.size(); k-- > 0;)
-  {
-    probeLeft[k] += probeLeft[k + 1];
-    probesLeft[k] += probesLeft[k + 1];
-  }
-  auto remaining = [&](std::size_t k)
-  {
-    const double fromProbes =
-      probesLeft[k] > 0 ? probeLeft[k] / probesLeft[k] * static_cast<double>(rest.size() - k) : 0;
-    return std::max(left[k], fromProbes) / (3.0 * static_cast<double>(n));
-  };
+      placed.push_back(
+        { static_cast<std::size_t>(std::lower_bound(rest.begin(), rest.end(), probes[q], worse) -
+                                   rest.begin()),
+          methods[static_cast<std::size_t>(probes[q])], probeError[q] });
+  const std::vector<double> left = remainingError(rest, calibrated, methods, placed);
+  auto remaining = [&](std::size_t k) { return left[k] / (3.0 * static_cast<double>(n)); };
   std::size_t count = rest.size();
   for (std::size_t k = 0; k <= rest.size(); ++k)
     if (psnrOfMse(remaining(k)) >= targetDb)

@@ -20,13 +20,15 @@
 //  - Edges. A pixel that either inner key supersampled (an edge runs through it) but whose centre
 //    rays end alike shows the average over the edge's two sides, which varies with s as the edge
 //    moves inside it: its colours are interpolated themselves (EdgeBlend), the record is the
-//    nearer key's, and the estimate is at least the keys' colour step.
+//    nearer key's, and the estimate is at least the keys' colour step and the nearer key's
+//    contrast with its 4 neighbours (what the edge moving by a pixel changes).
 //  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
-//    dropped) differs from the prediction by about the lower order's error: that squared
-//    difference, summed over the channels in levels² of 255, ranks the pixels for re-tracing.
-//    A linear prediction has no lower order: its estimate is the squared colour step between the
-//    two keys, a bound on what linear interpolation can get wrong in between when the colour
-//    varies monotonically.
+//    dropped; for a linear prediction, the nearer key) differs from the prediction by about the
+//    lower order's error: that squared difference, summed over the channels in levels² of 255,
+//    ranks the pixels for re-tracing. Two orders may land on like colours while a bright feature
+//    of the texture lies just beside them (keys far apart move a pixel across many texels), so
+//    the texture is also sampled one disagreement in (u, v) further on and to either side. A
+//    linear prediction's estimate is also at least the squared colour step between its keys.
 // Plain C++ with OpenMP over rows; the result does not depend on the number of threads.
 #ifndef asrt_PathInterpolation_h
 #define asrt_PathInterpolation_h
@@ -122,11 +124,16 @@ struct PathCompletion
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
-/// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t: per way of
-/// predicting (cubic, quadratic, linear, edge blend), the probes' true error over their estimate,
-/// at least 1; a way whose probes erred where it estimated none is re-traced whole. Re-traced
-/// records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws InvalidParameter
-/// for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another size.
+/// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
+/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend): per way, the
+/// probes' true error over their estimate, at least 1. What the chosen pixels leave untraced is
+/// bounded per way of predicting by the larger of its calibrated estimates and its probes placed
+/// at or below them in the order (at least 16): their mean error plus two standard errors, with
+/// one more probe of the way's typical error counted in, since probes that all came out exact
+/// show only that errors are rare. The estimated PSNR is infinite only when nothing predicted is
+/// left. Re-traced records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws
+/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
+/// size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
