@@ -52,7 +52,8 @@ const char* const kSceneOverrideHelp = R"(Scene overrides (the scene file's valu
   --view-angle DEG      vertical field of view, in degrees
   -r, --resolution WxH  image size in pixels, e.g. 200x200
   --preset NAME         fast, balanced or accurate (rtol 1e-8, 1e-10, 1e-12 for the
-                        method auto picks; measured in bench/REPORT.md)
+                        method auto picks; fast and balanced on the adaptive grid,
+                        accurate tracing every pixel; measured in bench/REPORT.md)
   --method NAME         an integrator ("asrt bench" and bench/REPORT.md compare them)
   --antialias MODE      none (one ray a pixel), filter (textures filtered over each
                         pixel's footprint) or adaptive (filter, and up to --max-rays rays
