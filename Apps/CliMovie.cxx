@@ -365,7 +365,7 @@ PixelTracer retracedPixels(MovieRun& run, int k, const FrameTracer& tracer, Fram
       return records;
     SceneDescription subset = run.frames[static_cast<std::size_t>(k)].identity;
     subset.subset = pixelSubsetId(pixels);
-    subset.rendering.gridLattice = 1; // as the tracer traces them: each its own ray
+    subset.rendering = scatteredPixelRendering(subset.rendering); // as the tracer traces them
     if (run.store)
       if (const auto id = run.store->findFrame(subset))
       {
@@ -408,10 +408,8 @@ std::vector<RayRecord> interpolatedFrame(MovieRun& run, int k, const Scene& shad
     keys.push_back({ direction * run.frames[static_cast<std::size_t>(key)].s, &records });
   const MovieFrame& f = run.frames[static_cast<std::size_t>(k)];
   PathFrame frame = interpolateAlongPath(keys, direction * f.s, run.width, run.height, shading);
-  // Re-traced pixels lie scattered along edges: each takes its own ray, where the adaptive grid
-  // would process the whole lattice block around it.
   SceneDescription retrace = sceneWithTextures(run, f);
-  retrace.rendering.gridLattice = 1;
+  retrace.rendering = scatteredPixelRendering(retrace.rendering);
   const FrameTracer tracer(retrace);
   const PathCompletion done =
     completePathFrame(frame, retracedPixels(run, k, tracer, report), quality, kProbeFraction);

@@ -451,6 +451,14 @@ void addDoubleField(vtkFieldData* fd, const char* name, std::initializer_list<do
   fd->AddArray(a);
 }
 
+void addCountField(vtkFieldData* fd, const char* name, vtkIdType count)
+{
+  auto a = vtkSmartPointer<vtkIdTypeArray>::New();
+  a->SetName(name);
+  a->InsertNextValue(count);
+  fd->AddArray(a);
+}
+
 void setSpacetimeFieldData(const SpacetimeParameters& st, vtkFieldData* fd)
 {
   addDoubleField(fd, "Mass", { st.mass });

@@ -92,6 +92,8 @@ void pathsToPolyData(const std::vector<RayPath>& paths, vtkPolyData* lines);
 std::vector<RayPath> polyDataToPaths(vtkPolyData* lines);
 /// Adds the field data array `name`: doubles, one tuple of the given values.
 void addDoubleField(vtkFieldData* fd, const char* name, std::initializer_list<double> values);
+/// Adds the field data array `name`: one vtkIdType, a count of pixels.
+void addCountField(vtkFieldData* fd, const char* name, vtkIdType count);
 /// The spacetime as field data "Mass", "Spin" and "Charge" (what frames and interpolated frames
 /// both report).
 void setSpacetimeFieldData(const SpacetimeParameters& st, vtkFieldData* fd);

@@ -17,7 +17,6 @@
 #include "vtkDoubleArray.h"
 #include "vtkExecutive.h"
 #include "vtkFieldData.h"
-#include "vtkIdTypeArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -254,9 +253,7 @@ struct vtkGeodesicFrameInterpolator::Internals
     source->SetViewUp(p.viewUp.data());
     if (this->MethodsDiffer)
       source->SetIntegrationMethod("auto"); // each end resolved "auto" for its own spacetime
-    // Re-traced pixels lie scattered along edges: each takes its own ray, where the adaptive grid
-    // would process the whole lattice block around it.
-    source->SetGridLattice(1);
+    source->SetGridLattice(asrt::scatteredPixelRendering(this->Scene[0].rendering).gridLattice);
     vtkNew<vtkIntArray> subset;
     subset->SetNumberOfComponents(2);
     subset->SetNumberOfTuples(static_cast<vtkIdType>(pixels.size()));
@@ -480,14 +477,8 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     asrt::addDoubleField(fd, "InterpolationTime", { t });
     asrt::addDoubleField(fd, "InterpolationFractions",
                          { fractions[0], fractions[1], fractions[2], fractions[3], fractions[4] });
-    auto holes = vtkSmartPointer<vtkIdTypeArray>::New();
-    holes->SetName("HolePixels");
-    holes->InsertNextValue(static_cast<vtkIdType>(f.holes));
-    fd->AddArray(holes);
-    auto retraced = vtkSmartPointer<vtkIdTypeArray>::New();
-    retraced->SetName("RetracedPixels");
-    retraced->InsertNextValue(this->LastRetracedCount);
-    fd->AddArray(retraced);
+    asrt::addCountField(fd, "HolePixels", static_cast<vtkIdType>(f.holes));
+    asrt::addCountField(fd, "RetracedPixels", this->LastRetracedCount);
     const asrt::FrameParameters p = this->Impl->At(t, this->CameraPath);
     asrt::setParametersFieldData(p, fd);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), t);

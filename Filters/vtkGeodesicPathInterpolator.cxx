@@ -15,7 +15,6 @@
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
-#include "vtkIdTypeArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -369,9 +368,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       asrt::applyParameters(p, atT);
       if (in.Scenes[a].integrator.method != in.Scenes[a + 1].integrator.method)
         atT.integrator.method = "auto"; // each key resolved "auto" for its own spacetime
-      // Re-traced pixels lie scattered along edges: each takes its own ray, where the adaptive
-      // grid would process the whole lattice block around it.
-      atT.rendering.gridLattice = 1;
+      atT.rendering = asrt::scatteredPixelRendering(atT.rendering);
       const asrt::FrameTracer tracer(atT);
       const asrt::PathCompletion done =
         asrt::completePathFrame(f, tracer, this->QualityTarget, this->ProbeFraction);
@@ -389,10 +386,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     addPathArrays(f, image);
     vtkFieldData* fd = image->GetFieldData();
     asrt::addDoubleField(fd, "PathParameter", { s });
-    auto retraced = vtkSmartPointer<vtkIdTypeArray>::New();
-    retraced->SetName("RetracedPixels");
-    retraced->InsertNextValue(this->LastRetracedCount);
-    fd->AddArray(retraced);
+    asrt::addCountField(fd, "RetracedPixels", this->LastRetracedCount);
     if (this->QualityTarget > 0.0)
       asrt::addDoubleField(fd, "EstimatedPsnr", { this->LastEstimatedPsnr });
     asrt::setParametersFieldData(p, fd);

@@ -90,6 +90,15 @@ inline int effectiveGridLattice(const AntialiasOptions& o)
   return o.supersample > 1 ? 1 : o.gridLattice;
 }
 
+/// The rendering for tracing scattered pixels, such as the pixels an interpolated frame re-traces:
+/// each its own centre ray, where the adaptive grid would process the whole lattice block around
+/// each of them.
+inline AntialiasOptions scatteredPixelRendering(AntialiasOptions o)
+{
+  o.gridLattice = 1;
+  return o;
+}
+
 /// The options of a frame traced one ray a pixel with point-sampled textures: what a scene text
 /// without a "rendering" section was traced with before anti-aliasing existed. Every field is set
 /// here, not taken from the defaults: the store writes this section into such texts (schema
