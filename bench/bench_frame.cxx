@@ -5,8 +5,8 @@
 // Markdown section for bench/REPORT.md.
 // Usage: asrt_bench_frame fig1.json kerr-disk.json [--no-hd]
 #include "FrameTracer.h"
+#include "GeodesicSceneLoading.h"
 #include "SceneFile.h"
-#include "vtkGeodesicSource.h"
 
 #include <omp.h>
 
@@ -34,16 +34,6 @@ double cpuNow()
   timespec t;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-ImageLoader loader()
-{
-  return [](const std::string& path)
-  {
-    ImagePixels px;
-    vtkGeodesicSource::LoadImagePixels(path, px.width, px.height, px.rgb);
-    return px;
-  };
 }
 
 struct Config
@@ -244,8 +234,8 @@ int main(int argc, char* argv[])
     return 2;
   }
   const bool hd = !(argc > 3 && std::strcmp(argv[3], "--no-hd") == 0);
-  const SceneDescription fig1 = loadSceneFile(argv[1], loader());
-  const SceneDescription kerr = loadSceneFile(argv[2], loader());
+  const SceneDescription fig1 = loadSceneFile(argv[1], vtkImageFileLoader());
+  const SceneDescription kerr = loadSceneFile(argv[2], vtkImageFileLoader());
   std::printf("<!-- frame:begin -->\n## Frame tracing: speed against accuracy on whole frames\n\n");
   smallFrame(fig1, argv[1]);
   if (hd)

@@ -5,9 +5,9 @@
 // traces itself. Prints a Markdown section for bench/REPORT.md.
 // Usage: asrt_bench_grid SCENE.json... [--grid L[:TOLERANCE]]... [--no-hd] [--only-size WIDTH]
 #include "FrameTracer.h"
+#include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
 #include "SceneFile.h"
-#include "vtkGeodesicSource.h"
 
 #include <omp.h>
 
@@ -41,16 +41,6 @@ double cpuNow()
   timespec t;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-ImageLoader loader()
-{
-  return [](const std::string& path)
-  {
-    ImagePixels px;
-    vtkGeodesicSource::LoadImagePixels(path, px.width, px.height, px.rgb);
-    return px;
-  };
 }
 
 double loadAverage()
@@ -310,7 +300,7 @@ int main(int argc, char* argv[])
     std::printf("\n### At %d×%d\n", size.width, size.height);
     for (const std::string& file : files)
     {
-      const SceneDescription scene = loadSceneFile(file, loader());
+      const SceneDescription scene = loadSceneFile(file, vtkImageFileLoader());
       sceneAtSize(scene, file, size, presets, grids, met);
     }
   }
