@@ -318,7 +318,13 @@ bool PlanarOrbitPropagator::step(const Plane& s, const Plane& k1, double& h, dou
     if (norm <= 1.0)
     {
       k13 = this->slope(out);
-      next = h * factor;
+      // The controller's proposal assumes that the next step meets this one's error constant,
+      // but the constant follows the orbit's scale: the force goes as r⁻⁴, and the step the
+      // tolerance allows about as r. Coming in, the proposal is scaled by the radius ratio, which
+      // keeps the next radius from rejecting it (a quarter of all attempts on Fig. 1 without).
+      // Going out it is not lengthened beyond the controller's: an embedded estimate over a step
+      // that spans scales of r is not to be trusted.
+      next = h * factor * std::min(1.0, this->radius(out) / this->radius(s));
       return true;
     }
     h *= std::max(factor, 0.1);

@@ -10,6 +10,10 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
 
 namespace asrt
 {
@@ -171,6 +175,53 @@ std::vector<GridBlock> latticeBlocksOf(const std::vector<std::pair<int, int>>& p
   return blocks;
 }
 
+namespace
+{
+/// The rays on the borders of lattice blocks, which the blocks either side of a border (four at a
+/// lattice point) all need: each is traced once, by the first thread to ask, and copied by the
+/// others. A ray is a function of its pixel alone, so which block traces it changes nothing in
+/// the frame; tracing them in every block instead cost 1.3 to 2.25 times the unique rays.
+class SharedBorderRays
+{
+public:
+  template<typename Trace>
+  const RayRecord& get(long key, const Trace& trace)
+  {
+    Entry* e;
+    {
+      const std::lock_guard<std::mutex> lock(this->Mutex);
+      std::unique_ptr<Entry>& slot = this->Entries[key];
+      if (!slot)
+        slot = std::make_unique<Entry>();
+      e = slot.get();
+    }
+    int expected = 0;
+    if (e->state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel))
+    {
+      e->record = trace();
+      e->state.store(2, std::memory_order_release);
+    }
+    else
+    {
+      // Another thread is tracing it: one ray's wait at most, and only where two threads work on
+      // neighbouring blocks at once.
+      while (e->state.load(std::memory_order_acquire) != 2)
+        std::this_thread::yield();
+    }
+    return e->record;
+  }
+
+private:
+  struct Entry
+  {
+    std::atomic<int> state{ 0 }; // 0 untraced, 1 being traced, 2 ready
+    RayRecord record;
+  };
+  std::mutex Mutex;
+  std::unordered_map<long, std::unique_ptr<Entry>> Entries;
+};
+}
+
 /// The rays and interpolations of one lattice block, over its closed pixel range.
 struct FrameTracer::GridWork
 {
@@ -195,10 +246,18 @@ struct FrameTracer::GridWork
     return this->Traced[k] ? this->Rays[k] : this->Fills[k];
   }
 
+  /// Whether the pixel lies on the lattice block's border, shared with its neighbours.
+  bool onBorder(int i, int j) const
+  {
+    return i == this->Block.x0 || i == this->Block.x1 || j == this->Block.y0 || j == this->Block.y1;
+  }
+
   GridBlock Block;
   int W = 0;
   std::vector<unsigned char> Traced, Filled;
   std::vector<RayRecord> Rays, Fills;
+  SharedBorderRays* Shared = nullptr;
+  int FrameWidth = 0;
 };
 
 void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const
@@ -212,7 +271,11 @@ void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& wo
     const std::size_t s = work.slot(i, j);
     if (!work.Traced[s])
     {
-      work.Rays[s] = this->traceThrough(prop, i, j);
+      if (work.Shared && work.onBorder(i, j))
+        work.Rays[s] = work.Shared->get(static_cast<long>(j) * work.FrameWidth + i,
+                                        [&] { return this->traceThrough(prop, i, j); });
+      else
+        work.Rays[s] = this->traceThrough(prop, i, j);
       work.Traced[s] = 1;
     }
     p[k] = &work.Rays[s];
@@ -276,10 +339,13 @@ std::vector<RayRecord> FrameTracer::traceGrid(const std::vector<std::pair<int, i
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, n / 200);
+  SharedBorderRays shared;
 #pragma omp parallel
   {
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
     GridWork work;
+    work.Shared = &shared;
+    work.FrameWidth = W;
     long lastReported = 0;
 #pragma omp for schedule(dynamic, 1)
     for (long q = 0; q < n; ++q)
