@@ -2,17 +2,20 @@
 
 Checked against independent facts: its time steps are the movie's frames; its key frames are the
 frames vtkGeodesicSource traces at their parameters, bit for bit; its interpolated frames reach
-the quality target less 1 dB against frames this test traces itself; a second source over the
-same store makes the same frames tracing no ray; bad settings are errors naming the setting.
+the quality target less 1 dB against frames this test traces itself; they are the frames that
+`asrt movie` writes for the same settings; a second source over the same store makes the same
+frames tracing no ray; bad settings are errors naming the setting.
 Run with PYTHONPATH at the build tree's site-packages and the PG* variables naming a throwaway
 server (ctest does both).
 
-Usage: python3 test_movie.py SCENES_DIR
+Usage: python3 test_movie.py SCENES_DIR ASRT_PROGRAM
 """
 
 import math
 import os
+import subprocess
 import sys
+import tempfile
 import unittest
 
 import numpy
@@ -22,6 +25,7 @@ from vtkmodules.util import numpy_support
 from asrt import vtkGeodesicMovieSource, vtkGeodesicSource
 
 SCENES = sys.argv.pop(1) if len(sys.argv) > 1 else "Data/scenes"
+ASRT = sys.argv.pop(1) if len(sys.argv) > 1 else "asrt"
 SIDE, FRAMES, FROM, TO, TARGET = 48, 5, 0.65, 0.8, 35.0
 KEY, INTERPOLATED = 1, 3  # asrt::FrameMethod
 
@@ -126,6 +130,26 @@ class MovieSource(unittest.TestCase):
         first = frame(again, 0)
         self.assertEqual(first.GetFieldData().GetAbstractArray("FrameMethod").GetValue(0),
                          "reused")
+
+    def test_the_frames_are_those_asrt_movie_writes(self):
+        movie = movie_source()
+        with tempfile.TemporaryDirectory() as out:
+            subprocess.run([ASRT, "movie", scene(), "--ramp", "mass=%r:%r" % (FROM, TO),
+                            "-n", str(FRAMES), "-r", "%dx%d" % (SIDE, SIDE), "--quality",
+                            str(TARGET), "-q", "-o", out + "/"],
+                           check=True, stdout=subprocess.DEVNULL)
+            for k in range(FRAMES):
+                reader = vtk.vtkXMLImageDataReader()
+                reader.SetFileName(os.path.join(out, "fig4-mass-start-%03d.vti" % k))
+                reader.Update()
+                written = reader.GetOutput().GetPointData()
+                made = frame(movie, k).GetPointData()
+                for name in ("Colors", "ObjectId", "ImageOrder", "PathLength", "Termination"):
+                    self.assertTrue(
+                        numpy.array_equal(numpy_support.vtk_to_numpy(made.GetArray(name)),
+                                          numpy_support.vtk_to_numpy(written.GetArray(name)),
+                                          equal_nan=True),
+                        "frame %d, %s" % (k, name))
 
     def test_bad_settings_are_errors_naming_the_setting(self):
         cases = [
