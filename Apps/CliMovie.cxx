@@ -62,7 +62,8 @@ the share of its pixels re-traced, and the rays traced against tracing every fra
 With --store, every frame traced whole and every set of pixels re-traced is accumulated in
 PostgreSQL, and whatever is stored already is read instead of traced (whole frames whoever stored
 them: asrt trace --store with --sweep or --orbit of the same frame count stores the same frames).
-Running the same movie again traces nothing and writes the same bytes.
+Running the same movie again traces nothing and writes the same bytes; a movie with more frames
+on the same path (2n - 1 after n) reads every old frame and traces only the new ones' pixels.
 
 The path (one of):
   --ramp P=FROM:TO      P (mass, spin or charge) from FROM to TO, frame k at
