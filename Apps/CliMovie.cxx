@@ -154,20 +154,7 @@ MoviePath orbitPath(const std::string& spec, int n, const std::string& sceneText
 
 MoviePath cameraPath(const std::string& file, int n)
 {
-  const std::vector<tools::CameraPose> keys = tools::parseCameraKeys(readSceneFile(file), file);
-  MoviePath path;
-  path.parameter = "camera key";
-  const double last = static_cast<double>(keys.size() - 1);
-  for (int k = 0; k < n; ++k)
-  {
-    // Frame k at u = (K - 1) k / (n - 1): the keys at u = 0 ... K - 1, the first and last frames
-    // the first and last keys.
-    const double u = last * k / (n - 1);
-    const tools::CameraPose pose = tools::cameraOnPath(keys, u);
-    path.s.push_back(u);
-    path.apply.push_back([pose](vtkGeodesicSource* src) { tools::setCamera(src, pose); });
-  }
-  return path;
+  return cameraKeyMoviePath(parseCameraKeys(readSceneFile(file), file), n);
 }
 
 void stopIfInterrupted()

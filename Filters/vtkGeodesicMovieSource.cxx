@@ -2,10 +2,12 @@
 
 #include "AlgorithmAbort.h"
 #include "ErrorEstimate.h"
+#include "GeodesicCameraPath.h"
 #include "GeodesicMovie.h"
 #include "GeodesicRecordArrays.h"
 #include "InterpolatorPipeline.h"
 #include "RayStore.h"
+#include "SceneFile.h"
 #include "StoreConnection.h"
 #include "vtkGeodesicSource.h"
 
@@ -22,6 +24,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -48,6 +51,7 @@ vtkGeodesicMovieSource::~vtkGeodesicMovieSource()
   this->SetPathParameter(nullptr);
   this->SetStoreConnection(nullptr);
   this->SetStoreLabel(nullptr);
+  this->SetCameraKeysFileName(nullptr);
 }
 
 namespace
@@ -79,6 +83,8 @@ void checkSettings(const char* scene, const std::string& parameter, int frames, 
   if (!(quality > 0.0 && quality <= asrt::kMaxQualityTargetDb))
     throw asrt::InvalidParameter("QualityTarget: the target must lie in (0, 100] dB, got " +
                                  number(quality));
+  if (parameter == "cameras")
+    return;
   if (parameter == "orbit")
   {
     if (!std::isfinite(degrees) || degrees == 0 || std::abs(degrees) > 360)
@@ -88,12 +94,41 @@ void checkSettings(const char* scene, const std::string& parameter, int frames, 
   }
   if (parameter != "mass" && parameter != "spin" && parameter != "charge")
     throw asrt::InvalidParameter("PathParameter: unknown ramp parameter '" +
-                                 parameter.substr(0, 40) + "' (mass, spin, charge or orbit)");
+                                 parameter.substr(0, 40) +
+                                 "' (mass, spin, charge, orbit or cameras)");
   if (!std::isfinite(from) || !std::isfinite(to))
     throw asrt::InvalidParameter("RampFrom, RampTo: must be finite, got " + number(from) + " and " +
                                  number(to));
   if (from == to)
     throw asrt::InvalidParameter("RampFrom, RampTo: equal (" + number(from) + "): no path");
+}
+
+/// The key cameras of the file, read whole (at most a scene file's size).
+std::vector<asrt::CameraPose> cameraKeys(const char* file)
+{
+  const std::string name = text(file);
+  if (name.empty())
+    throw asrt::InvalidParameter("CameraKeysFileName: no key-camera file given");
+  std::ifstream in(name, std::ios::binary);
+  if (!in || !vtksys::SystemTools::FileExists(name, true))
+    throw asrt::InvalidParameter("CameraKeysFileName: cannot read '" + name + "'");
+  std::string content;
+  char chunk[65536];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0)
+  {
+    content.append(chunk, static_cast<std::size_t>(in.gcount()));
+    if (content.size() > asrt::kMaxSceneBytes)
+      throw asrt::InvalidParameter("CameraKeysFileName: '" + name + "' is larger than " +
+                                   std::to_string(asrt::kMaxSceneBytes >> 20) + " MiB");
+  }
+  try
+  {
+    return asrt::parseCameraKeys(content, name);
+  }
+  catch (const asrt::InvalidParameter& e)
+  {
+    throw asrt::InvalidParameter(std::string("CameraKeysFileName: ") + e.what());
+  }
 }
 }
 
@@ -124,6 +159,8 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
         path = asrt::orbitMoviePath(asrt::sceneCameraOfText(sceneText), this->OrbitDegrees,
                                     this->NumberOfFrames);
       }
+      else if (parameter == "cameras")
+        path = asrt::cameraKeyMoviePath(cameraKeys(this->CameraKeysFileName), this->NumberOfFrames);
       else
         path = asrt::rampMoviePath(parameter, this->RampFrom, this->RampTo, this->NumberOfFrames);
       std::vector<asrt::MovieFrame> frames = asrt::movieFrames(source, path);
@@ -265,6 +302,7 @@ void vtkGeodesicMovieSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "RampFrom: " << this->RampFrom << "\n";
   os << indent << "RampTo: " << this->RampTo << "\n";
   os << indent << "OrbitDegrees: " << this->OrbitDegrees << "\n";
+  os << indent << "CameraKeysFileName: " << text(this->CameraKeysFileName) << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";

@@ -4,11 +4,12 @@
  *
  * The movie `asrt movie` makes, frame by frame on request: a scene file, a path (a ramp of the
  * hole's mass, spin or charge from RampFrom to RampTo, or the camera turned about the hole's axis
- * through OrbitDegrees), NumberOfFrames frames and a QualityTarget in dB. The plan (which frames
- * are keys, traced whole; which are interpolated per pixel between them, with the pixels the
- * target needs re-traced; which are traced because that is cheaper) is made once, in the
- * information pass, and again only after a setting changed. Frames are made by asrt::MovieMaker
- * (GeodesicMovie.h), the same code as `asrt movie`: the same settings give the same frames.
+ * through OrbitDegrees, or through key cameras), NumberOfFrames frames and a QualityTarget in dB.
+ * The plan (which frames are keys, traced whole; which are interpolated per pixel between them,
+ * with the pixels the target needs re-traced; which are traced because that is cheaper) is made
+ * once, in the information pass, and again only after a setting changed. Frames are made by
+ * asrt::MovieMaker (GeodesicMovie.h), the same code as `asrt movie`: the same settings give the
+ * same frames.
  *
  * With a StoreConnection, whole frames and re-traced pixels are read from the PostgreSQL store
  * when stored (whoever stored them) and stored when traced. Without one nothing is stored. Either
@@ -21,11 +22,12 @@
  * "Termination", "RaysPerPixel"); field data "FrameMethod" (a string: key, traced, interpolated
  * or reused), "EstimatedPsnr" (infinite for a frame traced or read whole), "ShareRetraced" (of the
  * frame's pixels traced for it, 1 for a frame traced whole, 0 for one read), "PathParameter" (its
- * value at the frame: mass, spin, charge or orbit angle in degrees) and "FrameIndex".
+ * value at the frame: mass, spin, charge, orbit angle in degrees or position among the key
+ * cameras) and "FrameIndex".
  *
  * Bad settings (no scene file, fewer than 2 frames, a target outside (0, 100] or NaN, an unknown
- * ramp parameter, equal ramp ends, an orbit of 0 or more than 360 degrees) are errors naming the
- * setting, and the output is empty.
+ * ramp parameter, equal ramp ends, an orbit of 0 or more than 360 degrees, a key-camera file
+ * missing or invalid) are errors naming the setting, and the output is empty.
  */
 #ifndef vtkGeodesicMovieSource_h
 #define vtkGeodesicMovieSource_h
@@ -50,8 +52,10 @@ public:
 
   ///@{
   /// The path: "mass", "spin" or "charge" (a ramp from RampFrom to RampTo, frame k at
-  /// RampFrom + (RampTo − RampFrom) k / (NumberOfFrames − 1)), or "orbit" (the scene's camera
-  /// turned about the hole's axis through OrbitDegrees; 360 closes the orbit). Default "mass".
+  /// RampFrom + (RampTo − RampFrom) k / (NumberOfFrames − 1)), "orbit" (the scene's camera
+  /// turned about the hole's axis through OrbitDegrees; 360 closes the orbit), or "cameras" (the
+  /// camera through the key cameras of CameraKeysFileName, as asrt movie --cameras). Default
+  /// "mass".
   vtkSetStringMacro(PathParameter);
   vtkGetStringMacro(PathParameter);
   vtkSetMacro(RampFrom, double);
@@ -60,6 +64,8 @@ public:
   vtkGetMacro(RampTo, double);
   vtkSetMacro(OrbitDegrees, double);
   vtkGetMacro(OrbitDegrees, double);
+  vtkSetStringMacro(CameraKeysFileName);
+  vtkGetStringMacro(CameraKeysFileName);
   ///@}
 
   ///@{
@@ -122,6 +128,7 @@ protected:
   double RampFrom = 0.1;
   double RampTo = 1.0;
   double OrbitDegrees = 90.0;
+  char* CameraKeysFileName = nullptr;
   int NumberOfFrames = 24;
   double QualityTarget = 35.0;
   int Resolution[2] = { 0, 0 };

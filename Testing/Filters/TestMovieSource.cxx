@@ -14,6 +14,7 @@
 #include "vtkUnsignedCharArray.h"
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <string>
@@ -262,4 +263,46 @@ TEST(MovieSource, AnOrbitHasItsAnglesAsParameters)
   std::ostringstream printed;
   movie->Print(printed);
   EXPECT_NE(printed.str().find("OrbitDegrees: 20"), std::string::npos);
+}
+
+TEST(MovieSource, ACameraPathThroughKeyCamerasEndsAtTheLastKey)
+{
+  const std::string file = ::testing::TempDir() + "movie-source-cams.json";
+  {
+    std::ofstream out(file);
+    out << R"({"keys": [
+      {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+      {"position": [6, -29, 9], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+      {"position": [12, -27, 10], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]})";
+  }
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  movie->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+  movie->SetPathParameter("cameras");
+  movie->SetCameraKeysFileName(file.c_str());
+  movie->SetNumberOfFrames(3);
+  movie->SetResolution(24, 24);
+  const vtkSmartPointer<vtkImageData> last = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_DOUBLE_EQ(fieldOf(last, "PathParameter"), 2.0); // the third key
+  vtkNew<vtkGeodesicSource> traced;
+  traced->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+  traced->SetResolution(24, 24);
+  traced->SetCameraPosition(12, -27, 10);
+  traced->SetFocalPoint(0, 0, 0);
+  traced->SetViewUp(0, 0, 1);
+  traced->Update();
+  EXPECT_EQ(colours(last), colours(traced->GetOutput()));
+
+  // A file of one key: an error naming the setting and the file's field.
+  {
+    std::ofstream out(file);
+    out << R"({"keys": [{"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]})";
+  }
+  movie->Modified();
+  movie->UpdateTimeStep(0);
+  EXPECT_TRUE(catcher->Mentions("CameraKeysFileName")) << catcher->AllErrors();
+  EXPECT_TRUE(catcher->Mentions("at least 2 key cameras")) << catcher->AllErrors();
+  std::remove(file.c_str());
 }
