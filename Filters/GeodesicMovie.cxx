@@ -359,8 +359,8 @@ struct MovieMaking
 
   /// The re-traced pixels of interpolated frame k: known ones read, else traced (and stored).
   /// With `storeOnly`, a subset not known is NotServed, and nothing is counted or kept.
-  PixelTracer retracedPixels(int k, const FrameTracer& tracer, MovieFrameReport& report,
-                             bool storeOnly)
+  PixelTracer retracedPixels(int k, const std::function<const FrameTracer&()>& tracer,
+                             MovieFrameReport& report, bool storeOnly)
   {
     return [this, k, &tracer, &report, storeOnly](const std::vector<std::pair<int, int>>& pixels)
     {
@@ -386,7 +386,7 @@ struct MovieMaking
       if (storeOnly)
         throw NotServed();
       const auto t0 = std::chrono::steady_clock::now();
-      records = tracer.tracePixels(pixels, this->progress());
+      records = tracer().tracePixels(pixels, this->progress());
       if (this->cancelled())
         throw MovieCancelled();
       const double seconds =
@@ -417,9 +417,19 @@ struct MovieMaking
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene);
-    SceneDescription retrace = this->withTextures(f);
-    retrace.rendering = scatteredPixelRendering(retrace.rendering);
-    const FrameTracer tracer(retrace);
+    // The tracer (the frame's scene, its textures loaded) only once a pixel must be traced: a
+    // frame the store serves whole needs none.
+    std::unique_ptr<FrameTracer> made;
+    const std::function<const FrameTracer&()> tracer = [this, &made, &f]() -> const FrameTracer&
+    {
+      if (!made)
+      {
+        SceneDescription retrace = this->withTextures(f);
+        retrace.rendering = scatteredPixelRendering(retrace.rendering);
+        made = std::make_unique<FrameTracer>(retrace);
+      }
+      return *made;
+    };
     const PathCompletion done =
       completePathFrame(frame, this->retracedPixels(k, tracer, report, storeOnly),
                         maker.Settings.quality, kMovieProbeFraction);
