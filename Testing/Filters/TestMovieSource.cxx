@@ -7,6 +7,7 @@
 
 #include "MoviePlan.h"
 
+#include "vtkCallbackCommand.h"
 #include "vtkFieldData.h"
 #include "vtkInformation.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
@@ -305,4 +306,32 @@ TEST(MovieSource, ACameraPathThroughKeyCamerasEndsAtTheLastKey)
   EXPECT_TRUE(catcher->Mentions("CameraKeysFileName")) << catcher->AllErrors();
   EXPECT_TRUE(catcher->Mentions("at least 2 key cameras")) << catcher->AllErrors();
   std::remove(file.c_str());
+}
+
+TEST(MovieSource, AnAbortStopsTheFrameAndTheNextRequestMakesIt)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  // Abort at the first progress report of the first key frame's trace.
+  vtkNew<vtkCallbackCommand> abort;
+  abort->SetCallback(
+    [](vtkObject* caller, unsigned long, void*, void* callData)
+    {
+      const double progress = *static_cast<double*>(callData);
+      if (progress > 0.05 && progress < 1.0)
+        static_cast<vtkAlgorithm*>(caller)->SetAbortExecute(1);
+    });
+  const unsigned long tag = movie->AddObserver(vtkCommand::ProgressEvent, abort);
+  movie->UpdateTimeStep(1);
+  EXPECT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(movie->GetOutput()->GetNumberOfPoints(), 0);
+  EXPECT_LT(movie->GetRaysTraced(), 1.0 * kSide * kSide); // stopped inside the first key frame
+  movie->RemoveObserver(tag);
+  movie->SetAbortExecute(0);
+  const vtkSmartPointer<vtkImageData> frame = frameAt(movie, 1);
+  EXPECT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(frame->GetNumberOfPoints(), kSide * kSide);
+  EXPECT_EQ(methodOf(frame), "interpolated");
 }
