@@ -353,7 +353,6 @@ int runMovie(const std::vector<std::string>& args)
   }
 
   const std::vector<MovieFrame> frames = movieFrames(source, path);
-  const std::string describeFirst = frames.front().describe;
   // Connect before tracing: an unreachable database should not cost a trace first.
   std::unique_ptr<RayStore> store;
   if (settings.store)
