@@ -1,19 +1,10 @@
-// asrt movie: a movie along a path (a ramp of mass, spin or charge, or an orbit of the camera) at
-// a quality target, for as few traced rays as the plan (MoviePlan.h) can manage: key frames
-// traced whole, the others interpolated per pixel between them (PathInterpolation.h) with the
-// pixels the target needs re-traced, or traced whole where that is cheaper. With --store, every
-// whole frame and every re-traced subset of pixels is accumulated in PostgreSQL, and whatever is
-// stored already is read instead of traced.
-//
-// Reuse. A whole frame is found by its identity (the scene at the frame's parameters), whoever
-// stored it (asrt trace --store, --sweep, --orbit: the same parameters give the same identity).
-// The pixels an interpolated frame re-traces are stored as subset frames, as the splat
-// interpolator's StoreRetracedRays does: the scene at the frame's parameters with a "subset"
-// naming the pixels (count and digest), so they never pass for the whole frame. completePathFrame
-// asks for two lists of pixels, each a function of the keys and of the records traced before; the
-// same keys therefore ask for the same lists, which the store then has. The plan is stable under
-// storing its own whole frames (MoviePlan.h), so running the same movie again has the same keys:
-// it traces nothing and writes the same bytes.
+// asrt movie: a movie along a path (a ramp of mass, spin or charge, an orbit of the camera, or a
+// path through key cameras) at a quality target, for as few traced rays as the plan (MoviePlan.h)
+// can manage. The movie itself is made by asrt::MovieMaker (GeodesicMovie.h), which
+// vtkGeodesicMovieSource shares: key frames traced whole or read from the store, the others
+// interpolated per pixel with the pixels the target needs re-traced, and with --store every
+// whole frame and every re-traced subset accumulated in PostgreSQL and reused. This file reads
+// the command line, writes the files as one set and prints the table.
 #include "Cli.h"
 
 #include "AtomicFile.h"
@@ -26,13 +17,10 @@
 #include "VtkMessages.h"
 
 #include "ErrorEstimate.h"
-#include "FrameTracer.h"
+#include "GeodesicMovie.h"
 #include "GeodesicRecordArrays.h"
-#include "GeodesicSceneLoading.h"
 #include "MoviePlan.h"
-#include "PathInterpolation.h"
 #include "RayStore.h"
-#include "SceneFile.h"
 #include "vtkGeodesicSource.h"
 
 #include "vtkImageData.h"
@@ -41,14 +29,9 @@
 #include <vtksys/SystemTools.hxx>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <functional>
-#include <limits>
-#include <map>
 #include <memory>
-#include <optional>
 
 namespace asrt
 {
@@ -79,7 +62,8 @@ the share of its pixels re-traced, and the rays traced against tracing every fra
 With --store, every frame traced whole and every set of pixels re-traced is accumulated in
 PostgreSQL, and whatever is stored already is read instead of traced (whole frames whoever stored
 them: asrt trace --store with --sweep or --orbit of the same frame count stores the same frames).
-Running the same movie again traces nothing and writes the same bytes.
+Running the same movie again traces nothing and writes the same bytes; a movie with more frames
+on the same path (2n - 1 after n) reads every old frame and traces only the new ones' pixels.
 
 The path (one of):
   --ramp P=FROM:TO      P (mass, spin or charge) from FROM to TO, frame k at
@@ -112,32 +96,6 @@ Examples:
   asrt movie Data/scenes/fig1-cylinders.json --cameras flight.json -n 48 -r 200x200 -o flight/
 )";
 
-constexpr int kMaxMovieFrames = 10000;
-/// The prior of the re-trace share (SpacingShareModel): a quarter of a frame re-traced, beyond the
-/// probes, between keys a quarter of the path apart. The paper's mass ramp re-traced 23 % in
-/// exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README, "Interpolated movies").
-constexpr double kPriorSlope = 1.0;
-/// completePathFrame's default probe share, the floor of the estimate.
-constexpr double kProbeFraction = 0.01;
-
-/// One frame of the movie: where it lies on the path and which scene it is.
-struct MovieFrame
-{
-  double s = 0;
-  std::string describe;
-  std::string sceneText;     ///< the effective scene text at the frame's parameters
-  SceneDescription identity; ///< without textures: the frame's identity in the store
-  std::optional<std::int64_t> storedId;
-};
-
-/// The path: a setting of the source per frame, and its parameter.
-struct PathFrames
-{
-  std::string parameter; ///< "mass", "spin", "charge" or "orbit angle"
-  std::vector<double> s;
-  std::vector<std::function<void(vtkGeodesicSource*)>> apply;
-};
-
 std::string formatNumber(double v)
 {
   char text[32];
@@ -145,7 +103,7 @@ std::string formatNumber(double v)
   return text;
 }
 
-PathFrames rampPath(const std::string& spec, int n)
+MoviePath rampPath(const std::string& spec, int n)
 {
   const std::size_t eq = spec.find('=');
   const std::string parameter = spec.substr(0, eq);
@@ -161,36 +119,20 @@ PathFrames rampPath(const std::string& spec, int n)
     throw UsageError("--ramp: expected " + parameter + "=FROM:TO, got " + quotedArgument(spec));
   const double from = parseNumber("--ramp", range.substr(0, colon));
   const double to = parseNumber("--ramp", range.substr(colon + 1));
-  if (from == to)
-    throw UsageError("--ramp: FROM and TO are equal (" + formatNumber(from) + "): no path");
-  PathFrames path;
-  path.parameter = parameter;
-  for (int k = 0; k < n; ++k)
+  try
   {
-    // The formula of asrt trace --sweep, so that its frames are these frames.
-    const double v = from + (to - from) * k / (n - 1);
-    path.s.push_back(v);
-    path.apply.push_back(
-      [parameter, v](vtkGeodesicSource* src)
-      {
-        if (parameter == "mass")
-          src->SetMass(v);
-        else if (parameter == "spin")
-          src->SetSpin(v);
-        else
-          src->SetCharge(v);
-      });
+    return rampMoviePath(parameter, from, to, n);
   }
-  return path;
+  catch (const InvalidParameter& e)
+  {
+    throw UsageError(std::string("--") + e.what());
+  }
 }
 
-PathFrames orbitPath(const std::string& spec, int n, const std::string& sceneText,
-                     const Options& options)
+MoviePath orbitPath(const std::string& spec, int n, const std::string& sceneText,
+                    const Options& options)
 {
   const double degrees = parseNumber("--orbit", spec);
-  if (degrees == 0 || std::abs(degrees) > 360)
-    throw UsageError("--orbit: DEGREES must be nonzero and at most 360 in magnitude, got " +
-                     quotedArgument(spec));
   tools::CameraPose pose = tools::sceneCameraOfText(sceneText);
   auto override = [&options](const char* name, Vec3& v)
   {
@@ -200,223 +142,25 @@ PathFrames orbitPath(const std::string& spec, int n, const std::string& sceneTex
   override("camera", pose.position);
   override("focal", pose.focalPoint);
   override("view-up", pose.viewUp);
-  PathFrames path;
-  path.parameter = "orbit angle";
-  for (int k = 0; k < n; ++k)
+  try
   {
-    const double angle = tools::orbitAngle(k, n, degrees);
-    const tools::CameraPose turned = tools::turnedAboutZ(pose, angle);
-    path.s.push_back(angle);
-    path.apply.push_back([turned](vtkGeodesicSource* src) { tools::setCamera(src, turned); });
+    return orbitMoviePath(pose, degrees, n);
   }
-  return path;
+  catch (const InvalidParameter& e)
+  {
+    throw UsageError(std::string("--") + e.what());
+  }
 }
 
-PathFrames cameraPath(const std::string& file, int n)
+MoviePath cameraPath(const std::string& file, int n)
 {
-  const std::vector<tools::CameraPose> keys = tools::parseCameraKeys(readSceneFile(file), file);
-  PathFrames path;
-  path.parameter = "camera key";
-  const double last = static_cast<double>(keys.size() - 1);
-  for (int k = 0; k < n; ++k)
-  {
-    // Frame k at u = (K - 1) k / (n - 1): the keys at u = 0 ... K - 1, the first and last frames
-    // the first and last keys.
-    const double u = last * k / (n - 1);
-    const tools::CameraPose pose = tools::cameraOnPath(keys, u);
-    path.s.push_back(u);
-    path.apply.push_back([pose](vtkGeodesicSource* src) { tools::setCamera(src, pose); });
-  }
-  return path;
-}
-
-/// The frames' scenes, each checked (a camera sent inside the horizon, a spin ramped past the
-/// mass) before anything is traced.
-std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const PathFrames& path)
-{
-  std::vector<MovieFrame> frames(path.s.size());
-  for (std::size_t k = 0; k < frames.size(); ++k)
-  {
-    MovieFrame& f = frames[k];
-    f.s = path.s[k];
-    f.describe = path.parameter + " = " + formatNumber(f.s);
-    path.apply[k](source);
-    tools::VtkMessageCatcher messages;
-    messages.watch(source);
-    f.sceneText = source->GetFrameSceneText();
-    if (messages.failed() || f.sceneText.empty())
-      throw InputError("frame " + std::to_string(k) + " (" + f.describe +
-                       "): " + messages.firstError());
-    f.identity = parseSceneWithoutImages(f.sceneText);
-  }
-  return frames;
-}
-
-/// Everything a run shares: the frames, the store, the counts.
-struct MovieRun
-{
-  std::vector<MovieFrame> frames;
-  std::string textureDirectory;
-  std::unique_ptr<RayStore> store;
-  std::string label;
-  double maxFailedShare = kDefaultMaxFailedShare;
-  int width = 0, height = 0;
-  std::map<int, std::vector<RayRecord>> wholeFrames; ///< the keys' records, in pixel order
-  double raysTraced = 0;                             ///< this run
-  double raysOfMovie = 0; ///< traced now or read from the store: what the movie cost in all
-  double raysOfKeys = 0;  ///< of the whole frames, traced or read
-  int wholeCount = 0;
-};
-
-double raysOf(const std::vector<RayRecord>& records)
-{
-  double rays = 0;
-  for (const RayRecord& r : records)
-    rays += r.raysPerPixel;
-  return rays;
+  return cameraKeyMoviePath(parseCameraKeys(readSceneFile(file), file), n);
 }
 
 void stopIfInterrupted()
 {
   if (tools::interruptRequested())
     throw Interrupted();
-}
-
-/// Stores a frame (whole or a subset). Another writer may have stored it since it was looked up:
-/// then its copy stands.
-void storeFrame(MovieRun& run, const SceneDescription& identity,
-                const std::vector<RayRecord>& records, double seconds)
-{
-  try
-  {
-    run.store->writeFrame(
-      identity, run.label, records,
-      FrameWriteOptions().tracedIn(seconds).cancelledWhen(&tools::interruptRequested));
-  }
-  catch (const StoreError&)
-  {
-    stopIfInterrupted();
-    if (!run.store->findFrame(identity))
-      throw;
-  }
-}
-
-SceneDescription sceneWithTextures(const MovieRun& run, const MovieFrame& f)
-{
-  return loadScene(f.sceneText.c_str(), nullptr, run.textureDirectory.c_str());
-}
-
-/// A whole frame's records, in pixel order: read from the store, or traced (and stored).
-std::vector<RayRecord> wholeFrame(MovieRun& run, int k)
-{
-  const MovieFrame& f = run.frames[static_cast<std::size_t>(k)];
-  std::vector<RayRecord> records;
-  if (f.storedId)
-  {
-    records = run.store->readFrame(*f.storedId);
-    std::sort(records.begin(), records.end(),
-              [](const RayRecord& a, const RayRecord& b)
-              { return a.j != b.j ? a.j < b.j : a.i < b.i; });
-    if (records.size() != static_cast<std::size_t>(run.width) * run.height)
-      throw DatabaseError("stored frame " + std::to_string(*f.storedId) + " has " +
-                          std::to_string(records.size()) + " rays, the movie's frames " +
-                          std::to_string(run.width * run.height) + " pixels");
-  }
-  else
-  {
-    const FrameTracer tracer(sceneWithTextures(run, f));
-    const auto t0 = std::chrono::steady_clock::now();
-    records = tracer.traceRows(0, run.height, [](double) { return !tools::interruptRequested(); });
-    stopIfInterrupted();
-    const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    vtkNew<vtkImageData> image;
-    recordsToImage(records, run.width, 0, run.height, image);
-    // A frame with too many failed rays is no picture of its scene: neither written nor stored.
-    checkRayEnds(image, run.maxFailedShare, "frame " + std::to_string(k) + " (" + f.describe + ")");
-    run.raysTraced += raysOf(records);
-    if (run.store)
-      storeFrame(run, f.identity, records, seconds);
-  }
-  run.raysOfMovie += raysOf(records);
-  run.raysOfKeys += raysOf(records);
-  ++run.wholeCount;
-  return records;
-}
-
-/// What made one frame, for the table.
-struct FrameReport
-{
-  FrameMethod method = FrameMethod::Key;
-  double estimatedPsnr = std::numeric_limits<double>::infinity();
-  double shareRetraced = 0;
-  double raysTraced = 0;
-  double raysReused = 0;
-};
-
-/// The re-traced pixels of interpolated frame k: read from the store when it has exactly that
-/// subset at the frame's parameters, else traced (and stored).
-PixelTracer retracedPixels(MovieRun& run, int k, const FrameTracer& tracer, FrameReport& report)
-{
-  return [&run, k, &tracer, &report](const std::vector<std::pair<int, int>>& pixels)
-  {
-    std::vector<RayRecord> records;
-    if (pixels.empty())
-      return records;
-    SceneDescription subset = run.frames[static_cast<std::size_t>(k)].identity;
-    subset.subset = pixelSubsetId(pixels);
-    subset.rendering = scatteredPixelRendering(subset.rendering); // as the tracer traces them
-    if (run.store)
-      if (const auto id = run.store->findFrame(subset))
-      {
-        std::map<std::pair<int, int>, RayRecord> byPixel;
-        for (const RayRecord& r : run.store->readFrame(*id))
-          byPixel.emplace(std::make_pair(r.i, r.j), r);
-        for (const auto& ij : pixels)
-        {
-          const auto found = byPixel.find(ij);
-          if (found == byPixel.end())
-            throw DatabaseError("stored subset frame " + std::to_string(*id) + " lacks pixel (" +
-                                std::to_string(ij.first) + ", " + std::to_string(ij.second) +
-                                ") that its digest names");
-          records.push_back(found->second);
-        }
-        report.raysReused += raysOf(records);
-        run.raysOfMovie += raysOf(records);
-        return records;
-      }
-    const auto t0 = std::chrono::steady_clock::now();
-    records = tracer.tracePixels(pixels, [](double) { return !tools::interruptRequested(); });
-    stopIfInterrupted();
-    const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    report.raysTraced += raysOf(records);
-    run.raysTraced += raysOf(records);
-    run.raysOfMovie += raysOf(records);
-    if (run.store)
-      storeFrame(run, subset, records, seconds);
-    return records;
-  };
-}
-
-/// Interpolated frame k between the plan's keys, completed to the target.
-std::vector<RayRecord> interpolatedFrame(MovieRun& run, int k, const Scene& shading,
-                                         double direction, double quality, FrameReport& report)
-{
-  std::vector<PathKey> keys;
-  for (const auto& [key, records] : run.wholeFrames)
-    keys.push_back({ direction * run.frames[static_cast<std::size_t>(key)].s, &records });
-  const MovieFrame& f = run.frames[static_cast<std::size_t>(k)];
-  PathFrame frame = interpolateAlongPath(keys, direction * f.s, run.width, run.height, shading);
-  SceneDescription retrace = sceneWithTextures(run, f);
-  retrace.rendering = scatteredPixelRendering(retrace.rendering);
-  const FrameTracer tracer(retrace);
-  const PathCompletion done =
-    completePathFrame(frame, retracedPixels(run, k, tracer, report), quality, kProbeFraction);
-  report.estimatedPsnr = done.estimatedPsnr;
-  report.shareRetraced = static_cast<double>(done.retraced) / static_cast<double>(run.width) /
-                         static_cast<double>(run.height);
-  return std::move(frame.records);
 }
 
 std::string psnrText(double db)
@@ -449,7 +193,7 @@ void printPlan(const MoviePlan& plan, const std::vector<MovieFrame>& frames,
 }
 
 /// The command line's movie settings, checked before anything is read or traced.
-struct MovieSettings
+struct MovieOptions
 {
   int count = 24;
   double quality = 35;
@@ -457,9 +201,9 @@ struct MovieSettings
   bool plan = false, quiet = false, store = false;
 };
 
-MovieSettings movieSettings(const Options& options)
+MovieOptions movieOptions(const Options& options)
 {
-  MovieSettings m;
+  MovieOptions m;
   m.count = options.positiveInteger("frames").value_or(24);
   if (m.count < 2 || m.count > kMaxMovieFrames)
     throw UsageError("--frames: a movie has 2 to " + std::to_string(kMaxMovieFrames) +
@@ -482,50 +226,25 @@ MovieSettings movieSettings(const Options& options)
 }
 
 /// Makes every frame and writes it into the set, in order; fills `reports`.
-void makeFrames(MovieRun& run, const MoviePlan& plan, const Scene& shading,
-                const MovieSettings& settings, tools::AtomicFileSet& files,
+void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFileSet& files,
                 tools::MovieWriter& movie, const std::string& prefix,
-                std::vector<FrameReport>& reports)
+                std::vector<MovieFrameReport>& reports)
 {
-  const int n = static_cast<int>(run.frames.size());
-  const std::vector<int> keys = plan.keys();
+  const int n = static_cast<int>(maker.frames().size());
   tools::ProgressBar bar("movie of " + std::to_string(n) + " frames",
                          settings.quiet ? tools::ProgressBar::Style::Silent
                                         : tools::ProgressBar::Style::Automatic);
-  const double steps = static_cast<double>(keys.size() + static_cast<std::size_t>(n));
+  const double steps =
+    static_cast<double>(maker.plan().keys().size() + static_cast<std::size_t>(n));
   double done = 0;
-  for (int k : keys)
-  {
-    run.wholeFrames[k] = wholeFrame(run, k);
-    bar.update(++done / steps);
-  }
-  const double direction = run.frames.back().s > run.frames.front().s ? 1.0 : -1.0;
+  maker.makeKeys([&] { bar.update(++done / steps); });
   tools::PvdCollection series;
-  reports.assign(run.frames.size(), FrameReport());
+  reports.assign(maker.frames().size(), MovieFrameReport());
   for (int k = 0; k < n; ++k)
   {
-    FrameReport& report = reports[static_cast<std::size_t>(k)];
-    report.method = plan.frames[static_cast<std::size_t>(k)].method;
-    std::vector<RayRecord> interpolated;
-    const std::vector<RayRecord>* records = nullptr;
-    if (report.method == FrameMethod::Interpolated)
-    {
-      interpolated = interpolatedFrame(run, k, shading, direction, settings.quality, report);
-      records = &interpolated;
-    }
-    else
-    {
-      records = &run.wholeFrames.at(k);
-      if (!run.frames[static_cast<std::size_t>(k)].storedId)
-      {
-        report.raysTraced = raysOf(*records);
-        report.shareRetraced = 1;
-      }
-      else
-        report.raysReused = raysOf(*records);
-    }
+    const std::vector<RayRecord> records = maker.frame(k, reports[static_cast<std::size_t>(k)]);
     vtkNew<vtkImageData> image;
-    recordsToImage(*records, run.width, 0, run.height, image);
+    recordsToImage(records, maker.width(), 0, maker.height(), image);
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
     tools::writePng(image, files.add(prefix + number + ".png"));
@@ -545,28 +264,29 @@ void makeFrames(MovieRun& run, const MoviePlan& plan, const Scene& shading,
   bar.finish("-> " + prefix + "-*.png");
 }
 
-void printReport(const MovieRun& run, const MoviePlan& plan,
-                 const std::vector<FrameReport>& reports, const std::string& parameter)
+void printReport(MovieMaker& maker, const std::vector<MovieFrameReport>& reports)
 {
-  std::printf("%5s %12s %-12s %9s %10s %12s %12s\n", "frame", parameter.c_str(), "method",
+  const MoviePlan& plan = maker.plan();
+  std::printf("%5s %12s %-12s %9s %10s %12s %12s\n", "frame", maker.parameter().c_str(), "method",
               "est.PSNR", "retraced%", "rays traced", "rays reused");
   for (std::size_t k = 0; k < reports.size(); ++k)
   {
-    const FrameReport& r = reports[k];
-    std::printf("%5zu %12.6g %-12s %9s %10.1f %12.0f %12.0f\n", k, run.frames[k].s,
+    const MovieFrameReport& r = reports[k];
+    std::printf("%5zu %12.6g %-12s %9s %10.1f %12.0f %12.0f\n", k, maker.frames()[k].s,
                 toString(r.method), psnrText(r.estimatedPsnr).c_str(), 100 * r.shareRetraced,
                 r.raysTraced, r.raysReused);
   }
   // Tracing every frame: each as many rays as the whole frames took on average (measured).
-  const double perFrame = run.wholeCount > 0 ? run.raysOfKeys / run.wholeCount : 0;
+  const double perFrame = maker.wholeCount() > 0 ? maker.raysOfKeys() / maker.wholeCount() : 0;
   const double direct = perFrame * static_cast<double>(reports.size());
-  std::printf("rays traced: %.0f\n", run.raysTraced);
+  std::printf("rays traced: %.0f\n", maker.raysTraced());
   std::printf("the movie's rays, traced now or before: %.0f; tracing every frame: %.0f "
               "(%.0f a frame, measured); ratio %.3f\n",
-              run.raysOfMovie, direct, perFrame, direct > 0 ? run.raysOfMovie / direct : 0.0);
+              maker.raysOfMovie(), direct, perFrame,
+              direct > 0 ? maker.raysOfMovie() / direct : 0.0);
   // The plan counts a frame as its pixels (its decisions depend only on ratios); in measured
   // rays a frame, its estimate is:
-  const double scale = perFrame / (static_cast<double>(run.width) * run.height);
+  const double scale = perFrame / (static_cast<double>(maker.width()) * maker.height());
   std::printf("the plan estimated %.0f rays against %.0f for tracing every frame not stored (at "
               "the measured rays a frame)\n",
               plan.estimatedRays * scale, plan.directRays * scale);
@@ -596,8 +316,8 @@ int runMovie(const std::vector<std::string>& args)
   }
   options.expectPositional(1, 1, "the scene file (asrt movie SCENE.json --ramp mass=0.1:1.2)");
   const std::string scenePath = options.positional()[0];
-  const MovieSettings settings = movieSettings(options);
-  PathFrames path;
+  const MovieOptions settings = movieOptions(options);
+  MoviePath path;
   if (options.has("ramp"))
   {
     path = rampPath(options.get("ramp"), settings.count);
@@ -632,45 +352,45 @@ int runMovie(const std::vector<std::string>& args)
     throw UsageError(std::string("--movie/--fps: ") + e.what());
   }
 
-  MovieRun run;
-  run.frames = movieFrames(source, path);
-  run.width = run.frames.front().identity.camera.width;
-  run.height = run.frames.front().identity.camera.height;
-  run.maxFailedShare = maxFailedShare(options);
-  run.textureDirectory = vtksys::SystemTools::GetFilenamePath(scenePath);
-  run.label = options.get("store");
+  const std::vector<MovieFrame> frames = movieFrames(source, path);
   // Connect before tracing: an unreachable database should not cost a trace first.
+  std::unique_ptr<RayStore> store;
   if (settings.store)
   {
-    run.store = std::make_unique<RayStore>(databaseConnection(options));
-    limitReads(*run.store);
-    run.store->migrate();
+    store = std::make_unique<RayStore>(databaseConnection(options));
+    limitReads(*store);
+    store->migrate();
   }
-  std::vector<bool> stored(run.frames.size(), false);
-  for (std::size_t k = 0; k < run.frames.size() && run.store; ++k)
+  asrt::MovieSettings making;
+  making.quality = settings.quality;
+  making.textureDirectory = vtksys::SystemTools::GetFilenamePath(scenePath);
+  making.label = options.get("store");
+  making.cancelled = &tools::interruptRequested;
+  const double failedShare = maxFailedShare(options);
+  making.checkTraced = [failedShare, &frames](const std::vector<RayRecord>& records, int k)
   {
-    run.frames[k].storedId = run.store->findFrame(run.frames[k].identity);
-    stored[k] = run.frames[k].storedId.has_value();
-  }
-  SpacingShareModel share;
-  share.pathLength = std::abs(path.s.back() - path.s.front());
-  share.floor = std::min(1.0, std::max(kProbeFraction, 64.0 / (run.width * run.height)));
-  share.slope = kPriorSlope;
-  MovieCostModel model;
-  model.frameRays = static_cast<double>(run.width) * run.height;
-  model.retraceShare = share.function();
-  const MoviePlan plan = planMovie(path.s, stored, model);
-  if (settings.plan)
-  {
-    printPlan(plan, run.frames, path.parameter);
-    return kOk;
-  }
-
-  const SceneDescription shading = sceneWithTextures(run, run.frames.front());
-  std::vector<FrameReport> reports;
+    vtkNew<vtkImageData> image;
+    recordsToImage(records, frames.front().identity.camera.width, 0,
+                   frames.front().identity.camera.height, image);
+    checkRayEnds(image, failedShare,
+                 "frame " + std::to_string(k) + " (" +
+                   frames[static_cast<std::size_t>(k)].describe + ")");
+  };
+  MovieMaker maker(frames, path.parameter, store.get(), making);
+  std::vector<MovieFrameReport> reports;
   try
   {
-    makeFrames(run, plan, *shading.scene, settings, files, *movie, prefix, reports);
+    const MoviePlan& plan = maker.plan();
+    if (settings.plan)
+    {
+      printPlan(plan, maker.frames(), path.parameter);
+      return kOk;
+    }
+    makeFrames(maker, settings, files, *movie, prefix, reports);
+  }
+  catch (const MovieCancelled&)
+  {
+    throw Interrupted();
   }
   catch (const StoreError&)
   {
@@ -678,12 +398,12 @@ int runMovie(const std::vector<std::string>& args)
     stopIfInterrupted();
     throw;
   }
-  std::printf("movie of %zu frames along the %s, quality target %s dB%s\n", run.frames.size(),
+  std::printf("movie of %zu frames along the %s, quality target %s dB%s\n", frames.size(),
               path.parameter.c_str(), formatNumber(settings.quality).c_str(),
-              run.store ? ", accumulated in the store" : "");
-  printReport(run, plan, reports, path.parameter);
+              store ? ", accumulated in the store" : "");
+  printReport(maker, reports);
   std::printf("  wrote %s-000.png ... %s-%03zu.png (and .vti), %s.pvd, %s\n", prefix.c_str(),
-              prefix.c_str(), run.frames.size() - 1, prefix.c_str(), moviePath.c_str());
+              prefix.c_str(), frames.size() - 1, prefix.c_str(), moviePath.c_str());
   return kOk;
 }
 }

@@ -217,6 +217,48 @@ MoviePlan planMovie(const std::vector<double>& s, const std::vector<bool>& store
   return plan;
 }
 
+std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
+                                           const std::vector<bool>& stored,
+                                           const std::vector<bool>& served,
+                                           const MovieCostModel& model)
+{
+  checkInput(s, stored, model);
+  if (!served.empty() && served.size() != s.size())
+    throw InvalidParameter("movie plan: " + std::to_string(served.size()) + " served flags for " +
+                           std::to_string(s.size()) + " frames");
+  const std::size_t n = s.size();
+  if (stored.empty() || !stored.front() || !stored.back())
+    return std::nullopt;
+  MoviePlan plan;
+  plan.frames.assign(n, FramePlan());
+  std::size_t before = 0;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    FramePlan& f = plan.frames[k];
+    plan.tracedAllRays += model.frameRays;
+    if (stored[k])
+    {
+      f.method = FrameMethod::Reused;
+      before = k;
+      continue;
+    }
+    plan.directRays += model.frameRays;
+    std::size_t after = k + 1;
+    while (!stored[after])
+      ++after;
+    const double share = model.retraceShare(s[before], s[after], s[k]);
+    if (!(share >= 0 && share < 1))
+      return std::nullopt;
+    f.method = FrameMethod::Interpolated;
+    f.keyBefore = static_cast<int>(before);
+    f.keyAfter = static_cast<int>(after);
+    f.share = share;
+    f.rays = !served.empty() && served[k] ? 0.0 : share * model.frameRays;
+    plan.estimatedRays += f.rays;
+  }
+  return plan;
+}
+
 double SpacingShareModel::share(double keyA, double keyB) const
 {
   const double spacing = std::abs(keyB - keyA) / (this->pathLength > 0 ? this->pathLength : 1.0);

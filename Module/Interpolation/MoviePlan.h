@@ -23,6 +23,15 @@
 // frame it traces whole stored, the movie has the same keys and interpolates the same frames
 // between the same keys (which is what makes a second run trace nothing). Frames traced because
 // interpolating costs more are keys too.
+//
+// More frames on the same path. A denser movie over a path stored before (twice the frames:
+// every old frame is a frame of the new one) costs the bisection more to interpolate, so it may
+// add keys; but a new key changes the keys of the old interpolated frames near it, whose stored
+// re-traced pixels then no longer serve. planBetweenStored() is the other candidate: the stored
+// frames as the only keys, every other frame interpolated between the stored frames around it,
+// and the frames the caller knows to be served whole by the store at those keys costing nothing.
+// The caller takes the cheaper; when the stored frames are all an earlier plan's keys and its
+// frames are all served, that is the earlier movie's plan with the new frames between.
 #ifndef asrt_MoviePlan_h
 #define asrt_MoviePlan_h
 
@@ -30,6 +39,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +92,17 @@ struct MoviePlan
 ASRTINTERPOLATION_EXPORT MoviePlan planMovie(const std::vector<double>& s,
                                              const std::vector<bool>& stored,
                                              const MovieCostModel& model);
+
+/// The plan whose keys are exactly the stored frames: every other frame interpolated between the
+/// stored frames before and after it, at no cost where `served[k]` (its re-traced pixels are
+/// stored for those keys already), else at its estimated share. None when the first or last
+/// frame is not stored, or a frame's estimate between its stored neighbours is not below 1 (it
+/// would be traced, and so become a key). `served` is empty (none) or one flag per frame. Throws
+/// InvalidParameter as planMovie does.
+ASRTINTERPOLATION_EXPORT std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
+                                                                    const std::vector<bool>& stored,
+                                                                    const std::vector<bool>& served,
+                                                                    const MovieCostModel& model);
 
 /// The re-trace share as a function of the keys' spacing: floor + slope · |keyB − keyA| /
 /// pathLength, where the floor is the probes' share. Between two keys, the pixels an

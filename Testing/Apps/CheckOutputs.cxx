@@ -2,7 +2,8 @@
 // the Ogg inspector): each exists, reads back, and holds what it should.
 // Usage: asrtCheckOutputs SPEC...   where SPEC is
 //   PATH.png[=WxH]  a PNG of that size with more than one colour (not a blank picture)
-//   PATH.vti[=WxH]  VTK image data of that size with an RGB "Colors" array
+//   PATH.vti[=WxH]  VTK image data of that size with an RGB "Colors" array (the sum of its
+//                   "RaysPerPixel", if any, is printed: "..., N rays")
 //   PATH.vtp[=N]    VTK poly data with points (N of them)
 //   PATH.pvd[=N]    a ParaView collection of N datasets whose files all exist
 //   PATH.ogv[=N]    an Ogg Theora movie (well-formed pages) of N frames
@@ -12,6 +13,7 @@
 //                   MSE)) is at least DB
 #include "OggTheoraFile.h"
 
+#include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkPNGReader.h"
@@ -136,7 +138,17 @@ std::string check(std::string spec)
     require(reader->CanReadFile(path.c_str()) != 0, path, "is not VTK XML image data");
     reader->SetFileName(path.c_str());
     reader->Update();
-    return "VTI " + checkImage(reader->GetOutput(), path, expect, "Colors");
+    std::string what = "VTI " + checkImage(reader->GetOutput(), path, expect, "Colors");
+    // The rays a traced frame took (anti-aliasing's extra rays counted), for scripts that
+    // compare what a run traced with tracing the frames directly.
+    if (vtkDataArray* rays = reader->GetOutput()->GetPointData()->GetArray("RaysPerPixel"))
+    {
+      double sum = 0;
+      for (vtkIdType p = 0; p < rays->GetNumberOfTuples(); ++p)
+        sum += rays->GetComponent(p, 0);
+      what += ", " + std::to_string(static_cast<long long>(sum)) + " rays";
+    }
+    return what;
   }
   if (ext == ".vtp")
   {

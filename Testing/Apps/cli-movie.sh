@@ -2,7 +2,9 @@
 # asrt movie against a throwaway server, which asrtWithThrowawayPostgres started and named in the
 # PG* variables: a small mass ramp of Figs. 4-5 at --quality 35, every frame checked against the
 # frame this script traces itself at that frame's parameters; the same movie again traces no ray
-# and writes the same bytes; and the refusals, each with its exit code and nothing written.
+# and writes the same bytes; twice the frames on the same path reuses every old frame and traces
+# fewer rays than its new frames would take traced directly; and the refusals, each with its exit
+# code and nothing written.
 # Usage: cli-movie.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
@@ -43,6 +45,29 @@ for k in 0 1 2 3 4 5 6; do
   cmp "first/fig4-mass-start-00$k.png" "second/fig4-mass-start-00$k.png"
   cmp "first/fig4-mass-start-00$k.vti" "second/fig4-mass-start-00$k.vti"
 done
+
+step "twice the frames on the same path: the old frames reused whole, only the new ones traced"
+out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 13 \
+  -r 48x48 --quality 35 -q --store -o double/)"
+echo "$out"
+# Frame k of the first movie is frame 2k of this one: read from the store, not traced again.
+for k in 0 6 12; do grep -Eq "^ +$k +[0-9.]+ +reused " <<< "$out"; done
+if awk '$1 ~ /^[0-9]+$/ && NF == 7 && $1 % 2 == 0 && $6 != 0 { found = 1 } END { exit !found }' \
+  <<< "$out"; then echo "the denser movie traced rays for an old frame" >&2; exit 1; fi
+for k in 0 1 2 3 4 5 6; do
+  cmp "first/fig4-mass-start-00$k.png" "double/fig4-mass-start-$(printf %03d $((2 * k))).png"
+done
+traced="$(sed -n 's/^rays traced: \([0-9]*\)$/\1/p' <<< "$out")"
+# The new frames traced directly, their rays counted from their frames' RaysPerPixel.
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:13 -r 48x48 --formats vti -q -o direct > /dev/null
+direct=0
+for k in 1 3 5 7 9 11; do
+  rays="$("$check" "direct-$(printf %03d "$k").vti=48x48" | sed -n 's/.*, \([0-9]*\) rays$/\1/p')"
+  direct=$((direct + rays))
+done
+echo "twice the frames: the second run traced $traced rays; its 6 new frames traced directly: $direct"
+test "$traced" -lt "$direct" ||
+  { echo "the denser movie traced more than its new frames would cost directly" >&2; exit 1; }
 
 step "Ctrl-C a quarter into another movie: exit 130, the previous set intact, the keys kept"
 snapshot() { (cd first && ls -A | LC_ALL=C sort && md5sum ./*); }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace
@@ -188,6 +189,53 @@ TEST(MoviePlan, StoredFramesCostNothingAndAreKeys)
 
   std::vector<bool> all(s.size(), true);
   EXPECT_DOUBLE_EQ(asrt::planMovie(s, all, model).estimatedRays, 0.0);
+}
+
+TEST(MoviePlan, BetweenStoredKeepsTheStoredKeysAndCountsServedFramesFree)
+{
+  // The 7-frame movie planned with keys 0, 3, 6, stored; the same path with 13 frames has them at
+  // 0, 6, 12, and its even frames are the old interpolated ones, served by the store.
+  const std::vector<double> s = evenPath(13);
+  std::vector<bool> stored(s.size(), false), served(s.size(), false);
+  stored[0] = stored[6] = stored[12] = true;
+  for (int k : { 2, 4, 8, 10 })
+    served[static_cast<std::size_t>(k)] = true;
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.retraceShare = [](double a, double b, double) { return 0.01 + std::abs(b - a); };
+  const std::optional<asrt::MoviePlan> plan = asrt::planBetweenStored(s, stored, served, model);
+  ASSERT_TRUE(plan.has_value());
+  EXPECT_EQ(plan->keys(), (std::vector<int>{ 0, 6, 12 }));
+  for (int k = 1; k < 12; ++k)
+  {
+    const asrt::FramePlan& f = plan->frames[static_cast<std::size_t>(k)];
+    if (k == 6)
+      continue;
+    EXPECT_EQ(f.method, FrameMethod::Interpolated) << k;
+    EXPECT_EQ(f.keyBefore, k < 6 ? 0 : 6) << k;
+    EXPECT_EQ(f.keyAfter, k < 6 ? 6 : 12) << k;
+    EXPECT_DOUBLE_EQ(f.rays, served[static_cast<std::size_t>(k)] ? 0.0 : 510.0) << k;
+  }
+  // The six new frames at their share, nothing for the served ones.
+  EXPECT_DOUBLE_EQ(plan->estimatedRays, 6 * 510.0);
+  EXPECT_DOUBLE_EQ(plan->directRays, 10 * 1000.0);
+  // The bisection, which knows nothing of what is served, adds keys to this denser movie and so
+  // costs more by the same model once the served frames are counted.
+  const asrt::MoviePlan bisected = asrt::planMovie(s, stored, model);
+  EXPECT_GT(bisected.keys().size(), 3u);
+  EXPECT_LT(plan->estimatedRays, bisected.estimatedRays);
+
+  // No candidate when an end is not stored, or a frame cannot be interpolated between its keys.
+  std::vector<bool> noEnd = stored;
+  noEnd[12] = false;
+  EXPECT_FALSE(asrt::planBetweenStored(s, noEnd, served, model).has_value());
+  asrt::MovieCostModel hard = model;
+  hard.retraceShare = [](double a, double b, double) { return std::abs(b - a) > 0.6 ? 1.0 : 0.2; };
+  std::vector<bool> wide(s.size(), false);
+  wide[0] = wide[12] = true;
+  EXPECT_FALSE(asrt::planBetweenStored(s, wide, {}, hard).has_value());
+  EXPECT_THROW(asrt::planBetweenStored(s, stored, std::vector<bool>(3, false), model),
+               asrt::InvalidParameter);
 }
 
 TEST(MoviePlan, NeverCostsMoreThanTracingEveryFrameAndComesNearTheOptimum)

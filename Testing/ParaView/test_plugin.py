@@ -2,7 +2,8 @@
 # Python package, so a proxy's outputs must equal the plain source's bit for bit (one VTK, one
 # build); the interpolator's time steps drive the animation scene, and each step's parameters lie
 # on the straight path between the key frames; errors reach ParaView's output window naming the
-# field; the PostgreSQL writer and reader proxies store a frame and read it back.
+# field; the PostgreSQL writer and reader proxies store a frame and read it back; the movie
+# source's frames are the animation's time steps and the plain movie source's frames.
 #
 # Usage (under asrtWithThrowawayPostgres, which exports PG* for a throwaway server, and a display):
 #   PYTHONPATH=<build>/lib/python3.11/site-packages pvpython test_plugin.py ASRT.so SCENES_DIR
@@ -187,6 +188,35 @@ selected = servermanager.Fetch(ring, idx=1).GetNumberOfPoints()
 check(selected == int((order >= 1).sum()),
       f"the predicate image_order >= 1 selected {selected} rays, the frame has "
       f"{int((order >= 1).sum())}")
+
+# 5. The movie source: its frames are the animation's time steps 0 ... N - 1, and each frame the
+# proxy makes is the plain movie source's frame bit for bit, with its method in the field data.
+frames = 4
+movie_source = ASRTMovieSource(SceneFileName=scene, Resolution=[width, height],  # noqa: F821
+                               PathParameter="mass", RampFrom=0.9, RampTo=1.1,
+                               NumberOfFrames=frames, QualityTarget=30)
+movie_source.UpdatePipelineInformation()
+movie_steps = list(movie_source.TimestepValues)
+check(movie_steps == [float(k) for k in range(frames)], f"movie time steps {movie_steps}")
+animation.UpdateAnimationUsingDataTimeSteps()
+animation_steps = list(animation.TimeKeeper.TimestepValues)
+check(all(float(k) in animation_steps for k in range(frames)),
+      f"the animation's time steps {animation_steps} lack the movie's frames")
+plain_movie = asrt.vtkGeodesicMovieSource()
+plain_movie.SetSceneFileName(scene)
+plain_movie.SetResolution(width, height)
+plain_movie.SetRampFrom(0.9)
+plain_movie.SetRampTo(1.1)
+plain_movie.SetNumberOfFrames(frames)
+plain_movie.SetQualityTarget(30)
+for k in range(frames):
+    movie_source.UpdatePipeline(float(k))
+    made = servermanager.Fetch(movie_source)
+    plain_movie.UpdateTimeStep(float(k))
+    same_data(f"movie frame {k}", made, plain_movie.GetOutput())
+    method = made.GetFieldData().GetAbstractArray("FrameMethod")
+    check(method is not None and method.GetValue(0) in ("key", "interpolated", "traced"),
+          f"movie frame {k}: method {method.GetValue(0) if method else None}")
 
 if failures:
     print(f"test_plugin: {len(failures)} failures")

@@ -1,4 +1,4 @@
-#include "CameraPath.h"
+#include "GeodesicCameraPath.h"
 
 #include <nlohmann/json.hpp>
 
@@ -6,8 +6,6 @@
 #include <cmath>
 
 namespace asrt
-{
-namespace tools
 {
 namespace
 {
@@ -99,5 +97,27 @@ CameraPose cameraOnPath(const std::vector<CameraPose>& keys, double u)
     pose.viewUp.normalize();
   return pose;
 }
+
+MoviePath cameraKeyMoviePath(const std::vector<CameraPose>& keys, int n)
+{
+  if (n < 2 || n > kMaxMovieFrames)
+    throw InvalidParameter("frames: a movie has 2 to " + std::to_string(kMaxMovieFrames) +
+                           " frames, got " + std::to_string(n));
+  if (keys.size() < 2)
+    throw InvalidParameter("keys: a path needs at least 2 key cameras, got " +
+                           std::to_string(keys.size()));
+  MoviePath path;
+  path.parameter = "camera key";
+  const double last = static_cast<double>(keys.size() - 1);
+  for (int k = 0; k < n; ++k)
+  {
+    // Frame k at u = (K - 1) k / (n - 1): the keys at u = 0 ... K - 1, the first and last frames
+    // the first and last keys.
+    const double u = last * k / (n - 1);
+    const CameraPose pose = cameraOnPath(keys, u);
+    path.s.push_back(u);
+    path.apply.push_back([pose](vtkGeodesicSource* src) { setCamera(src, pose); });
+  }
+  return path;
 }
 }

@@ -1,0 +1,534 @@
+#include "GeodesicMovie.h"
+
+#include "ErrorEstimate.h"
+#include "FrameTracer.h"
+#include "GeodesicSceneLoading.h"
+#include "PathInterpolation.h"
+#include "RayStore.h"
+#include "SceneFile.h"
+#include "vtkGeodesicSource.h"
+
+#include "vtkCallbackCommand.h"
+#include "vtkCommand.h"
+#include "vtkNew.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+namespace asrt
+{
+CameraPose sceneCameraOfText(const std::string& sceneText)
+{
+  const SceneDescription scene = parseSceneWithoutImages(sceneText);
+  return { scene.camera.position, scene.camera.focalPoint, scene.camera.viewUp };
+}
+
+CameraPose turnedAboutZ(const CameraPose& pose, double degrees)
+{
+  const double t = degrees * M_PI / 180.0, c = std::cos(t), s = std::sin(t);
+  auto turn = [c, s](const Vec3& v)
+  { return Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()); };
+  return { turn(pose.position), turn(pose.focalPoint), turn(pose.viewUp) };
+}
+
+double orbitAngle(int k, int n, double degrees)
+{
+  if (n <= 1)
+    return 0.0;
+  const bool closed = std::abs(std::abs(degrees) - 360.0) < 1e-9;
+  return degrees * k / (closed ? n : n - 1);
+}
+
+void setCamera(vtkGeodesicSource* source, const CameraPose& pose)
+{
+  source->SetCameraPosition(pose.position.x(), pose.position.y(), pose.position.z());
+  source->SetFocalPoint(pose.focalPoint.x(), pose.focalPoint.y(), pose.focalPoint.z());
+  source->SetViewUp(pose.viewUp.x(), pose.viewUp.y(), pose.viewUp.z());
+}
+
+namespace
+{
+std::string formatNumber(double v)
+{
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+void checkFrameCount(int n)
+{
+  if (n < 2 || n > kMaxMovieFrames)
+    throw InvalidParameter("frames: a movie has 2 to " + std::to_string(kMaxMovieFrames) +
+                           " frames, got " + std::to_string(n));
+}
+}
+
+MoviePath rampMoviePath(const std::string& parameter, double from, double to, int n)
+{
+  if (parameter != "mass" && parameter != "spin" && parameter != "charge")
+    throw InvalidParameter("ramp: unknown parameter '" + parameter.substr(0, 40) +
+                           "' (mass, spin or charge)");
+  checkFrameCount(n);
+  if (!std::isfinite(from) || !std::isfinite(to))
+    throw InvalidParameter("ramp: FROM and TO must be finite numbers");
+  if (from == to)
+    throw InvalidParameter("ramp: FROM and TO are equal (" + formatNumber(from) + "): no path");
+  MoviePath path;
+  path.parameter = parameter;
+  for (int k = 0; k < n; ++k)
+  {
+    // The formula of asrt trace --sweep, so that its frames are these frames.
+    const double v = from + (to - from) * k / (n - 1);
+    path.s.push_back(v);
+    path.apply.push_back(
+      [parameter, v](vtkGeodesicSource* src)
+      {
+        if (parameter == "mass")
+          src->SetMass(v);
+        else if (parameter == "spin")
+          src->SetSpin(v);
+        else
+          src->SetCharge(v);
+      });
+  }
+  return path;
+}
+
+MoviePath orbitMoviePath(const CameraPose& pose, double degrees, int n)
+{
+  checkFrameCount(n);
+  if (!std::isfinite(degrees) || degrees == 0 || std::abs(degrees) > 360)
+    throw InvalidParameter("orbit: DEGREES must be nonzero and at most 360 in magnitude, got " +
+                           formatNumber(degrees));
+  MoviePath path;
+  path.parameter = "orbit angle";
+  for (int k = 0; k < n; ++k)
+  {
+    const double angle = orbitAngle(k, n, degrees);
+    const CameraPose turned = turnedAboutZ(pose, angle);
+    path.s.push_back(angle);
+    path.apply.push_back([turned](vtkGeodesicSource* src) { setCamera(src, turned); });
+  }
+  return path;
+}
+
+namespace
+{
+/// The first error the source reports while watched, instead of VTK's output window.
+struct SourceErrors
+{
+  std::string first;
+  static void onError(vtkObject*, unsigned long, void* clientData, void* callData)
+  {
+    auto* self = static_cast<SourceErrors*>(clientData);
+    if (self->first.empty() && callData)
+      self->first = static_cast<const char*>(callData);
+  }
+};
+}
+
+std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const MoviePath& path)
+{
+  std::vector<MovieFrame> frames(path.s.size());
+  SourceErrors errors;
+  vtkNew<vtkCallbackCommand> onError;
+  onError->SetClientData(&errors);
+  onError->SetCallback(&SourceErrors::onError);
+  const unsigned long tag = source->AddObserver(vtkCommand::ErrorEvent, onError);
+  try
+  {
+    for (std::size_t k = 0; k < frames.size(); ++k)
+    {
+      MovieFrame& f = frames[k];
+      f.s = path.s[k];
+      f.describe = path.parameter + " = " + formatNumber(f.s);
+      path.apply[k](source);
+      errors.first.clear();
+      f.sceneText = source->GetFrameSceneText();
+      if (!errors.first.empty() || f.sceneText.empty())
+      {
+        // VTK's messages lead with where they were raised: the reason is after the last ": ".
+        std::string reason = errors.first;
+        const std::size_t at = reason.find("): ");
+        if (at != std::string::npos)
+          reason = reason.substr(at + 3);
+        while (!reason.empty() && (reason.back() == '\n' || reason.back() == ' '))
+          reason.pop_back();
+        throw InvalidParameter("frame " + std::to_string(k) + " (" + f.describe + "): " + reason);
+      }
+      f.identity = parseSceneWithoutImages(f.sceneText);
+    }
+  }
+  catch (...)
+  {
+    source->RemoveObserver(tag);
+    throw;
+  }
+  source->RemoveObserver(tag);
+  return frames;
+}
+
+namespace
+{
+/// The prior of the re-trace share (SpacingShareModel): a quarter of a frame re-traced, beyond the
+/// probes, between keys a quarter of the path apart. The paper's mass ramp re-traced 23 % in
+/// exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README, "Interpolated movies").
+constexpr double kPriorSlope = 1.0;
+/// completePathFrame's default probe share, the floor of the estimate.
+constexpr double kMovieProbeFraction = 0.01;
+
+double raysOf(const std::vector<RayRecord>& records)
+{
+  double rays = 0;
+  for (const RayRecord& r : records)
+    rays += r.raysPerPixel;
+  return rays;
+}
+
+/// What completePathFrame asked of the store alone did not have.
+struct NotServed
+{
+};
+}
+
+struct MovieMaker::Internals
+{
+  std::map<int, std::vector<RayRecord>> whole; ///< whole frames made, in pixel order
+  /// Re-traced pixels kept in memory (MovieSettings::cacheRetraced): frame, subset's count and
+  /// digest.
+  std::map<std::pair<int, std::string>, std::vector<RayRecord>> retraced;
+  std::optional<SceneDescription> shading; ///< the first frame's scene, textures loaded
+};
+
+MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
+                       MovieSettings settings)
+  : Frames(std::move(frames))
+  , Parameter(std::move(parameter))
+  , Store(store)
+  , Settings(std::move(settings))
+  , Impl(new Internals)
+{
+  if (this->Frames.size() < 2)
+    throw InvalidParameter("frames: a movie has at least 2 frames, got " +
+                           std::to_string(this->Frames.size()));
+  if (!(this->Settings.quality > 0.0 && this->Settings.quality <= kMaxQualityTargetDb))
+    throw InvalidParameter("quality: the target must lie in (0, " +
+                           formatNumber(kMaxQualityTargetDb) + "] dB, got " +
+                           formatNumber(this->Settings.quality));
+  this->Width = this->Frames.front().identity.camera.width;
+  this->Height = this->Frames.front().identity.camera.height;
+  for (const MovieFrame& f : this->Frames)
+    if (f.identity.camera.width != this->Width || f.identity.camera.height != this->Height)
+      throw InvalidParameter("frames: " + f.describe + " is " +
+                             std::to_string(f.identity.camera.width) + "x" +
+                             std::to_string(f.identity.camera.height) + ", the first frame " +
+                             std::to_string(this->Width) + "x" + std::to_string(this->Height));
+}
+
+MovieMaker::~MovieMaker() = default;
+
+namespace
+{
+/// Stores a frame (whole or a subset). Another writer may have stored it since it was looked up:
+/// then its copy stands.
+void storeFrame(RayStore& store, const MovieSettings& settings, const SceneDescription& identity,
+                const std::vector<RayRecord>& records, double seconds)
+{
+  std::function<bool()> cancelled = settings.cancelled ? settings.cancelled : [] { return false; };
+  try
+  {
+    store.writeFrame(identity, settings.label, records,
+                     FrameWriteOptions().tracedIn(seconds).cancelledWhen(cancelled));
+  }
+  catch (const StoreError&)
+  {
+    if (cancelled())
+      throw MovieCancelled();
+    if (!store.findFrame(identity))
+      throw;
+  }
+}
+
+/// The keys of `keys` (sorted) that interpolating at frame k uses: the two on either side.
+std::vector<int> keysAround(const std::vector<int>& keys, int k)
+{
+  const auto after = std::upper_bound(keys.begin(), keys.end(), k);
+  const auto from = after - std::min<std::ptrdiff_t>(2, after - keys.begin());
+  const auto to = after + std::min<std::ptrdiff_t>(2, keys.end() - after);
+  return std::vector<int>(from, to);
+}
+}
+
+/// The ways the maker gets records, and the bookkeeping that goes with them.
+struct MovieMaking
+{
+  MovieMaker& maker;
+  MovieMaker::Internals& in;
+
+  bool cancelled() const { return maker.Settings.cancelled && maker.Settings.cancelled(); }
+
+  std::function<bool(double)> progress() const
+  {
+    const MovieSettings& settings = maker.Settings;
+    return [&settings](double fraction)
+    {
+      if (settings.traceProgress)
+        settings.traceProgress(fraction);
+      return !(settings.cancelled && settings.cancelled());
+    };
+  }
+
+  SceneDescription withTextures(const MovieFrame& f) const
+  {
+    return loadScene(f.sceneText.c_str(), nullptr, maker.Settings.textureDirectory.c_str());
+  }
+
+  /// A whole frame's records, in pixel order: kept, read from the store, or traced (and stored).
+  const std::vector<RayRecord>& whole(int k)
+  {
+    const auto kept = in.whole.find(k);
+    if (kept != in.whole.end())
+      return kept->second;
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    std::vector<RayRecord> records;
+    if (f.storedId && maker.Store)
+    {
+      records = maker.Store->readFrame(*f.storedId);
+      std::sort(records.begin(), records.end(),
+                [](const RayRecord& a, const RayRecord& b)
+                { return a.j != b.j ? a.j < b.j : a.i < b.i; });
+      if (records.size() != static_cast<std::size_t>(maker.Width) * maker.Height)
+        throw StoreError("stored frame " + std::to_string(*f.storedId) + " has " +
+                         std::to_string(records.size()) + " rays, the movie's frames " +
+                         std::to_string(maker.Width * maker.Height) + " pixels");
+    }
+    else
+    {
+      const FrameTracer tracer(this->withTextures(f));
+      const auto t0 = std::chrono::steady_clock::now();
+      records = tracer.traceRows(0, maker.Height, this->progress());
+      if (this->cancelled())
+        throw MovieCancelled();
+      const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      // A frame with too many failed rays is no picture of its scene: neither used nor stored.
+      if (maker.Settings.checkTraced)
+        maker.Settings.checkTraced(records, k);
+      maker.RaysTraced += raysOf(records);
+      if (maker.Store)
+        storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
+    }
+    maker.RaysOfMovie += raysOf(records);
+    maker.RaysOfKeys += raysOf(records);
+    ++maker.WholeCount;
+    return in.whole.emplace(k, std::move(records)).first->second;
+  }
+
+  /// Records of a subset that was traced before: in memory, or in the store.
+  std::optional<std::vector<RayRecord>> known(int k, const SceneDescription& subset,
+                                              const std::vector<std::pair<int, int>>& pixels)
+  {
+    const std::pair<int, std::string> cacheKey(k, std::to_string(subset.subset.count) + ":" +
+                                                    subset.subset.digest);
+    const auto cached = in.retraced.find(cacheKey);
+    if (cached != in.retraced.end())
+      return cached->second;
+    if (!maker.Store)
+      return std::nullopt;
+    const auto id = maker.Store->findFrame(subset);
+    if (!id)
+      return std::nullopt;
+    std::map<std::pair<int, int>, RayRecord> byPixel;
+    for (const RayRecord& r : maker.Store->readFrame(*id))
+      byPixel.emplace(std::make_pair(r.i, r.j), r);
+    std::vector<RayRecord> records;
+    for (const auto& ij : pixels)
+    {
+      const auto found = byPixel.find(ij);
+      if (found == byPixel.end())
+        throw StoreError("stored subset frame " + std::to_string(*id) + " lacks pixel (" +
+                         std::to_string(ij.first) + ", " + std::to_string(ij.second) +
+                         ") that its digest names");
+      records.push_back(found->second);
+    }
+    return records;
+  }
+
+  /// The re-traced pixels of interpolated frame k: known ones read, else traced (and stored).
+  /// With `storeOnly`, a subset not known is NotServed, and nothing is counted or kept.
+  PixelTracer retracedPixels(int k, const std::function<const FrameTracer&()>& tracer,
+                             MovieFrameReport& report, bool storeOnly)
+  {
+    return [this, k, &tracer, &report, storeOnly](const std::vector<std::pair<int, int>>& pixels)
+    {
+      std::vector<RayRecord> records;
+      if (pixels.empty())
+        return records;
+      SceneDescription subset = maker.Frames[static_cast<std::size_t>(k)].identity;
+      subset.subset = pixelSubsetId(pixels);
+      subset.rendering = scatteredPixelRendering(subset.rendering); // as the tracer traces them
+      const std::pair<int, std::string> cacheKey(k, std::to_string(subset.subset.count) + ":" +
+                                                      subset.subset.digest);
+      if (auto found = this->known(k, subset, pixels))
+      {
+        if (!storeOnly)
+        {
+          report.raysReused += raysOf(*found);
+          maker.RaysOfMovie += raysOf(*found);
+          if (maker.Settings.cacheRetraced)
+            in.retraced.emplace(cacheKey, *found);
+        }
+        return std::move(*found);
+      }
+      if (storeOnly)
+        throw NotServed();
+      const auto t0 = std::chrono::steady_clock::now();
+      records = tracer().tracePixels(pixels, this->progress());
+      if (this->cancelled())
+        throw MovieCancelled();
+      const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      report.raysTraced += raysOf(records);
+      maker.RaysTraced += raysOf(records);
+      maker.RaysOfMovie += raysOf(records);
+      if (maker.Store)
+        storeFrame(*maker.Store, maker.Settings, subset, records, seconds);
+      if (maker.Settings.cacheRetraced)
+        in.retraced.emplace(cacheKey, records);
+      return records;
+    };
+  }
+
+  /// Frame k interpolated between `keys` (the nearest of the plan's keys), completed to the target.
+  std::vector<RayRecord> interpolated(int k, const std::vector<int>& keys, MovieFrameReport& report,
+                                      bool storeOnly)
+  {
+    const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
+    // Frame order is the order of direction · s: the keys go in as they are.
+    std::vector<PathKey> pathKeys;
+    for (int key : keysAround(keys, k))
+      pathKeys.push_back(
+        { direction * maker.Frames[static_cast<std::size_t>(key)].s, &this->whole(key) });
+    if (!in.shading)
+      in.shading = this->withTextures(maker.Frames.front());
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
+                                           *in.shading->scene);
+    // The tracer (the frame's scene, its textures loaded) only once a pixel must be traced: a
+    // frame the store serves whole needs none.
+    std::unique_ptr<FrameTracer> made;
+    const std::function<const FrameTracer&()> tracer = [this, &made, &f]() -> const FrameTracer&
+    {
+      if (!made)
+      {
+        SceneDescription retrace = this->withTextures(f);
+        retrace.rendering = scatteredPixelRendering(retrace.rendering);
+        made = std::make_unique<FrameTracer>(retrace);
+      }
+      return *made;
+    };
+    const PathCompletion done =
+      completePathFrame(frame, this->retracedPixels(k, tracer, report, storeOnly),
+                        maker.Settings.quality, kMovieProbeFraction);
+    report.method = FrameMethod::Interpolated;
+    report.estimatedPsnr = done.estimatedPsnr;
+    report.shareRetraced = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
+                           static_cast<double>(maker.Height);
+    return std::move(frame.records);
+  }
+};
+
+const MoviePlan& MovieMaker::plan()
+{
+  if (this->Plan)
+    return *this->Plan;
+  const std::size_t n = this->Frames.size();
+  std::vector<double> s;
+  std::vector<bool> stored(n, false);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    MovieFrame& f = this->Frames[k];
+    s.push_back(f.s);
+    if (this->Store)
+      f.storedId = this->Store->findFrame(f.identity);
+    stored[k] = f.storedId.has_value();
+  }
+  SpacingShareModel share;
+  share.pathLength = std::abs(s.back() - s.front());
+  share.floor =
+    std::min(1.0, std::max(kMovieProbeFraction, 64.0 / (static_cast<double>(this->Width) *
+                                                        static_cast<double>(this->Height))));
+  share.slope = kPriorSlope;
+  MovieCostModel model;
+  model.frameRays = static_cast<double>(this->Width) * this->Height;
+  model.retraceShare = share.function();
+  MoviePlan bisected = planMovie(s, stored, model);
+  std::vector<int> storedKeys;
+  for (std::size_t k = 0; k < n; ++k)
+    if (stored[k])
+      storedKeys.push_back(static_cast<int>(k));
+  // The other candidate, the stored frames as the only keys, is worth a look only when the
+  // bisection wants keys of its own and the store has both ends (planBetweenStored).
+  if (bisected.keys() != storedKeys && stored.front() && stored.back() &&
+      planBetweenStored(s, stored, {}, model))
+  {
+    MovieMaking making{ *this, *this->Impl };
+    std::vector<bool> served(n, false);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      if (stored[k])
+        continue;
+      MovieFrameReport dry;
+      try
+      {
+        making.interpolated(static_cast<int>(k), storedKeys, dry, true);
+        served[k] = true;
+      }
+      catch (const NotServed&)
+      {
+      }
+    }
+    const std::optional<MoviePlan> between = planBetweenStored(s, stored, served, model);
+    if (between && between->estimatedRays < bisected.estimatedRays)
+      bisected = *between;
+  }
+  this->Plan = bisected;
+  return *this->Plan;
+}
+
+void MovieMaker::makeKeys(const std::function<void()>& afterEach)
+{
+  MovieMaking making{ *this, *this->Impl };
+  for (int k : this->plan().keys())
+  {
+    making.whole(k);
+    if (afterEach)
+      afterEach();
+  }
+}
+
+std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
+{
+  const MoviePlan& plan = this->plan();
+  if (k < 0 || k >= static_cast<int>(this->Frames.size()))
+    throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
+                           std::to_string(this->Frames.size()) + " frames");
+  MovieMaking making{ *this, *this->Impl };
+  report = MovieFrameReport();
+  report.method = plan.frames[static_cast<std::size_t>(k)].method;
+  if (report.method == FrameMethod::Interpolated)
+    return making.interpolated(k, plan.keys(), report, false);
+  const std::vector<RayRecord>& records = making.whole(k);
+  if (this->Frames[static_cast<std::size_t>(k)].storedId)
+    report.raysReused = raysOf(records);
+  else
+  {
+    report.raysTraced = raysOf(records);
+    report.shareRetraced = 1;
+  }
+  return records;
+}
+}

@@ -1,0 +1,190 @@
+// Making a movie along a path at a quality target: the one implementation behind `asrt movie` and
+// vtkGeodesicMovieSource. The path (a ramp of mass, spin or charge, an orbit of the camera, or any
+// setting of a vtkGeodesicSource per frame) gives every frame's scene; the plan (MoviePlan.h)
+// chooses the key frames; key frames are traced whole, or read from the store; the others are
+// interpolated per pixel between the nearest keys (PathInterpolation.h) and completed to the
+// target with the pixels it needs re-traced, read from the store where it has them.
+//
+// Reuse. A whole frame is found by its identity (the scene at the frame's parameters), whoever
+// stored it. The pixels an interpolated frame re-traces are stored as subset frames: the scene at
+// the frame's parameters with a "subset" naming the pixels (count and digest), so they never pass
+// for the whole frame. completePathFrame asks for two lists of pixels, each a function of the keys
+// and of the records traced before; the same keys therefore ask for the same lists. So the plan
+// is stable under storing its own whole frames (MoviePlan.h), and a denser movie over a stored
+// path is offered the stored frames as its only keys (planBetweenStored), its old interpolated
+// frames then served whole by the store: which of them are is found by making them from the store
+// alone before planning.
+#ifndef asrt_GeodesicMovie_h
+#define asrt_GeodesicMovie_h
+
+#include "AsrtTypes.h"
+#include "MoviePlan.h"
+#include "RayRecord.h"
+#include "SceneDescription.h"
+#include "asrtFiltersModule.h"
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+class vtkGeodesicSource;
+
+namespace asrt
+{
+class RayStore;
+struct MovieMaking;
+
+/// A camera: eye, focal point and up.
+struct CameraPose
+{
+  Vec3 position = Vec3::Zero();
+  Vec3 focalPoint = Vec3::Zero();
+  Vec3 viewUp = Vec3::UnitZ();
+};
+
+/// The camera of a scene's JSON text (its images are not read). Throws InvalidParameter for an
+/// invalid scene.
+ASRTFILTERS_EXPORT CameraPose sceneCameraOfText(const std::string& sceneText);
+/// The pose turned by `degrees` about the z axis through the origin (counter-clockwise seen from
+/// +z): the eye keeps its distance and height, so the hole looks the same but the sky and the
+/// objects move.
+ASRTFILTERS_EXPORT CameraPose turnedAboutZ(const CameraPose& pose, double degrees);
+/// The angle of frame k of n on an orbit through `degrees`: a full turn (±360) closes on itself
+/// (k·360/n, the last frame one step short of the first); a partial one runs from 0 to `degrees`
+/// inclusive.
+ASRTFILTERS_EXPORT double orbitAngle(int k, int n, double degrees);
+/// Sets the source's camera overrides to the pose.
+ASRTFILTERS_EXPORT void setCamera(vtkGeodesicSource* source, const CameraPose& pose);
+
+/// A movie's path: its parameter per frame, and the setting of the source that gives each frame.
+struct MoviePath
+{
+  std::string parameter; ///< "mass", "spin", "charge", "orbit angle" or "camera key"
+  std::vector<double> s;
+  std::vector<std::function<void(vtkGeodesicSource*)>> apply;
+};
+
+/// The most frames of a movie.
+constexpr int kMaxMovieFrames = 10000;
+
+/// `parameter` ("mass", "spin" or "charge") from `from` to `to` over `n` frames, frame k at
+/// from + (to − from) k / (n − 1) (asrt trace --sweep's formula, so that its frames are these).
+/// Throws InvalidParameter naming the field: an unknown parameter, n outside [2, kMaxMovieFrames],
+/// FROM or TO not finite, or equal.
+ASRTFILTERS_EXPORT MoviePath rampMoviePath(const std::string& parameter, double from, double to,
+                                           int n);
+/// The camera `pose` turned about the hole's axis through `degrees` over `n` frames (orbitAngle).
+/// Throws InvalidParameter for n outside [2, kMaxMovieFrames], or degrees zero, not finite or
+/// above 360 in magnitude.
+ASRTFILTERS_EXPORT MoviePath orbitMoviePath(const CameraPose& pose, double degrees, int n);
+
+/// One frame of the movie: where it lies on the path and which scene it is.
+struct MovieFrame
+{
+  double s = 0;
+  std::string describe;      ///< e.g. "mass = 0.675"
+  std::string sceneText;     ///< the effective scene text at the frame's parameters
+  SceneDescription identity; ///< without textures: the frame's identity in the store
+  std::optional<std::int64_t> storedId;
+};
+
+/// The frames' scenes of `source` (its scene and overrides) along the path, each checked (a
+/// camera sent inside the horizon, a spin ramped past the mass) before anything is traced. Throws
+/// InvalidParameter "frame K (P = V): <the source's error>".
+ASRTFILTERS_EXPORT std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source,
+                                                       const MoviePath& path);
+
+/// Thrown when the movie's `cancelled` callback asked to stop.
+struct MovieCancelled : std::runtime_error
+{
+  MovieCancelled()
+    : std::runtime_error("the movie was cancelled")
+  {
+  }
+};
+
+/// How one frame was made.
+struct MovieFrameReport
+{
+  FrameMethod method = FrameMethod::Key;
+  double estimatedPsnr = std::numeric_limits<double>::infinity();
+  double shareRetraced = 0; ///< of its pixels traced for it (1 for a frame traced whole)
+  double raysTraced = 0;    ///< traced for this frame, this time
+  double raysReused = 0;    ///< read from the store or the cache for it
+};
+
+struct MovieSettings
+{
+  /// The PSNR in dB every interpolated frame is to reach, in (0, kMaxQualityTargetDb].
+  double quality = 35;
+  /// Where the scene's relative texture paths lie (its file's directory).
+  std::string textureDirectory;
+  /// The label of frames stored.
+  std::string label;
+  /// Keep the pixels re-traced for interpolated frames in memory too, so that making a frame again
+  /// (scrubbing) traces nothing even without a store.
+  bool cacheRetraced = false;
+  /// Asked during traces: true stops the movie (MovieCancelled).
+  std::function<bool()> cancelled;
+  /// Called with the fraction done of a whole frame being traced.
+  std::function<void(double)> traceProgress;
+  /// Called with every whole frame traced, before it is stored or used (e.g. to refuse one with
+  /// too many failed rays by throwing).
+  std::function<void(const std::vector<RayRecord>&, int frame)> checkTraced;
+};
+
+/// One movie: its plan, made once, and its frames, each made on demand.
+class ASRTFILTERS_EXPORT MovieMaker
+{
+public:
+  /// `frames` at least 2, of one size; `store` may be null (nothing stored or reused) and must
+  /// outlive the maker. Throws InvalidParameter for a quality target out of range or NaN.
+  MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
+             MovieSettings settings);
+  ~MovieMaker();
+  MovieMaker(const MovieMaker&) = delete;
+  MovieMaker& operator=(const MovieMaker&) = delete;
+
+  /// The plan: made at the first call (looking up the stored frames).
+  const MoviePlan& plan();
+  const std::vector<MovieFrame>& frames() const { return this->Frames; }
+  const std::string& parameter() const { return this->Parameter; }
+  int width() const { return this->Width; }
+  int height() const { return this->Height; }
+
+  /// Makes (or reads) every key frame of the plan, calling `afterEach` after each.
+  void makeKeys(const std::function<void()>& afterEach = {});
+  /// Frame k's records, one per pixel in pixel order (record p is pixel (p mod width, p / width)).
+  /// Key frames are traced or read once and kept; an interpolated frame's re-traced pixels are
+  /// read from the store (or the memory cache) when they were traced before.
+  std::vector<RayRecord> frame(int k, MovieFrameReport& report);
+
+  /// Rays traced so far (anti-aliasing's extra rays counted), by this maker.
+  double raysTraced() const { return this->RaysTraced; }
+  /// Rays of the frames made, traced or read: what the movie cost in all.
+  double raysOfMovie() const { return this->RaysOfMovie; }
+  /// Rays of the whole frames made and how many (for the rays a whole frame takes).
+  double raysOfKeys() const { return this->RaysOfKeys; }
+  int wholeCount() const { return this->WholeCount; }
+
+private:
+  friend struct MovieMaking;
+  struct Internals;
+  std::vector<MovieFrame> Frames;
+  std::string Parameter;
+  RayStore* Store = nullptr;
+  MovieSettings Settings;
+  int Width = 0, Height = 0;
+  std::optional<MoviePlan> Plan;
+  double RaysTraced = 0, RaysOfMovie = 0, RaysOfKeys = 0;
+  int WholeCount = 0;
+  std::unique_ptr<Internals> Impl;
+};
+}
+
+#endif

@@ -1,0 +1,337 @@
+// vtkGeodesicMovieSource against frames this test traces itself with vtkGeodesicSource at each
+// frame's parameters: its time steps are the movie's frames, its key frames are the traced frames
+// bit for bit, its interpolated frames meet the quality target less 1 dB, asking for a frame again
+// traces no ray, and bad settings are errors naming the setting.
+#include "FiltersTestUtilities.h"
+#include "vtkGeodesicMovieSource.h"
+
+#include "MoviePlan.h"
+
+#include "vtkCallbackCommand.h"
+#include "vtkFieldData.h"
+#include "vtkInformation.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkStringArray.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+using namespace asrt::testing;
+
+namespace
+{
+constexpr int kSide = 48;
+constexpr int kFrames = 7;
+constexpr double kFrom = 0.65, kTo = 0.8;
+
+/// The movie of CLI.Movie: Figs. 4-5's scene, the mass from 0.65 to 0.8 in 7 frames at 48×48.
+void configure(vtkGeodesicMovieSource* movie)
+{
+  movie->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+  movie->SetPathParameter("mass");
+  movie->SetRampFrom(kFrom);
+  movie->SetRampTo(kTo);
+  movie->SetNumberOfFrames(kFrames);
+  movie->SetQualityTarget(35);
+  movie->SetResolution(kSide, kSide);
+}
+
+double massOf(int k)
+{
+  return kFrom + (kTo - kFrom) * k / (kFrames - 1);
+}
+
+/// The frame traced whole at mass M by the source itself: the truth.
+vtkSmartPointer<vtkImageData> traced(double mass)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+  source->SetResolution(kSide, kSide);
+  source->SetMass(mass);
+  source->Update();
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->DeepCopy(source->GetOutput());
+  return image;
+}
+
+vtkSmartPointer<vtkImageData> frameAt(vtkGeodesicMovieSource* movie, double time)
+{
+  movie->UpdateTimeStep(time);
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->DeepCopy(movie->GetOutput());
+  return image;
+}
+
+std::vector<unsigned char> colours(vtkImageData* image)
+{
+  std::vector<unsigned char> rgb;
+  vtkDataArray* c = image->GetPointData()->GetArray("Colors");
+  if (!c)
+    return rgb;
+  for (vtkIdType p = 0; p < c->GetNumberOfTuples(); ++p)
+    for (int k = 0; k < 3; ++k)
+      rgb.push_back(static_cast<unsigned char>(c->GetComponent(p, k)));
+  return rgb;
+}
+
+/// 10 log10(255² / MSE) over the three channels.
+double psnrOf(const std::vector<unsigned char>& a, const std::vector<unsigned char>& b)
+{
+  double sum = 0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    sum += (double(a[k]) - double(b[k])) * (double(a[k]) - double(b[k]));
+  if (sum == 0)
+    return std::numeric_limits<double>::infinity();
+  return 10 * std::log10(255.0 * 255.0 / (sum / static_cast<double>(a.size())));
+}
+
+std::string methodOf(vtkImageData* image)
+{
+  auto* a = vtkStringArray::SafeDownCast(image->GetFieldData()->GetAbstractArray("FrameMethod"));
+  return a && a->GetNumberOfValues() == 1 ? a->GetValue(0) : std::string();
+}
+
+double fieldOf(vtkImageData* image, const char* name)
+{
+  vtkDataArray* a = image->GetFieldData()->GetArray(name);
+  return a ? a->GetComponent(0, 0) : std::numeric_limits<double>::quiet_NaN();
+}
+}
+
+TEST(MovieSource, TimeStepsAreTheFramesKeysAreTracedFramesAndTheRestMeetTheTarget)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  movie->UpdateInformation();
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  vtkInformation* info = movie->GetOutputInformation(0);
+  ASSERT_TRUE(info->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()));
+  ASSERT_EQ(info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()), kFrames);
+  const double* steps = info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  for (int k = 0; k < kFrames; ++k)
+    EXPECT_EQ(steps[k], k);
+  // The plan of asrt movie for these settings (CLI.Movie checks the same): keys 0, 3 and 6.
+  EXPECT_EQ(movie->GetNumberOfPlannedKeys(), 3);
+  int keys = 0, interpolated = 0;
+  for (int k = 0; k < kFrames; ++k)
+  {
+    const auto method = static_cast<asrt::FrameMethod>(movie->GetPlannedMethod(k));
+    const vtkSmartPointer<vtkImageData> frame = frameAt(movie, k);
+    ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+    EXPECT_EQ(fieldOf(frame, "FrameIndex"), k);
+    EXPECT_DOUBLE_EQ(fieldOf(frame, "PathParameter"), massOf(k));
+    const vtkSmartPointer<vtkImageData> truth = traced(massOf(k));
+    if (method == asrt::FrameMethod::Key)
+    {
+      ++keys;
+      EXPECT_EQ(methodOf(frame), "key");
+      EXPECT_EQ(fieldOf(frame, "ShareRetraced"), 1.0);
+      EXPECT_TRUE(std::isinf(fieldOf(frame, "EstimatedPsnr")));
+      for (const char* name :
+           { "Colors", "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
+      {
+        vtkDataArray* a = frame->GetPointData()->GetArray(name);
+        vtkDataArray* b = truth->GetPointData()->GetArray(name);
+        ASSERT_TRUE(a && b) << name;
+        ASSERT_EQ(a->GetNumberOfValues(), b->GetNumberOfValues()) << name;
+        vtkIdType differ = 0;
+        for (vtkIdType v = 0; v < a->GetNumberOfValues(); ++v)
+        {
+          const double x = a->GetVariantValue(v).ToDouble(), y = b->GetVariantValue(v).ToDouble();
+          if (std::memcmp(&x, &y, sizeof x) != 0)
+            ++differ;
+        }
+        EXPECT_EQ(differ, 0) << name << " of key frame " << k;
+      }
+    }
+    else
+    {
+      ASSERT_EQ(method, asrt::FrameMethod::Interpolated) << "frame " << k;
+      ++interpolated;
+      EXPECT_EQ(methodOf(frame), "interpolated");
+      const double share = fieldOf(frame, "ShareRetraced");
+      EXPECT_GT(share, 0.0);
+      EXPECT_LT(share, 1.0);
+      EXPECT_GE(fieldOf(frame, "EstimatedPsnr"), 35.0);
+      EXPECT_GE(psnrOf(colours(frame), colours(truth)), 34.0) << "frame " << k;
+    }
+  }
+  EXPECT_EQ(keys, 3);
+  EXPECT_EQ(interpolated, 4);
+}
+
+TEST(MovieSource, AFrameAskedForAgainTracesNothing)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  movie->UpdateInformation();
+  ASSERT_EQ(static_cast<asrt::FrameMethod>(movie->GetPlannedMethod(1)),
+            asrt::FrameMethod::Interpolated);
+  const vtkSmartPointer<vtkImageData> first = frameAt(movie, 1);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  const double afterFirst = movie->GetRaysTraced();
+  // Frame 1 needs keys 0 and 3 (and 6, the outer neighbour) traced, and its pixels re-traced.
+  EXPECT_GT(afterFirst, 3.0 * kSide * kSide);
+  frameAt(movie, 5);
+  const double afterOther = movie->GetRaysTraced();
+  EXPECT_GT(afterOther, afterFirst); // frame 5's own re-traced pixels
+  const vtkSmartPointer<vtkImageData> again = frameAt(movie, 1);
+  EXPECT_EQ(movie->GetRaysTraced(), afterOther);
+  EXPECT_EQ(colours(again), colours(first));
+  frameAt(movie, 3.2); // the nearest frame, key 3, made already
+  EXPECT_EQ(movie->GetRaysTraced(), afterOther);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+
+  // A changed setting is another movie: planned and made again.
+  movie->SetQualityTarget(30);
+  frameAt(movie, 1);
+  EXPECT_GT(movie->GetRaysTraced(), 0.0);
+  EXPECT_LT(movie->GetRaysTraced(), afterOther);
+}
+
+TEST(MovieSource, BadSettingsAreErrorsNamingTheSetting)
+{
+  struct Case
+  {
+    const char* field;
+    std::function<void(vtkGeodesicMovieSource*)> set;
+  };
+  const std::vector<Case> cases = {
+    { "NumberOfFrames", [](vtkGeodesicMovieSource* m) { m->SetNumberOfFrames(1); } },
+    { "QualityTarget", [](vtkGeodesicMovieSource* m) { m->SetQualityTarget(0); } },
+    { "QualityTarget", [](vtkGeodesicMovieSource* m) { m->SetQualityTarget(-3); } },
+    { "QualityTarget", [](vtkGeodesicMovieSource* m) { m->SetQualityTarget(101); } },
+    { "QualityTarget", [](vtkGeodesicMovieSource* m)
+      { m->SetQualityTarget(std::numeric_limits<double>::quiet_NaN()); } },
+    { "PathParameter", [](vtkGeodesicMovieSource* m) { m->SetPathParameter("temperature"); } },
+    { "RampFrom", [](vtkGeodesicMovieSource* m) { m->SetRampTo(kFrom); } },
+    { "OrbitDegrees",
+      [](vtkGeodesicMovieSource* m)
+      {
+        m->SetPathParameter("orbit");
+        m->SetOrbitDegrees(400);
+      } },
+    { "SceneFileName", [](vtkGeodesicMovieSource* m) { m->SetSceneFileName(nullptr); } },
+    { "SceneFileName",
+      [](vtkGeodesicMovieSource* m) { m->SetSceneFileName("/nonexistent/scene.json"); } },
+    // A ramp that sends the spin past the mass: the frame and the scene's complaint.
+    { "frame 4 (spin = 1.1)",
+      [](vtkGeodesicMovieSource* m)
+      {
+        m->SetSceneFileName(scenePath("kerr-disk.json").c_str());
+        m->SetPathParameter("spin");
+        m->SetRampFrom(0.3);
+        m->SetRampTo(1.5);
+      } },
+  };
+  for (const Case& c : cases)
+  {
+    vtkNew<vtkGeodesicMovieSource> movie;
+    vtkNew<MessageCatcher> catcher;
+    watch(movie, catcher);
+    configure(movie);
+    c.set(movie);
+    movie->UpdateTimeStep(1);
+    EXPECT_TRUE(catcher->Mentions(c.field)) << c.field << ": " << catcher->AllErrors();
+    EXPECT_EQ(movie->GetOutput()->GetNumberOfPoints(), 0) << c.field;
+    EXPECT_EQ(movie->GetRaysTraced(), 0.0) << c.field;
+  }
+}
+
+TEST(MovieSource, AnOrbitHasItsAnglesAsParameters)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  movie->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+  movie->SetPathParameter("orbit");
+  movie->SetOrbitDegrees(20);
+  movie->SetNumberOfFrames(3);
+  movie->SetResolution(24, 24);
+  const vtkSmartPointer<vtkImageData> last = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_DOUBLE_EQ(fieldOf(last, "PathParameter"), 20.0);
+  EXPECT_EQ(last->GetNumberOfPoints(), 24 * 24);
+  std::ostringstream printed;
+  movie->Print(printed);
+  EXPECT_NE(printed.str().find("OrbitDegrees: 20"), std::string::npos);
+}
+
+TEST(MovieSource, ACameraPathThroughKeyCamerasEndsAtTheLastKey)
+{
+  const std::string file = ::testing::TempDir() + "movie-source-cams.json";
+  {
+    std::ofstream out(file);
+    out << R"({"keys": [
+      {"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+      {"position": [6, -29, 9], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]},
+      {"position": [12, -27, 10], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]})";
+  }
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  movie->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+  movie->SetPathParameter("cameras");
+  movie->SetCameraKeysFileName(file.c_str());
+  movie->SetNumberOfFrames(3);
+  movie->SetResolution(24, 24);
+  const vtkSmartPointer<vtkImageData> last = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_DOUBLE_EQ(fieldOf(last, "PathParameter"), 2.0); // the third key
+  vtkNew<vtkGeodesicSource> traced;
+  traced->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+  traced->SetResolution(24, 24);
+  traced->SetCameraPosition(12, -27, 10);
+  traced->SetFocalPoint(0, 0, 0);
+  traced->SetViewUp(0, 0, 1);
+  traced->Update();
+  EXPECT_EQ(colours(last), colours(traced->GetOutput()));
+
+  // A file of one key: an error naming the setting and the file's field.
+  {
+    std::ofstream out(file);
+    out << R"({"keys": [{"position": [0, -30, 8], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1]}]})";
+  }
+  movie->Modified();
+  movie->UpdateTimeStep(0);
+  EXPECT_TRUE(catcher->Mentions("CameraKeysFileName")) << catcher->AllErrors();
+  EXPECT_TRUE(catcher->Mentions("at least 2 key cameras")) << catcher->AllErrors();
+  std::remove(file.c_str());
+}
+
+TEST(MovieSource, AnAbortStopsTheFrameAndTheNextRequestMakesIt)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  // Abort at the first progress report of the first key frame's trace.
+  vtkNew<vtkCallbackCommand> abort;
+  abort->SetCallback(
+    [](vtkObject* caller, unsigned long, void*, void* callData)
+    {
+      const double progress = *static_cast<double*>(callData);
+      if (progress > 0.05 && progress < 1.0)
+        static_cast<vtkAlgorithm*>(caller)->SetAbortExecute(1);
+    });
+  const unsigned long tag = movie->AddObserver(vtkCommand::ProgressEvent, abort);
+  movie->UpdateTimeStep(1);
+  EXPECT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(movie->GetOutput()->GetNumberOfPoints(), 0);
+  EXPECT_LT(movie->GetRaysTraced(), 1.0 * kSide * kSide); // stopped inside the first key frame
+  movie->RemoveObserver(tag);
+  movie->SetAbortExecute(0);
+  const vtkSmartPointer<vtkImageData> frame = frameAt(movie, 1);
+  EXPECT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(frame->GetNumberOfPoints(), kSide * kSide);
+  EXPECT_EQ(methodOf(frame), "interpolated");
+}
