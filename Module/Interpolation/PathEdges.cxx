@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 
@@ -411,8 +412,9 @@ constexpr double kSub[9][2] = { { -1 / 3.0, -1 / 3.0 }, { 0, -1 / 3.0 }, { 1 / 3
                                 { -1 / 3.0, 0 },        { 0, 0 },        { 1 / 3.0, 0 },
                                 { -1 / 3.0, 1 / 3.0 },  { 0, 1 / 3.0 },  { 1 / 3.0, 1 / 3.0 } };
 
-/// The centres of a pixel's 4 edge neighbours, relative to its own.
-constexpr double kNeighbours[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
+/// The centres of a pixel's 8 neighbours, relative to its own.
+constexpr double kNeighbours[8][2] = { { -1, 0 },  { 1, 0 },  { 0, -1 }, { 0, 1 },
+                                       { -1, -1 }, { 1, -1 }, { -1, 1 }, { 1, 1 } };
 /// The squared share of the contrast with a neighbour that an edge misplaced by about half a
 /// pixel leaves in the pixel's colour.
 constexpr float kEdgeShare = 0.25f;
@@ -463,7 +465,7 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     e.record = movedRecord(mover, centre, i, j, false, 1.0);
     e.record.i = i;
     e.record.j = j;
-    e.record.raysPerPixel = 4;
+    e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
     e.record.color = color;
     // The other ways of predicting the pixel: the disagreement of each with this one.
     Color other;

@@ -17,7 +17,11 @@
 //  - Estimate. The same pixel predicted other ways: with linear motion (the inner pair alone),
 //    from each inner key's points alone, and, where the inner pair agree on the pixel itself,
 //    per pixel. The largest squared colour difference to the prediction, levels² of 255 summed
-//    over the channels, is the estimate; what no prediction reaches stays to be re-traced.
+//    over the channels, is the estimate; what no prediction reaches stays to be re-traced. The
+//    ways may all move an edge alike and still misplace it by a fraction of a pixel (the keys
+//    place it only to their pixels' grain), which changes the pixel by that fraction of the
+//    contrast across it: so the estimate is also at least a quarter of the squared difference
+//    to what the moved points show at the centres of the 8 neighbours.
 // Private to ASRT::Interpolation. Deterministic: the result does not depend on the thread count.
 #ifndef asrt_PathEdges_h
 #define asrt_PathEdges_h

@@ -30,6 +30,8 @@
 //    of the texture lies just beside them (keys far apart move a pixel across many texels), so
 //    the texture is also sampled one disagreement in (u, v) further on and to either side. A
 //    linear prediction's estimate is also at least the squared colour step between its keys.
+//    A moved edge's estimate is the disagreement of the other ways of moving the scene points,
+//    and of the pixel's own prediction where there is one, with the prediction (PathEdges.h).
 // Plain C++ with OpenMP over rows; the result does not depend on the number of threads.
 #ifndef asrt_PathInterpolation_h
 #define asrt_PathInterpolation_h
@@ -138,15 +140,15 @@ struct PathCompletion
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
 /// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
-/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend): per way, the
-/// probes' true error over their estimate, at least 1. What the chosen pixels leave untraced is
-/// bounded per way of predicting by the larger of its calibrated estimates and its probes placed
-/// at or below them in the order (at least 16): their mean error plus two standard errors, with
-/// one more probe of the way's typical error counted in, since probes that all came out exact
-/// show only that errors are rare. The estimated PSNR is infinite only when nothing predicted is
-/// left. Re-traced records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws
-/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
-/// size.
+/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge):
+/// per way, the probes' true error over their estimate, at least 1. What the chosen pixels leave
+/// untraced is bounded per way of predicting by the larger of its calibrated estimates and its
+/// probes placed at or below them in the order (at least 16): their mean error plus two standard
+/// errors, with one more probe of the way's typical error counted in, since probes that all came
+/// out exact show only that errors are rare. The estimated PSNR is infinite only when nothing
+/// predicted is left. Re-traced records are the full frame's, bit for bit
+/// (FrameTracer::tracePixels). Throws InvalidParameter for a target outside (0,
+/// kMaxQualityTargetDb] or NaN, or a tracer of another size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
