@@ -3,8 +3,16 @@
 // against the converged picture of its view (8×8 point samples a pixel, traced here) and against
 // the frame traced at its parameters with the same settings; the estimate's rank correlation with
 // the true error; the re-trace share it needs for 35 and 40 dB against an oracle's (true error
-// first); and the cost against tracing the frame. Prints a Markdown section for bench/REPORT.md.
+// first); and the cost against tracing the frame. Each target is met twice, with the keys' moved
+// scene points predicting the pixels near edges the inner keys disagree on (PathMethod::MovedEdge)
+// and without (those pixels all re-traced): the before and after of that method, in one run.
+// Prints a Markdown section for bench/REPORT.md.
 // Usage: asrt_bench_path   (from the repository root)
+// Environment, to keep a run short or widen it: ASRT_BENCH_PATH_SIDE (frame side, 200),
+// ASRT_BENCH_PATH_FRAMES (0: the four frames midway between h = 0.055 keys; N: the N frames of a
+// movie along the ramp, those that are not keys), ASRT_BENCH_PATH_SPACINGS (key spacings,
+// "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (point
+// samples a side of the converged frames, 8).
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
@@ -19,7 +27,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <numeric>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -28,8 +38,27 @@ using namespace asrt;
 namespace
 {
 const std::string kScene = "Data/scenes/fig4-mass-start.json";
-constexpr int kSide = 200;
-constexpr int kReferenceSide = 8;
+int kSide = 200;
+int kReferenceSide = 8;
+
+double envNumber(const char* name, double fallback)
+{
+  const char* v = std::getenv(name);
+  return v && *v ? std::atof(v) : fallback;
+}
+
+std::vector<double> envList(const char* name, const std::vector<double>& fallback)
+{
+  const char* v = std::getenv(name);
+  if (!v || !*v)
+    return fallback;
+  std::vector<double> out;
+  std::stringstream in(v);
+  std::string item;
+  while (std::getline(in, item, ','))
+    out.push_back(std::atof(item.c_str()));
+  return out;
+}
 
 double now()
 {
@@ -158,9 +187,28 @@ int main()
   if (getloadavg(load, 3) < 0)
     load[0] = -1;
   const double tStart = now();
-  const std::vector<double> spacings = { 0.11, 0.055 };
-  // Frames between keys on both spacings' lattices (0.1 + k h): midway between the h = 0.055 keys.
-  const std::vector<double> masses = { 0.3475, 0.6225, 0.8975, 1.1725 };
+  kSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_SIDE", 200));
+  kReferenceSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_REFERENCE", 8));
+  const int movieFrames = static_cast<int>(envNumber("ASRT_BENCH_PATH_FRAMES", 0));
+  const std::vector<double> spacings = envList("ASRT_BENCH_PATH_SPACINGS", { 0.11, 0.055 });
+  const std::vector<double> targets = envList("ASRT_BENCH_PATH_TARGETS", { 30, 35, 40 });
+  // Frames between keys on both spacings' lattices (0.1 + k h): midway between the h = 0.055 keys;
+  // or a movie's frames along the ramp, less those on a key (interpolation returns keys as such).
+  std::vector<double> masses = { 0.3475, 0.6225, 0.8975, 1.1725 };
+  if (movieFrames >= 2)
+  {
+    masses.clear();
+    for (int k = 0; k < movieFrames; ++k)
+    {
+      const double m = 0.1 + 1.1 * k / (movieFrames - 1);
+      bool onKey = false;
+      for (double h : spacings)
+        onKey = onKey || std::abs((m - 0.1) / h - std::round((m - 0.1) / h)) < 1e-9;
+      if (!onKey)
+        masses.push_back(m);
+    }
+  }
+  const bool detailed = masses.size() <= 8;
   std::vector<Frame> frames;
   AntialiasOptions referenceRendering;
   referenceRendering.mode = AntialiasMode::None;
@@ -181,6 +229,10 @@ int main()
     std::fprintf(stderr, "frame M = %.4f traced (%.2f s) with its reference\n", m, f.traceSeconds);
     frames.push_back(std::move(f));
   }
+  double traceSeconds = 0;
+  for (const Frame& f : frames)
+    traceSeconds += f.traceSeconds;
+  traceSeconds /= static_cast<double>(frames.size());
 
   std::printf("<!-- path:begin -->\n## Interpolation along a path, per pixel\n\n");
   std::printf("- **Machine:** %ld CPU(s), %d OpenMP threads, load average %.1f when the run "
@@ -188,31 +240,41 @@ int main()
               sysconf(_SC_NPROCESSORS_ONLN), omp_get_max_threads(), load[0]);
   std::printf("- **Regenerate:** `bench/run` (`ASRT_BENCH_ONLY=path`); it runs "
               "`build-bench/bin/asrt_bench_path` from the repository root.\n");
+  std::string frameText;
+  if (movieFrames >= 2)
+    frameText = "the " + std::to_string(masses.size()) + " frames of a " +
+                std::to_string(movieFrames) + "-frame movie along it that are not keys";
+  else
+    frameText = "frames at M = 0.3475, 0.6225, 0.8975, 1.1725 (midway between h = 0.055 keys)";
   std::printf(
     "- **Set-up.** `%s` at %d×%d, the default rendering, its mass ramp M = 0.1 → 1.2 "
-    "with key frames every h; frames at M = 0.3475, 0.6225, 0.8975, 1.1725 (midway "
-    "between h = 0.055 keys). **Converged**: %d×%d point samples a pixel (%.0f s for the four). "
+    "with key frames every h; %s. **Converged**: %d×%d point samples a pixel (%.0f s for all). "
     "**Traced**: the frame traced at its mass with the keys' settings (%.2f s a frame "
     "on average). Each interpolated frame comes from the 4 keys around it "
     "(`interpolateAlongPath`), then `completePathFrame` re-traces to the target (against "
     "the traced frame); its re-traced share counts every ray traced at t (the "
-    "must-re-trace pixels, the chosen ones and the probes).\n\n",
-    kScene.c_str(), kSide, kSide, kReferenceSide, kReferenceSide, referenceSeconds,
-    [&]
-    {
-      double s = 0;
-      for (const Frame& f : frames)
-        s += f.traceSeconds;
-      return s / frames.size();
-    }());
+    "must-re-trace pixels, the chosen ones and the probes). **Moved edges**: the pixels near an "
+    "edge the inner keys disagree on predicted from the keys' scene points moved through the "
+    "chain (`PathOptions::movedEdges`, the default); **all re-traced**: without, every such pixel "
+    "re-traced (the method before moved edges).\n\n",
+    kScene.c_str(), kSide, kSide, frameText.c_str(), kReferenceSide, kReferenceSide,
+    referenceSeconds, traceSeconds);
 
-  std::printf("| h | M | traced vs converged | method | re-traced | vs traced | vs converged | "
-              "time (× trace) |\n|---|---|---|---|---|---|---|---|\n");
+  if (detailed)
+    std::printf("| h | M | traced vs converged | method | re-traced | vs traced | vs converged | "
+                "time (× trace) |\n|---|---|---|---|---|---|---|---|\n");
   struct Ranking
   {
-    double h, mass, spearman, must, estimate35, oracle35, estimate40, oracle40;
+    double h, mass, spearman, mustBefore, must, moved, estimate35, oracle35, estimate40, oracle40;
+  };
+  struct Outcome
+  {
+    double h, target;
+    bool moved;
+    double share, vsTraced, vsConverged;
   };
   std::vector<Ranking> rankings;
+  std::vector<Outcome> outcomes;
   for (double h : spacings)
   {
     const int K = static_cast<int>(std::lround(1.1 / h)) + 1;
@@ -231,8 +293,14 @@ int main()
       for (int k = 0; k < K; ++k)
         path.push_back({ s[k], &keys[k] });
       const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
-      // The plain frame, the estimate's ranking against the truth, and the oracle.
+      PathOptions without;
+      without.movedEdges = false;
+      const double tPlain = now();
       const PathFrame plain = interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene);
+      const double plainSeconds = now() - tPlain;
+      const PathFrame plainBefore =
+        interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, without);
+      // The plain frame, the estimate's ranking against the truth, and the oracle.
       const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
       std::vector<double> err2(plain.records.size()), est, truth;
       std::size_t must = 0;
@@ -252,40 +320,111 @@ int main()
       std::vector<std::size_t> byTruth = byEstimate;
       std::stable_sort(byTruth.begin() + must, byTruth.end(),
                        [&](std::size_t a, std::size_t b) { return err2[a] > err2[b]; });
-      rankings.push_back({ h, f.mass, spearman(est, truth), double(must) / err2.size(),
-                           shareFor(byEstimate, must, err2, 35), shareFor(byTruth, must, err2, 35),
-                           shareFor(byEstimate, must, err2, 40),
-                           shareFor(byTruth, must, err2, 40) });
-      std::printf("| %g | %.4f | %s | plain (nothing re-traced) | 0 | %s | %s | |\n", h, f.mass,
-                  dbs(tracedVsRef).c_str(), dbs(psnrOf(plainRgb, f.tracedRgb)).c_str(),
-                  dbs(psnrOf(plainRgb, f.reference)).c_str());
+      const double n = static_cast<double>(err2.size());
+      rankings.push_back(
+        { h, f.mass, spearman(est, truth),
+          plainBefore.counts()[static_cast<std::size_t>(PathMethod::Retrace)] / n, must / n,
+          plain.counts()[static_cast<std::size_t>(PathMethod::MovedEdge)] / n,
+          shareFor(byEstimate, must, err2, 35), shareFor(byTruth, must, err2, 35),
+          shareFor(byEstimate, must, err2, 40), shareFor(byTruth, must, err2, 40) });
+      if (detailed)
+        std::printf("| %g | %.4f | %s | plain (nothing re-traced) | 0 | %s | %s | %.2f |\n", h,
+                    f.mass, dbs(tracedVsRef).c_str(), dbs(psnrOf(plainRgb, f.tracedRgb)).c_str(),
+                    dbs(psnrOf(plainRgb, f.reference)).c_str(), plainSeconds / f.traceSeconds);
       const SceneDescription atT = rampScene(f.mass);
       const FrameTracer tracer(atT);
-      for (double target : { 30.0, 35.0, 40.0 })
-      {
-        PathFrame done = plain;
-        const double t0 = now();
-        const PathCompletion c = completePathFrame(done, tracer, target);
-        const double seconds = now() - t0;
-        const std::vector<std::uint8_t> rgb = rgbOf(done.records);
-        std::printf("| %g | %.4f | | --quality %.0f | %s | %s | %s | %.2f |\n", h, f.mass, target,
-                    pct(double(c.retraced) / done.records.size()).c_str(),
-                    dbs(psnrOf(rgb, f.tracedRgb)).c_str(), dbs(psnrOf(rgb, f.reference)).c_str(),
-                    seconds / f.traceSeconds);
-      }
+      for (double target : targets)
+        for (const bool moved : { false, true })
+        {
+          PathFrame done = moved ? plain : plainBefore;
+          const double t0 = now();
+          const PathCompletion c = completePathFrame(done, tracer, target);
+          const double seconds = now() - t0;
+          const std::vector<std::uint8_t> rgb = rgbOf(done.records);
+          const Outcome o{ h,
+                           target,
+                           moved,
+                           double(c.retraced) / done.records.size(),
+                           psnrOf(rgb, f.tracedRgb),
+                           psnrOf(rgb, f.reference) };
+          outcomes.push_back(o);
+          if (detailed)
+            std::printf("| %g | %.4f | | --quality %.0f, %s | %s | %s | %s | %.2f |\n", h, f.mass,
+                        target, moved ? "moved edges" : "all re-traced", pct(o.share).c_str(),
+                        dbs(o.vsTraced).c_str(), dbs(o.vsConverged).c_str(),
+                        seconds / f.traceSeconds);
+        }
+      std::fprintf(stderr, "h = %g, M = %.4f done (%.0f s so far)\n", h, f.mass, now() - tStart);
     }
   }
+  std::printf("\n**Moved edges against all re-traced**, per key spacing and target, over the %zu "
+              "frames: the share re-traced (mean), PSNR against the converged and the traced frame "
+              "(mean / worst), and the frames below the target less 1 dB against each:\n\n",
+              frames.size());
+  std::printf("| h | target | near edges | re-traced | vs converged | vs traced | below T − 1 "
+              "(converged) | below T − 1 (traced) |\n|---|---|---|---|---|---|---|---|\n");
+  for (double h : spacings)
+    for (double target : targets)
+      for (const bool moved : { false, true })
+      {
+        double share = 0, conv = 0, trac = 0, worstConv = 1e9, worstTrac = 1e9, count = 0;
+        int belowConv = 0, belowTrac = 0;
+        for (const Outcome& o : outcomes)
+          if (o.h == h && o.target == target && o.moved == moved)
+          {
+            count += 1;
+            share += o.share;
+            conv += std::min(o.vsConverged, 99.0);
+            trac += std::min(o.vsTraced, 99.0);
+            worstConv = std::min(worstConv, o.vsConverged);
+            worstTrac = std::min(worstTrac, o.vsTraced);
+            belowConv += o.vsConverged < target - 1;
+            belowTrac += o.vsTraced < target - 1;
+          }
+        std::printf("| %g | %.0f | %s | %s | %s / %s | %s / %s | %d | %d |\n", h, target,
+                    moved ? "moved edges" : "all re-traced", pct(share / count).c_str(),
+                    dbs(conv / count).c_str(), dbs(worstConv).c_str(), dbs(trac / count).c_str(),
+                    dbs(worstTrac).c_str(), belowConv, belowTrac);
+      }
   std::printf(
     "\n**The estimate against the truth** (the plain frame's pixels that the keys vouch "
-    "for; the share re-traced in all, the must-re-trace pixels first, for the frame to reach "
-    "35 or 40 dB against the traced frame when pixels are re-traced in the estimate's "
-    "order and in the true error's, the oracle):\n\n");
-  std::printf("| h | M | Spearman | must re-trace | 35 dB: estimate | 35 dB: oracle | 40 dB: "
-              "estimate | 40 dB: oracle |\n|---|---|---|---|---|---|---|---|\n");
-  for (const Ranking& r : rankings)
-    std::printf("| %g | %.4f | %.2f | %s | %s | %s | %s | %s |\n", r.h, r.mass, r.spearman,
-                pct(r.must).c_str(), pct(r.estimate35).c_str(), pct(r.oracle35).c_str(),
-                pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
+    "for, moved edges included; the share re-traced in all, the must-re-trace pixels first, for "
+    "the frame to reach 35 or 40 dB against the traced frame when pixels are re-traced in the "
+    "estimate's order and in the true error's, the oracle; must re-trace before: without moved "
+    "edges):\n\n");
+  std::printf("| h | M | Spearman | must re-trace before | moved edges | must re-trace | 35 dB: "
+              "estimate | 35 dB: oracle | 40 dB: estimate | 40 dB: oracle "
+              "|\n|---|---|---|---|---|---|---|---|---|---|\n");
+  for (double h : spacings)
+  {
+    Ranking mean{ h, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+    double count = 0;
+    for (const Ranking& r : rankings)
+    {
+      if (r.h != h)
+        continue;
+      if (detailed)
+        std::printf("| %g | %.4f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", r.h, r.mass,
+                    r.spearman, pct(r.mustBefore).c_str(), pct(r.moved).c_str(),
+                    pct(r.must).c_str(), pct(r.estimate35).c_str(), pct(r.oracle35).c_str(),
+                    pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
+      count += 1;
+      mean.spearman += r.spearman;
+      mean.mustBefore += r.mustBefore;
+      mean.moved += r.moved;
+      mean.must += r.must;
+      mean.estimate35 += r.estimate35;
+      mean.oracle35 += r.oracle35;
+      mean.estimate40 += r.estimate40;
+      mean.oracle40 += r.oracle40;
+    }
+    if (!detailed && count > 0)
+      std::printf("| %g | mean of %.0f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", h, count,
+                  mean.spearman / count, pct(mean.mustBefore / count).c_str(),
+                  pct(mean.moved / count).c_str(), pct(mean.must / count).c_str(),
+                  pct(mean.estimate35 / count).c_str(), pct(mean.oracle35 / count).c_str(),
+                  pct(mean.estimate40 / count).c_str(), pct(mean.oracle40 / count).c_str());
+  }
   std::printf("\nThe whole section took %.0f s.\n<!-- path:end -->\n", now() - tStart);
   return 0;
 }

@@ -2,6 +2,7 @@
 
 #include "ErrorEstimate.h"
 #include "FrameTracer.h"
+#include "PathEdges.h"
 
 #include <algorithm>
 #include <cmath>
@@ -340,6 +341,31 @@ std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
   }
   return remaining;
 }
+/// The pixels left to be re-traced, predicted where the keys' moved scene points cover them and
+/// the ways of predicting them give a finite estimate (PathEdges.h).
+void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
+                  const std::vector<RayRecord>& own, const std::vector<std::uint8_t>& hasOwn,
+                  PathFrame& f)
+{
+  std::vector<std::int32_t> pixels;
+  std::vector<const RayRecord*> perPixel;
+  for (std::size_t p = 0; p < f.method.size(); ++p)
+    if (f.method[p] == static_cast<std::uint8_t>(PathMethod::Retrace))
+    {
+      pixels.push_back(static_cast<std::int32_t>(p));
+      perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
+    }
+  const std::vector<MovedEdgePixel> moved =
+    predictMovedEdges(keys, a, t, f.width, f.height, scene, pixels, perPixel);
+  for (std::size_t k = 0; k < pixels.size(); ++k)
+    if (moved[k].covered && std::isfinite(moved[k].estimate))
+    {
+      const std::size_t p = static_cast<std::size_t>(pixels[k]);
+      f.records[p] = moved[k].record;
+      f.estimate[p] = moved[k].estimate;
+      f.method[p] = static_cast<std::uint8_t>(PathMethod::MovedEdge);
+    }
+}
 }
 
 const char* toString(PathMethod m)
@@ -360,6 +386,8 @@ const char* toString(PathMethod m)
       return "retraced";
     case PathMethod::EdgeBlend:
       return "edge";
+    case PathMethod::MovedEdge:
+      return "moved";
   }
   return "unknown";
 }
@@ -451,6 +479,12 @@ Color shadePrediction(const Scene& scene, const RayRecord& r)
 PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,
                                const Scene& scene)
 {
+  return interpolateAlongPath(keys, t, width, height, scene, PathOptions{});
+}
+
+PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,
+                               const Scene& scene, const PathOptions& options)
+{
   checkKeys(keys, t, width, height);
   PathFrame f;
   f.width = width;
@@ -478,6 +512,15 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   f.records.resize(n);
   f.estimate.resize(n);
   f.method.resize(n);
+  // Per pixel near a disagreement that the inner keys agree on, its own prediction, which the
+  // moved edge is held against (flag 1: there is one).
+  std::vector<RayRecord> own;
+  std::vector<std::uint8_t> hasOwn;
+  if (options.movedEdges)
+  {
+    own.resize(n);
+    hasOwn.assign(n, 0);
+  }
   const float unknown = std::numeric_limits<float>::infinity();
 #pragma omp parallel for schedule(dynamic, 4)
   for (int j = 0; j < height; ++j)
@@ -498,6 +541,13 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
         f.records[p] = nearerA ? ka[p] : kb[p];
         f.estimate[p] = unknown;
         f.method[p] = static_cast<std::uint8_t>(PathMethod::Retrace);
+        if (options.movedEdges && !disagree[p] && singleRay(ka[p]) && singleRay(kb[p]))
+        {
+          PathMethod m;
+          float e;
+          own[p] = predictPixel(keys, a, p, t, scene, m, e);
+          hasOwn[p] = 1;
+        }
         continue;
       }
       PathMethod m;
@@ -507,6 +557,8 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
         f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
       f.method[p] = static_cast<std::uint8_t>(m);
     }
+  if (options.movedEdges)
+    predictEdges(keys, a, t, scene, own, hasOwn, f);
   return f;
 }
 

@@ -6,9 +6,10 @@
 //  - Nodes. The inner pair of keys brackets t. If their records of the pixel end alike (object,
 //    termination, a winding that is continuous between them), the outer neighbours join when they
 //    end alike too: 4 nodes give a cubic Lagrange prediction, 3 a quadratic, 2 a linear one.
-//    Otherwise the pixel must be re-traced, and so must its 8 neighbours (an edge that moves
-//    between the keys may cross them at t); so must a pixel that either inner key supersampled
-//    (an edge runs through it).
+//    Otherwise the keys cannot vouch for the pixel, nor for its 8 neighbours (an edge that moves
+//    between the keys may cross them at t): these are predicted by moving the keys' scene points
+//    across the picture (PathEdges.h, PathMethod::MovedEdge), and re-traced where no moved point
+//    covers them (or, without PathOptions::movedEdges, all re-traced).
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
@@ -29,6 +30,8 @@
 //    of the texture lies just beside them (keys far apart move a pixel across many texels), so
 //    the texture is also sampled one disagreement in (u, v) further on and to either side. A
 //    linear prediction's estimate is also at least the squared colour step between its keys.
+//    A moved edge's estimate is the disagreement of the other ways of moving the scene points,
+//    and of the pixel's own prediction where there is one, with the prediction (PathEdges.h).
 // Plain C++ with OpenMP over rows; the result does not depend on the number of threads.
 #ifndef asrt_PathInterpolation_h
 #define asrt_PathInterpolation_h
@@ -67,9 +70,10 @@ enum class PathMethod : std::uint8_t
   Linear = 3,    ///< 2 nodes
   Retrace = 4,   ///< the keys cannot vouch for it: to be traced (its record is the nearer key's)
   Retraced = 5,  ///< traced at t
-  EdgeBlend = 6  ///< an edge pixel: the keys' colours interpolated (its record is the nearer key's)
+  EdgeBlend = 6, ///< an edge pixel: the keys' colours interpolated (its record is the nearer key's)
+  MovedEdge = 7  ///< near an edge the inner keys disagree on: from the keys' scene points, moved
 };
-constexpr int kPathMethodCount = 7;
+constexpr int kPathMethodCount = 8;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
 
 /// A frame at parameter t of a path.
@@ -106,11 +110,22 @@ ASRTINTERPOLATION_EXPORT RayRecord predictRecord(const RayRecord* const* nodes, 
 /// horizon's, the background's or the failure colour.
 ASRTINTERPOLATION_EXPORT Color shadePrediction(const Scene& scene, const RayRecord& r);
 
+/// How interpolateAlongPath predicts.
+struct PathOptions
+{
+  /// Predict the pixels near an edge that the inner keys disagree on by moving the keys' scene
+  /// points (PathMethod::MovedEdge), instead of leaving them all to be re-traced.
+  bool movedEdges = true;
+};
+
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within
 /// [s_first, s_last], every key `width` × `height` records of the same pixels). Throws
 /// InvalidParameter naming what is wrong.
 ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
                                                         int width, int height, const Scene& scene);
+ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
+                                                        int width, int height, const Scene& scene,
+                                                        const PathOptions& options);
 
 /// What completing a path frame for a quality target did.
 struct PathCompletion
@@ -125,15 +140,15 @@ struct PathCompletion
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
 /// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
-/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend): per way, the
-/// probes' true error over their estimate, at least 1. What the chosen pixels leave untraced is
-/// bounded per way of predicting by the larger of its calibrated estimates and its probes placed
-/// at or below them in the order (at least 16): their mean error plus two standard errors, with
-/// one more probe of the way's typical error counted in, since probes that all came out exact
-/// show only that errors are rare. The estimated PSNR is infinite only when nothing predicted is
-/// left. Re-traced records are the full frame's, bit for bit (FrameTracer::tracePixels). Throws
-/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
-/// size.
+/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge):
+/// per way, the probes' true error over their estimate, at least 1. What the chosen pixels leave
+/// untraced is bounded per way of predicting by the larger of its calibrated estimates and its
+/// probes placed at or below them in the order (at least 16): their mean error plus two standard
+/// errors, with one more probe of the way's typical error counted in, since probes that all came
+/// out exact show only that errors are rare. The estimated PSNR is infinite only when nothing
+/// predicted is left. Re-traced records are the full frame's, bit for bit
+/// (FrameTracer::tracePixels). Throws InvalidParameter for a target outside (0,
+/// kMaxQualityTargetDb] or NaN, or a tracer of another size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,

@@ -1,0 +1,502 @@
+#include "PathEdges.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <numeric>
+
+namespace asrt
+{
+namespace
+{
+/// A balanced k-d tree: order_[lo, hi) is a subtree whose root is its middle element, split on
+/// the axis of the range's widest spread (axis_ of that element).
+class PointTree final : public PointIndex
+{
+public:
+  explicit PointTree(const std::vector<Vec3>& points)
+    : points_(points)
+  {
+    for (std::size_t k = 0; k < points.size(); ++k)
+      if (points[k].allFinite())
+        order_.push_back(static_cast<std::int64_t>(k));
+    axis_.assign(order_.size(), 0);
+    this->build(0, order_.size());
+  }
+
+  std::int64_t nearestWithin(const Vec3& x, double radius) const override
+  {
+    std::int64_t best = -1;
+    double bestD2 = radius * radius;
+    this->nearest(0, order_.size(), x, best, bestD2);
+    return best;
+  }
+
+  void within(const Vec3& x, double radius, std::vector<std::int64_t>& out) const override
+  {
+    out.clear();
+    this->collect(0, order_.size(), x, radius * radius, out);
+  }
+
+private:
+  void build(std::size_t lo, std::size_t hi)
+  {
+    if (hi - lo < 2)
+      return;
+    Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
+    for (std::size_t k = lo; k < hi; ++k)
+    {
+      low = low.cwiseMin(points_[static_cast<std::size_t>(order_[k])]);
+      high = high.cwiseMax(points_[static_cast<std::size_t>(order_[k])]);
+    }
+    int axis = 0;
+    (high - low).maxCoeff(&axis);
+    const std::size_t mid = lo + (hi - lo) / 2;
+    auto less = [&](std::int64_t a, std::int64_t b)
+    {
+      const double pa = points_[static_cast<std::size_t>(a)][axis];
+      const double pb = points_[static_cast<std::size_t>(b)][axis];
+      return pa != pb ? pa < pb : a < b;
+    };
+    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(lo),
+                     order_.begin() + static_cast<std::ptrdiff_t>(mid),
+                     order_.begin() + static_cast<std::ptrdiff_t>(hi), less);
+    axis_[mid] = static_cast<std::uint8_t>(axis);
+    this->build(lo, mid);
+    this->build(mid + 1, hi);
+  }
+
+  void nearest(std::size_t lo, std::size_t hi, const Vec3& x, std::int64_t& best,
+               double& bestD2) const
+  {
+    if (lo >= hi)
+      return;
+    const std::size_t mid = lo + (hi - lo) / 2;
+    const std::int64_t k = order_[mid];
+    const Vec3& p = points_[static_cast<std::size_t>(k)];
+    const double d2 = (p - x).squaredNorm();
+    if (d2 < bestD2 || (d2 == bestD2 && (best < 0 || k < best)))
+    {
+      best = k;
+      bestD2 = d2;
+    }
+    if (hi - lo == 1)
+      return;
+    const double diff = x[axis_[mid]] - p[axis_[mid]];
+    const bool leftFirst = diff < 0;
+    this->nearest(leftFirst ? lo : mid + 1, leftFirst ? mid : hi, x, best, bestD2);
+    if (diff * diff <= bestD2)
+      this->nearest(leftFirst ? mid + 1 : lo, leftFirst ? hi : mid, x, best, bestD2);
+  }
+
+  void collect(std::size_t lo, std::size_t hi, const Vec3& x, double r2,
+               std::vector<std::int64_t>& out) const
+  {
+    if (lo >= hi)
+      return;
+    const std::size_t mid = lo + (hi - lo) / 2;
+    const Vec3& p = points_[static_cast<std::size_t>(order_[mid])];
+    if ((p - x).squaredNorm() <= r2)
+      out.push_back(order_[mid]);
+    if (hi - lo == 1)
+      return;
+    const double diff = x[axis_[mid]] - p[axis_[mid]];
+    if (diff <= 0 || diff * diff <= r2)
+      this->collect(lo, mid, x, r2, out);
+    if (diff >= 0 || diff * diff <= r2)
+      this->collect(mid + 1, hi, x, r2, out);
+  }
+
+  const std::vector<Vec3> points_;
+  std::vector<std::int64_t> order_;
+  std::vector<std::uint8_t> axis_;
+};
+
+float colorError2(const Color& a, const Color& b)
+{
+  const Color d = 255.0 * (a - b);
+  return static_cast<float>(d.squaredNorm());
+}
+
+/// The vertical view angle (degrees) the keys' rays were aimed with: from the directions, in the
+/// observer's frame (right, up, forward), of two rows about the middle of the middle column.
+double viewAngleOf(const std::vector<RayRecord>& records, int width, int height)
+{
+  if (height < 2)
+    return 30.0;
+  const std::size_t i = static_cast<std::size_t>(width / 2);
+  const std::size_t j = static_cast<std::size_t>(height / 2);
+  const Vec3& d0 = records[(j - 1) * static_cast<std::size_t>(width) + i].direction;
+  const Vec3& d1 = records[j * static_cast<std::size_t>(width) + i].direction;
+  if (!(d0.z() > 0 && d1.z() > 0))
+    return 30.0;
+  const double pixel = d1.y() / d1.z() - d0.y() / d0.z(); // 2 tan(angle / 2) / height
+  const double angle = 2.0 * std::atan(0.5 * pixel * height) * 180.0 / M_PI;
+  return angle > 0 && angle < 180 ? angle : 30.0;
+}
+
+/// Where no point can be followed: a lost ray.
+bool followable(const RayRecord& r)
+{
+  return r.termination == Termination::Escaped || r.termination == Termination::Captured ||
+         r.termination == Termination::HitObject;
+}
+
+/// A scene point of an inner key, moved to t.
+struct Mover
+{
+  double x[2] = { 0, 0 };         ///< at t, through every key it is matched in
+  double lin[2] = { 0, 0 };       ///< at t, through the inner pair alone
+  double inv[4] = { 1, 0, 0, 1 }; ///< inverse of its pixel's map to t, row-major
+  double length = 0;              ///< path length: the shorter covers the longer
+  const RayRecord* record = nullptr;
+  std::uint8_t side = 0; ///< 0: key a's, 1: key a + 1's
+  bool usable = false;
+};
+
+/// Whether the spot at offset d within a mover's source pixel still lies on its object: the
+/// surface's v, carried there by the record's Jacobian, stays within [0, 1] (the object's
+/// extent; u may wrap round). A point by an object's rim covers only the part of its square
+/// on the object's side of the rim, which places the rim within the pixel.
+bool onSurface(const Mover& m, const double* d)
+{
+  const RayRecord& r = *m.record;
+  if (r.objectId < 0 || !std::isfinite(r.dvdi + r.dvdj))
+    return true;
+  const double v = r.v + r.dvdi * d[0] + r.dvdj * d[1];
+  return v >= 0.0 && v <= 1.0;
+}
+
+/// Farthest a mover's square reaches from its centre along either axis, in pixels: movers
+/// stretched wider are left to the others (the photon ring between keys far apart).
+constexpr int kReach = 3;
+/// Slack on a square's edges, so that neighbouring squares leave no cracks to rounding.
+constexpr double kSeam = 1e-6;
+/// Farthest outside every square that a spot still takes the nearest one (a hairline gap
+/// between squares that do not quite tile where the motion bends); beyond it, nothing covers it.
+constexpr double kGap = 0.25;
+
+class EdgeMover
+{
+public:
+  EdgeMover(const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height)
+    : width_(width)
+    , height_(height)
+  {
+    const double va = viewAngleOf(*keys[a].records, width, height);
+    auto samples = [&](std::size_t k)
+    { return samplesFromRecords(*keys[k].records, width, height, va, "key " + std::to_string(k)); };
+    const FrameSamples sa = samples(a), sb = samples(a + 1);
+    const Correspondence inner = matchFrames(sa, sb, makePointTree);
+    Correspondence left, right;
+    const bool hasLeft = a > 0, hasRight = a + 2 < keys.size();
+    if (hasLeft)
+      left = matchFrames(samples(a - 1), sa, makePointTree);
+    if (hasRight)
+      right = matchFrames(sb, samples(a + 2), makePointTree);
+    // Per inner key: its map to the other inner key, and to its own outer neighbour.
+    const std::vector<PixelMatch>* toOther[2] = { &inner.aToB, &inner.bToA };
+    const std::vector<PixelMatch>* toOuter[2] = { hasLeft ? &left.bToA : nullptr,
+                                                  hasRight ? &right.aToB : nullptr };
+    const double sInner[2] = { keys[a].s, keys[a + 1].s };
+    const double sOuter[2] = { hasLeft ? keys[a - 1].s : 0.0, hasRight ? keys[a + 2].s : 0.0 };
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    movers_.resize(2 * n);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(2 * n); ++k)
+    {
+      const int side = k < static_cast<std::int64_t>(n) ? 0 : 1;
+      const std::size_t p = static_cast<std::size_t>(k) - side * n;
+      const RayRecord& r = (*keys[a + side].records)[p];
+      Mover& m = movers_[static_cast<std::size_t>(k)];
+      m.record = &r;
+      m.side = static_cast<std::uint8_t>(side);
+      m.length = r.termination == Termination::Captured ? std::numeric_limits<double>::infinity()
+                                                        : r.affineLength;
+      if (!followable(r))
+        continue;
+      const int other = 1 - side;
+      const PixelMatch& toB = (*toOther[side])[p];
+      double s[4], x[4], y[4];
+      int count = 0;
+      auto node = [&](double sk, double xk, double yk)
+      {
+        s[count] = sk;
+        x[count] = xk;
+        y[count++] = yk;
+      };
+      node(sInner[side], static_cast<double>(p % width), static_cast<double>(p / width));
+      node(sInner[other], toB.x, toB.y);
+      double w[4];
+      lagrangeWeights(s, 2, t, w);
+      m.lin[0] = w[0] * x[0] + w[1] * x[1];
+      m.lin[1] = w[0] * y[0] + w[1] * y[1];
+      if (toOuter[side] && (*toOuter[side])[p].kind == MatchKind::Matched)
+        node(sOuter[side], (*toOuter[side])[p].x, (*toOuter[side])[p].y);
+      if (toB.kind == MatchKind::Matched && toOuter[other] && toB.partner >= 0)
+      {
+        const std::size_t q = static_cast<std::size_t>(toB.partner);
+        const PixelMatch& beyond = (*toOuter[other])[q];
+        if (beyond.kind == MatchKind::Matched)
+        {
+          // The point lies off the partner's centre: carry the offset through its map.
+          const double ox = toB.x - static_cast<double>(q % width);
+          const double oy = toB.y - static_cast<double>(q / width);
+          const auto& J = beyond.jacobian;
+          node(sOuter[other], beyond.x + J[0] * ox + J[1] * oy, beyond.y + J[2] * ox + J[3] * oy);
+        }
+      }
+      lagrangeWeights(s, count, t, w);
+      for (int c = 0; c < count; ++c)
+      {
+        m.x[0] += w[c] * x[c];
+        m.x[1] += w[c] * y[c];
+      }
+      // The pixel's unit square maps to t by (1 − τ)·I + τ·D.
+      const double tau = (t - sInner[side]) / (sInner[other] - sInner[side]);
+      const auto& D = toB.jacobian;
+      const double M[4] = { 1 - tau + tau * D[0], tau * D[1], tau * D[2], 1 - tau + tau * D[3] };
+      const double det = M[0] * M[3] - M[1] * M[2];
+      const double hx = 0.5 * (std::abs(M[0]) + std::abs(M[1]));
+      const double hy = 0.5 * (std::abs(M[2]) + std::abs(M[3]));
+      if (!(std::abs(det) > 1e-3) || !(hx + kGap < kReach) || !(hy + kGap < kReach) ||
+          !std::isfinite(m.x[0] + m.x[1] + m.lin[0] + m.lin[1]))
+        continue;
+      m.inv[0] = M[3] / det;
+      m.inv[1] = -M[1] / det;
+      m.inv[2] = -M[2] / det;
+      m.inv[3] = M[0] / det;
+      m.usable = true;
+    }
+    bucket(false, full_);
+    bucket(true, linear_);
+  }
+
+  /// The front mover covering spot (x, y) at t, −1 if none: with the positions through every
+  /// matched key or through the inner pair alone, the movers of the sides in `sides` (bit 0: key
+  /// a's, bit 1: key a + 1's).
+  std::int64_t front(double x, double y, bool linear, int sides) const
+  {
+    const Grid& g = linear ? linear_ : full_;
+    const int ci = static_cast<int>(std::floor(x + 0.5)),
+              cj = static_cast<int>(std::floor(y + 0.5));
+    std::int64_t best = -1, nearest = -1;
+    double bestLength = 0, nearestGap = kGap;
+    for (int dj = -kReach; dj <= kReach; ++dj)
+      for (int di = -kReach; di <= kReach; ++di)
+      {
+        const int cell = g.cell(ci + di, cj + dj);
+        if (cell < 0)
+          continue;
+        for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
+        {
+          const std::int64_t k = g.entries[static_cast<std::size_t>(e)];
+          const Mover& m = movers_[static_cast<std::size_t>(k)];
+          if (!((sides >> m.side) & 1))
+            continue;
+          double d[2];
+          this->offset(m, x, y, linear, d);
+          if (!onSurface(m, d))
+            continue;
+          const double out = std::max(std::abs(d[0]), std::abs(d[1])) - 0.5;
+          if (out <= kSeam)
+          {
+            if (best < 0 || m.length < bestLength || (m.length == bestLength && k < best))
+            {
+              best = k;
+              bestLength = m.length;
+            }
+          }
+          else if (out < nearestGap || (out == nearestGap && nearest >= 0 && k < nearest))
+          {
+            nearest = k;
+            nearestGap = out;
+          }
+        }
+      }
+    return best >= 0 ? best : nearest;
+  }
+
+  const Mover& mover(std::int64_t k) const
+  {
+    return movers_[static_cast<std::size_t>(k)];
+  }
+
+  /// Spot (x, y) in the mover's source pixel's coordinates, relative to its centre.
+  void offset(const Mover& m, double x, double y, bool linear, double* d) const
+  {
+    const double* c = linear ? m.lin : m.x;
+    const double ex = x - c[0], ey = y - c[1];
+    d[0] = m.inv[0] * ex + m.inv[1] * ey;
+    d[1] = m.inv[2] * ex + m.inv[3] * ey;
+  }
+
+private:
+  /// The usable movers by the pixel their position at t rounds to, in a grid widened by kReach.
+  struct Grid
+  {
+    int w = 0, h = 0;
+    std::vector<std::int64_t> start, entries;
+    int cell(int i, int j) const
+    {
+      i += kReach;
+      j += kReach;
+      return i >= 0 && i < w && j >= 0 && j < h ? j * w + i : -1;
+    }
+  };
+
+  void bucket(bool linear, Grid& g)
+  {
+    g.w = width_ + 2 * kReach;
+    g.h = height_ + 2 * kReach;
+    std::vector<int> cellOf(movers_.size(), -1);
+    g.start.assign(static_cast<std::size_t>(g.w) * g.h + 1, 0);
+    for (std::size_t k = 0; k < movers_.size(); ++k)
+    {
+      if (!movers_[k].usable)
+        continue;
+      const double* c = linear ? movers_[k].lin : movers_[k].x;
+      if (!(std::abs(c[0]) < 1e6 && std::abs(c[1]) < 1e6))
+        continue;
+      cellOf[k] =
+        g.cell(static_cast<int>(std::floor(c[0] + 0.5)), static_cast<int>(std::floor(c[1] + 0.5)));
+      if (cellOf[k] >= 0)
+        ++g.start[static_cast<std::size_t>(cellOf[k]) + 1];
+    }
+    std::partial_sum(g.start.begin(), g.start.end(), g.start.begin());
+    g.entries.resize(static_cast<std::size_t>(g.start.back()));
+    std::vector<std::int64_t> fill(g.start.begin(), g.start.end() - 1);
+    for (std::size_t k = 0; k < movers_.size(); ++k)
+      if (cellOf[k] >= 0)
+        g.entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(cellOf[k])]++)] =
+          static_cast<std::int64_t>(k);
+  }
+
+  int width_, height_;
+  std::vector<Mover> movers_;
+  Grid full_, linear_;
+};
+
+/// The record a mover shows at spot (x, y): its scene point's surface coordinates moved by the
+/// spot's offset within its source pixel, and the footprint of a pixel at t scaled by `scale`.
+RayRecord movedRecord(const EdgeMover& mover, std::int64_t k, double x, double y, bool linear,
+                      double scale)
+{
+  const Mover& m = mover.mover(k);
+  RayRecord r = *m.record;
+  if (r.objectId < 0)
+    return r;
+  double d[2];
+  mover.offset(m, x, y, linear, d);
+  const double J[4] = { r.dudi, r.dudj, r.dvdi, r.dvdj };
+  const bool footprint = std::isfinite(J[0] + J[1] + J[2] + J[3]);
+  if (footprint)
+  {
+    const double u = r.u + J[0] * d[0] + J[1] * d[1];
+    r.u = u - std::floor(u);
+    r.v = std::clamp(r.v + J[2] * d[0] + J[3] * d[1], 0.0, 1.0);
+    // ∂(u, v)/∂(spot) = J · M⁻¹.
+    r.dudi = scale * (J[0] * m.inv[0] + J[1] * m.inv[2]);
+    r.dudj = scale * (J[0] * m.inv[1] + J[1] * m.inv[3]);
+    r.dvdi = scale * (J[2] * m.inv[0] + J[3] * m.inv[2]);
+    r.dvdj = scale * (J[2] * m.inv[1] + J[3] * m.inv[3]);
+  }
+  return r;
+}
+
+/// Sub-positions of a pixel, as a 3×3 supersampled trace places its rays (the adaptive
+/// anti-aliasing's pattern at its default 9 rays).
+constexpr double kSub[9][2] = { { -1 / 3.0, -1 / 3.0 }, { 0, -1 / 3.0 }, { 1 / 3.0, -1 / 3.0 },
+                                { -1 / 3.0, 0 },        { 0, 0 },        { 1 / 3.0, 0 },
+                                { -1 / 3.0, 1 / 3.0 },  { 0, 1 / 3.0 },  { 1 / 3.0, 1 / 3.0 } };
+
+/// The centres of a pixel's 8 neighbours, relative to its own.
+constexpr double kNeighbours[8][2] = { { -1, 0 },  { 1, 0 },  { 0, -1 }, { 0, 1 },
+                                       { -1, -1 }, { 1, -1 }, { -1, 1 }, { 1, 1 } };
+/// The squared share of the contrast with a neighbour that an edge misplaced by about half a
+/// pixel leaves in the pixel's colour.
+constexpr float kEdgeShare = 0.25f;
+
+/// The mean colour of the pixel's sub-positions as one way of moving predicts it; false if a
+/// sub-position is covered by nothing.
+bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool linear, int sides,
+                Color& out)
+{
+  out = Color::Zero();
+  for (const auto& o : kSub)
+  {
+    const double x = i + o[0], y = j + o[1];
+    const std::int64_t k = mover.front(x, y, linear, sides);
+    if (k < 0)
+      return false;
+    out += shadePrediction(scene, movedRecord(mover, k, x, y, linear, 1 / 3.0)) / 9.0;
+  }
+  return true;
+}
+}
+
+std::unique_ptr<PointIndex> makePointTree(const std::vector<Vec3>& points)
+{
+  return std::make_unique<PointTree>(points);
+}
+
+std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
+                                              double t, int width, int height, const Scene& scene,
+                                              const std::vector<std::int32_t>& pixels,
+                                              const std::vector<const RayRecord*>& perPixel)
+{
+  std::vector<MovedEdgePixel> out(pixels.size());
+  if (pixels.empty())
+    return out;
+  const EdgeMover mover(keys, a, t, width, height);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::int64_t q = 0; q < static_cast<std::int64_t>(pixels.size()); ++q)
+  {
+    MovedEdgePixel& e = out[static_cast<std::size_t>(q)];
+    const int i = pixels[static_cast<std::size_t>(q)] % width;
+    const int j = pixels[static_cast<std::size_t>(q)] / width;
+    Color color;
+    const std::int64_t centre = mover.front(i, j, false, 3);
+    if (centre < 0 || !subsampled(mover, scene, i, j, false, 3, color))
+      continue;
+    e.covered = true;
+    e.record = movedRecord(mover, centre, i, j, false, 1.0);
+    e.record.i = i;
+    e.record.j = j;
+    e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
+    e.record.color = color;
+    // The other ways of predicting the pixel: the disagreement of each with this one.
+    Color other;
+    if (subsampled(mover, scene, i, j, true, 3, other))
+      e.estimate = std::max(e.estimate, colorError2(color, other));
+    else
+      e.estimate = std::numeric_limits<float>::infinity();
+    for (int side : { 1, 2 })
+      if (subsampled(mover, scene, i, j, false, side, other))
+        e.estimate = std::max(e.estimate, colorError2(color, other));
+    // An edge within a pixel of it that every prediction moves alike may still lie a fraction of
+    // a pixel off, which changes the pixel by that fraction of the contrast across the edge.
+    for (const auto& o : kNeighbours)
+    {
+      const double x = i + o[0], y = j + o[1];
+      const std::int64_t k = mover.front(x, y, false, 3);
+      if (k >= 0)
+        e.estimate = std::max(
+          e.estimate,
+          kEdgeShare *
+            colorError2(color, shadePrediction(scene, movedRecord(mover, k, x, y, false, 1.0))));
+    }
+    if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
+    {
+      e.estimate = std::max(e.estimate, colorError2(color, own->color));
+      // Where the edge leaves the pixel's own ray on the object it ends on at both keys, the
+      // per-pixel prediction, which follows the surface through every key, is kept.
+      if (own->objectId == e.record.objectId && own->termination == e.record.termination)
+        e.record = *own;
+    }
+  }
+  return out;
+}
+}

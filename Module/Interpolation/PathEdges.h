@@ -1,0 +1,58 @@
+// Moving edges along a movie path: the pixels near which the inner pair of keys disagree on what a
+// pixel's ray ends on (another object, another image, another way of ending) cannot be predicted
+// from the pixel's own records, but the scene points on either side of the edge can be followed.
+//
+//  - Motion. The scene points of both inner keys are matched to the other inner key
+//    (matchFrames), and through the outer keys where those match too: each point's position in
+//    the picture is then known at 2 to 4 keys and moves on the Lagrange polynomial through them
+//    (cubic, quadratic or linear in s). Points seen in one inner key only move as matchFrames
+//    extrapolates them from their matched neighbours.
+//  - Coverage. A point covers at t the parallelogram its source pixel maps to, the unit square
+//    through (1 − τ)·I + τ·D (D the match's Jacobian, τ the fraction of the way to the other inner
+//    key). Where several cover a spot, the lowest image order, then the shortest path, is in
+//    front, as in the splat interpolator.
+//  - Shading. The front point's (u, v), moved within its pixel by the surface Jacobian mapped to
+//    t, is shaded with the footprint filter at 3×3 sub-positions of the pixel, whose mean is the
+//    pixel's colour: an edge crossing the pixel then blends as a supersampled trace does.
+//  - Estimate. The same pixel predicted other ways: with linear motion (the inner pair alone),
+//    from each inner key's points alone, and, where the inner pair agree on the pixel itself,
+//    per pixel. The largest squared colour difference to the prediction, levels² of 255 summed
+//    over the channels, is the estimate; what no prediction reaches stays to be re-traced. The
+//    ways may all move an edge alike and still misplace it by a fraction of a pixel (the keys
+//    place it only to their pixels' grain), which changes the pixel by that fraction of the
+//    contrast across it: so the estimate is also at least a quarter of the squared difference
+//    to what the moved points show at the centres of the 8 neighbours.
+// Private to ASRT::Interpolation. Deterministic: the result does not depend on the thread count.
+#ifndef asrt_PathEdges_h
+#define asrt_PathEdges_h
+
+#include "FrameMatching.h"
+#include "PathInterpolation.h"
+
+#include <memory>
+#include <vector>
+
+namespace asrt
+{
+/// A balanced k-d tree over fixed points (non-finite ones are left out), for matchFrames without
+/// VTK's locators. Ties between equally near points go to the lower index.
+std::unique_ptr<PointIndex> makePointTree(const std::vector<Vec3>& points);
+
+/// One pixel predicted by moving the scene points of the keys.
+struct MovedEdgePixel
+{
+  bool covered = false; ///< false: no point covers the pixel at t (it must be re-traced)
+  RayRecord record;     ///< the front point's at the pixel's centre, its colour the sub-samples'
+  float estimate = 0;   ///< squared colour error summed over the channels
+};
+
+/// Predicts the listed pixels (indices into the frame) of the frame at t from the keys, the
+/// inner pair (a, a + 1) bracketing t. `perPixel[k]` is the per-pixel prediction of pixel
+/// `pixels[k]`, or null where the inner pair disagree on it.
+std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
+                                              double t, int width, int height, const Scene& scene,
+                                              const std::vector<std::int32_t>& pixels,
+                                              const std::vector<const RayRecord*>& perPixel);
+}
+
+#endif

@@ -1,0 +1,201 @@
+// Moving edges along a path (PathInterpolation.h, PathMethod::MovedEdge) in flat space, where a
+// camera sliding sideways moves a sphere across the picture at a constant speed: the edge the
+// moved scene points predict lies within a pixel of the edge in a frame the test traces at t,
+// and the frame completed to a target meets it against that frame, re-tracing fewer pixels than
+// when every pixel near the edge is re-traced.
+#include "FrameTracer.h"
+#include "PathInterpolation.h"
+#include "SceneFile.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
+
+using namespace asrt;
+
+namespace
+{
+constexpr int kSide = 64;
+constexpr int kSphere = 1;
+
+/// Flat space; the camera at (s, −20, 0) looking along +y, so that the sphere of radius 2 at the
+/// origin, in front of a checkered wall at y = 12, crosses the picture at 6 pixels per unit of s.
+SceneDescription slidingScene(double s)
+{
+  const std::string text = R"({
+    "spacetime": { "mass": 0 },
+    "camera": { "position": [0, -20, 0], "focalPoint": [0, 0, 0], "viewUp": [0, 0, 1],
+                "viewAngle": 30, "resolution": [64, 64] },
+    "background": [0, 0, 0],
+    "objects": [
+      { "type": "sphere", "id": 1, "center": [0, 0, 0], "radius": 2,
+        "texture": { "checker": [8, 4], "colors": [[0.9, 0.8, 0.2], [0.8, 0.3, 0.1]] } },
+      { "type": "rectangle", "id": 2, "center": [0, 12, 0], "uAxis": [1, 0, 0],
+        "vAxis": [0, 0, 1], "halfWidth": 40, "halfHeight": 40,
+        "texture": { "checker": [6, 6], "colors": [[0.1, 0.2, 0.6], [0.2, 0.5, 0.3]] } }
+    ]
+  })";
+  SceneDescription d = parseScene(text, ".",
+                                  [](const std::string&) -> ImagePixels
+                                  { throw std::runtime_error("no image textures here"); });
+  d.camera.position = Vec3(s, -20, 0);
+  d.camera.focalPoint = Vec3(s, 0, 0);
+  d.camera.width = d.camera.height = kSide;
+  return d;
+}
+
+std::vector<RayRecord> traceAt(double s)
+{
+  return FrameTracer(slidingScene(s)).traceRows(0, kSide);
+}
+
+double psnrOf(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
+{
+  double sum = 0;
+  for (std::size_t p = 0; p < a.size(); ++p)
+    sum += (255.0 * (a[p].color - b[p].color)).squaredNorm();
+  const double mse = sum / (3.0 * a.size());
+  return mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
+}
+
+/// The columns of the first and last centre rays on the sphere in row j, or (−1, −1).
+std::pair<int, int> sphereSpan(const std::vector<RayRecord>& r, int j)
+{
+  int first = -1, last = -1;
+  for (int i = 0; i < kSide; ++i)
+    if (r[static_cast<std::size_t>(j) * kSide + i].objectId == kSphere)
+    {
+      if (first < 0)
+        first = i;
+      last = i;
+    }
+  return { first, last };
+}
+
+class PathEdges : public ::testing::Test
+{
+protected:
+  static constexpr double T = 0.2; // between the keys 0 and 0.5: the edges 1.2 px from key 0
+  static void SetUpTestSuite()
+  {
+    for (double s : { -0.5, 0.0, 0.5, 1.0 })
+    {
+      keyS().push_back(s);
+      keys().push_back(traceAt(s));
+    }
+    truth() = traceAt(T);
+  }
+  static std::vector<double>& keyS()
+  {
+    static std::vector<double> s;
+    return s;
+  }
+  static std::vector<std::vector<RayRecord>>& keys()
+  {
+    static std::vector<std::vector<RayRecord>> k;
+    return k;
+  }
+  static std::vector<RayRecord>& truth()
+  {
+    static std::vector<RayRecord> t;
+    return t;
+  }
+  static PathFrame interpolated(bool movedEdges)
+  {
+    std::vector<PathKey> path;
+    for (std::size_t k = 0; k < keys().size(); ++k)
+      path.push_back({ keyS()[k], &keys()[k] });
+    PathOptions options;
+    options.movedEdges = movedEdges;
+    return interpolateAlongPath(path, T, kSide, kSide, *slidingScene(T).scene, options);
+  }
+};
+}
+
+TEST_F(PathEdges, TheMovedEdgeLiesWithinAPixelOfTheTracedOne)
+{
+  const PathFrame f = interpolated(true);
+  const std::vector<std::size_t> c = f.counts();
+  std::printf("[ edges ] moved %zu, still to re-trace %zu of %zu\n",
+              c[static_cast<std::size_t>(PathMethod::MovedEdge)],
+              c[static_cast<std::size_t>(PathMethod::Retrace)], f.records.size());
+  ASSERT_GT(c[static_cast<std::size_t>(PathMethod::MovedEdge)], 100u);
+  // The sphere's silhouette moved 3 px between the inner keys, so each of its rows has pixels
+  // that the keys disagree on at both sides: there the prediction is the moved edge's.
+  int rows = 0;
+  for (int j = 0; j < kSide; ++j)
+  {
+    const auto [tFirst, tLast] = sphereSpan(truth(), j);
+    const auto [aFirst, aLast] = sphereSpan(keys()[1], j);
+    const auto [bFirst, bLast] = sphereSpan(keys()[2], j);
+    if (tFirst < 0 || aFirst < 0 || bFirst < 0 || aFirst == bFirst || aLast == bLast)
+      continue;
+    ++rows;
+    const auto [pFirst, pLast] = sphereSpan(f.records, j);
+    EXPECT_LE(std::abs(pFirst - tFirst), 1) << "row " << j;
+    EXPECT_LE(std::abs(pLast - tLast), 1) << "row " << j;
+    for (int i : { tFirst, tLast })
+      EXPECT_EQ(f.method[static_cast<std::size_t>(j) * kSide + i],
+                static_cast<std::uint8_t>(PathMethod::MovedEdge))
+        << "(" << i << ", " << j << ")";
+  }
+  EXPECT_GT(rows, 15);
+  // Off the silhouette's own pixels (those the traced frame samples with one ray) the moved
+  // points land on the right object and the right place on it: re-tracing nothing, they match
+  // the traced frame closely.
+  double sum = 0, count = 0;
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+    if (f.method[p] == static_cast<std::uint8_t>(PathMethod::MovedEdge) &&
+        truth()[p].raysPerPixel == 1)
+    {
+      sum += (255.0 * (f.records[p].color - truth()[p].color)).squaredNorm();
+      count += 1;
+    }
+  const double psnr = 10.0 * std::log10(255.0 * 255.0 * 3.0 * count / sum);
+  std::printf("[ edges ] the moved-edge pixels against the traced frame: %.1f dB\n", psnr);
+  EXPECT_GT(count, 50.0);
+  EXPECT_GT(psnr, 35.0);
+}
+
+TEST_F(PathEdges, AFrameMeetsItsTargetReTracingLessThanWithoutMovedEdges)
+{
+  const FrameTracer tracer(slidingScene(T));
+  for (double target : { 30.0, 40.0 })
+  {
+    std::size_t retraced[2] = { 0, 0 };
+    for (const bool moved : { false, true })
+    {
+      PathFrame f = interpolated(moved);
+      const PathCompletion done = completePathFrame(f, tracer, target);
+      const double psnr = psnrOf(f.records, truth());
+      std::printf("[ edges ] target %.0f dB, %s: %.1f dB, %zu re-traced (%zu must, %zu probes)\n",
+                  target, moved ? "moved edges" : "all re-traced", psnr, done.retraced,
+                  done.mustRetrace, done.probes);
+      EXPECT_GE(psnr, target - 1.0) << (moved ? "moved edges" : "all re-traced");
+      retraced[moved] = done.retraced;
+    }
+    EXPECT_LT(retraced[1], retraced[0]) << "target " << target;
+  }
+}
+
+TEST_F(PathEdges, TheFrameIsTheSameAtAnyThreadCount)
+{
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const PathFrame one = interpolated(true);
+  omp_set_num_threads(std::max(2, threads));
+  const PathFrame many = interpolated(true);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.records.size(), many.records.size());
+  for (std::size_t p = 0; p < one.records.size(); ++p)
+  {
+    ASSERT_EQ(one.method[p], many.method[p]) << p;
+    ASSERT_EQ(one.records[p].color, many.records[p].color) << p;
+    ASSERT_EQ(one.estimate[p], many.estimate[p]) << p;
+  }
+}
