@@ -415,8 +415,14 @@ struct MovieMaking
     if (!in.shading)
       in.shading = this->withTextures(maker.Frames.front());
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    // Without moved edges: on whole movies (bench/REPORT.md, "Movies") predicting them cost more
+    // CPU than the rays they saved (the mass ramp's first run 1.73 of direct with them, 1.05
+    // without; the same movie again, nothing traced, 0.77 against 0.08), and its worst frame
+    // fell from 33.1 to 29.6 dB against the converged one.
+    PathOptions options;
+    options.movedEdges = false;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
-                                           *in.shading->scene);
+                                           *in.shading->scene, options);
     // The tracer (the frame's scene, its textures loaded) only once a pixel must be traced: a
     // frame the store serves whole needs none.
     std::unique_ptr<FrameTracer> made;
