@@ -490,6 +490,40 @@ inline std::string legacyExec(PGconn* c, const std::string& sql,
   return v;
 }
 
+/// Stores tile `t` of frame `id` as the partitioned schemas (versions 4 to 6) did: its partition of
+/// ray_blocks holding the records packed by `pack`, `blockRecords` to a block, and its frame_tiles
+/// row. An empty tile has the row alone.
+template<typename Pack>
+void insertPartitionedTile(Db& db, const std::string& id, std::size_t t,
+                           const std::vector<RayRecord>& tile, std::size_t blockRecords,
+                           const Pack& pack)
+{
+  const std::string table = "ray_blocks_" + id + "_" + std::to_string(t);
+  if (!tile.empty())
+  {
+    db.value("CREATE TABLE " + table +
+             " (LIKE ray_block_layout INCLUDING ALL, PRIMARY KEY (block), CHECK (frame_id = " + id +
+             " AND tile = " + std::to_string(t) + ")) WITH (autovacuum_enabled = false)");
+    for (std::size_t first = 0, b = 0; first < tile.size(); first += blockRecords, ++b)
+    {
+      std::string data;
+      const std::size_t n = std::min(blockRecords, tile.size() - first);
+      for (std::size_t k = first; k < first + n; ++k)
+        data += pack(tile[k]);
+      legacyExec(db.Conn,
+                 "INSERT INTO " + table +
+                   " (frame_id, tile, block, first_ray, n, data) VALUES ($1, $2, $3, $4, $5, $6)",
+                 { id, std::to_string(t), std::to_string(b), std::to_string(first),
+                   std::to_string(n), data },
+                 { false, false, false, false, false, true });
+    }
+    db.value("ALTER TABLE ray_blocks ATTACH PARTITION " + table + " FOR VALUES FROM (" + id + ", " +
+             std::to_string(t) + ") TO (" + id + ", " + std::to_string(t + 1) + ")");
+  }
+  db.value("INSERT INTO frame_tiles (frame_id, tile, ray_count) VALUES (" + id + ", " +
+           std::to_string(t) + ", " + std::to_string(tile.size()) + ")");
+}
+
 /// Stores a frame as schema version `version` (1 or 2) did: its row, its tiles' rows (version 2)
 /// and the blocks of every tile. Returns the frame's id.
 inline std::int64_t insertLegacyFrame(PGconn* c, int version, const asrt::SceneDescription& scene,

@@ -160,30 +160,7 @@ std::int64_t insertVersion4Frame(Db& db, const Version4Frame& f)
     // A tiled frame being written has some of its tiles: here the first one.
     if (!complete && t > 0)
       break;
-    const std::string table = "ray_blocks_" + id + "_" + std::to_string(t);
-    if (!tile.empty())
-    {
-      db.value("CREATE TABLE " + table +
-               " (LIKE ray_block_layout INCLUDING ALL, PRIMARY KEY (block), CHECK (frame_id = " +
-               id + " AND tile = " + std::to_string(t) + ")) WITH (autovacuum_enabled = false)");
-      for (std::size_t first = 0, b = 0; first < tile.size(); first += Version4Block, ++b)
-      {
-        std::string data;
-        const std::size_t n = std::min(Version4Block, tile.size() - first);
-        for (std::size_t k = first; k < first + n; ++k)
-          data += legacyPackedRecord(tile[k]);
-        legacyExec(db.Conn,
-                   "INSERT INTO " + table +
-                     " (frame_id, tile, block, first_ray, n, data) VALUES ($1, $2, $3, $4, $5, $6)",
-                   { id, std::to_string(t), std::to_string(b), std::to_string(first),
-                     std::to_string(n), data },
-                   { false, false, false, false, false, true });
-      }
-      db.value("ALTER TABLE ray_blocks ATTACH PARTITION " + table + " FOR VALUES FROM (" + id +
-               ", " + std::to_string(t) + ") TO (" + id + ", " + std::to_string(t + 1) + ")");
-    }
-    db.value("INSERT INTO frame_tiles (frame_id, tile, ray_count) VALUES (" + id + ", " +
-             std::to_string(t) + ", " + std::to_string(tile.size()) + ")");
+    insertPartitionedTile(db, id, t, tile, Version4Block, legacyPackedRecord);
   }
   for (std::size_t seq = 0; seq < f.paths.size(); ++seq)
   {

@@ -121,33 +121,7 @@ std::int64_t insertVersion6Frame(Db& db, const asrt::SceneDescription& d,
       std::to_string(tiles.size()),
       std::to_string(count) });
   for (std::size_t t = 0; t < tiles.size(); ++t)
-  {
-    const std::vector<RayRecord>& tile = tiles[t];
-    const std::string table = "ray_blocks_" + id + "_" + std::to_string(t);
-    if (!tile.empty())
-    {
-      db.value("CREATE TABLE " + table +
-               " (LIKE ray_block_layout INCLUDING ALL, PRIMARY KEY (block), CHECK (frame_id = " +
-               id + " AND tile = " + std::to_string(t) + ")) WITH (autovacuum_enabled = false)");
-      for (std::size_t first = 0, b = 0; first < tile.size(); first += Version6Block, ++b)
-      {
-        std::string data;
-        const std::size_t n = std::min(Version6Block, tile.size() - first);
-        for (std::size_t k = first; k < first + n; ++k)
-          data += version6PackedRecord(tile[k]);
-        legacyExec(db.Conn,
-                   "INSERT INTO " + table +
-                     " (frame_id, tile, block, first_ray, n, data) VALUES ($1, $2, $3, $4, $5, $6)",
-                   { id, std::to_string(t), std::to_string(b), std::to_string(first),
-                     std::to_string(n), data },
-                   { false, false, false, false, false, true });
-      }
-      db.value("ALTER TABLE ray_blocks ATTACH PARTITION " + table + " FOR VALUES FROM (" + id +
-               ", " + std::to_string(t) + ") TO (" + id + ", " + std::to_string(t + 1) + ")");
-    }
-    db.value("INSERT INTO frame_tiles (frame_id, tile, ray_count) VALUES (" + id + ", " +
-             std::to_string(t) + ", " + std::to_string(tile.size()) + ")");
-  }
+    insertPartitionedTile(db, id, t, tiles[t], Version6Block, version6PackedRecord);
   db.value("COMMIT");
   return std::stoll(id);
 }
