@@ -16,6 +16,7 @@
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
 #include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
 #include "PathInterpolation.h"
@@ -293,10 +294,12 @@ int main()
       for (int k = 0; k < K; ++k)
         path.push_back({ s[k], &keys[k] });
       const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
-      PathOptions without;
+      PathOptions with, without;
+      with.pointIndex = vtkPointIndexFactory();
       without.movedEdges = false;
       const double tPlain = now();
-      const PathFrame plain = interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene);
+      const PathFrame plain =
+        interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, with);
       const double plainSeconds = now() - tPlain;
       const PathFrame plainBefore =
         interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, without);
