@@ -5,6 +5,7 @@
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
 #include "InterpolatorPipeline.h"
@@ -352,8 +353,10 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     for (int k = 0; k < K; ++k)
       keys.push_back({ in.Direction * in.S[k], &in.Records[static_cast<std::size_t>(k)] });
     const asrt::CameraParameters& cam = in.Scenes[0].camera;
-    asrt::PathFrame f =
-      asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height, *in.Shading.scene);
+    asrt::PathOptions options;
+    options.pointIndex = asrt::vtkPointIndexFactory();
+    asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
+                                                   *in.Shading.scene, options);
     this->UpdateProgress(0.3);
     const asrt::FrameParameters p = asrt::interpolateParameters(
       asrt::parametersOf(in.Scenes[a]), asrt::parametersOf(in.Scenes[a + 1]), fraction,

@@ -12,10 +12,19 @@
 // ASRT_BENCH_PATH_FRAMES (0: the four frames midway between h = 0.055 keys; N: the N frames of a
 // movie along the ramp, those that are not keys), ASRT_BENCH_PATH_SPACINGS (key spacings,
 // "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (point
-// samples a side of the converged frames, 8).
+// samples a side of the converged frames, 8), ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's
+// study above).
+// Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
+// "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
+// the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
+// ASRT_BENCH_PATH_PATH_FRAMES frames (4) midway between keys, spread along the path: the plain
+// preview and --quality ASRT_BENCH_PATH_PATH_TARGET (35) against converged, and the estimate's rank
+// correlation.
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
+#include "GeodesicMovie.h"
 #include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
 #include "PathInterpolation.h"
@@ -28,6 +37,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <map>
 #include <numeric>
 #include <sstream>
 #include <string>
@@ -172,6 +183,206 @@ std::string dbs(double x)
   return s;
 }
 
+/// A movie path for the paths table: the scene and how the parameter s sets it.
+struct BenchPath
+{
+  std::string name, scene, parameter;
+  double from = 0, to = 1, h = 0.1;
+  std::function<void(SceneDescription&, double)> apply;
+};
+
+std::vector<BenchPath> benchPaths()
+{
+  auto mass = [](SceneDescription& d, double s) { d.spacetime.mass = s; };
+  auto spin = [](SceneDescription& d, double s) { d.spacetime.spin = s; };
+  // The scene's camera turned about the hole's axis, as `asrt movie --orbit` turns it.
+  auto orbit = [](SceneDescription& d, double degrees)
+  {
+    const CameraPose pose =
+      turnedAboutZ({ d.camera.position, d.camera.focalPoint, d.camera.viewUp }, degrees);
+    d.camera.position = pose.position;
+    d.camera.focalPoint = pose.focalPoint;
+    d.camera.viewUp = pose.viewUp;
+  };
+  return { { "ramp", kScene, "M", 0.1, 1.2, 0.055, mass },
+           { "orbit", "Data/scenes/fig1-cylinders.json", "degrees", 0, 90, 2, orbit },
+           { "kerr-orbit", "Data/scenes/kerr-disk.json", "degrees", 0, 90, 10, orbit },
+           { "spin", "Data/scenes/kerr-disk.json", "a", 0, 0.99, 0.198, spin } };
+}
+
+/// The path's scene at s, `kSide` a side, with `rendering` if given.
+SceneDescription pathScene(const BenchPath& path, double s,
+                           const AntialiasOptions* rendering = nullptr)
+{
+  SceneDescription d = loadSceneFile(path.scene, vtkImageFileLoader());
+  d.camera.width = d.camera.height = kSide;
+  path.apply(d, s);
+  if (rendering)
+    d.rendering = *rendering;
+  return d;
+}
+
+/// One path frame's scores.
+struct PathScore
+{
+  double s = 0, tracedVsConverged = 0, mustBefore = 0, plainVsConverged = 0, plainVsTraced = 0,
+         spearman = 0, share = 0, doneVsConverged = 0, doneVsTraced = 0;
+};
+
+/// The frame at s from the keys around it (traced once each, into `keys`), scored.
+PathScore scorePathFrame(const BenchPath& path, int interval, int intervals, double target,
+                         std::map<int, std::vector<RayRecord>>& keys, const Scene& shading)
+{
+  PathScore r;
+  r.s = path.from + (interval + 0.5) * path.h;
+  std::vector<PathKey> around;
+  for (int k = std::max(0, interval - 1); k <= std::min(intervals, interval + 2); ++k)
+  {
+    if (!keys.count(k))
+      keys[k] = FrameTracer(pathScene(path, path.from + k * path.h)).traceRows(0, kSide);
+    around.push_back({ path.from + k * path.h, &keys[k] });
+  }
+  const SceneDescription atS = pathScene(path, r.s);
+  const FrameTracer tracer(atS);
+  const std::vector<std::uint8_t> traced = rgbOf(tracer.traceRows(0, kSide));
+  AntialiasOptions converged;
+  converged.mode = AntialiasMode::None;
+  converged.supersample = kReferenceSide;
+  const std::vector<std::uint8_t> reference =
+    rgbOf(FrameTracer(pathScene(path, r.s, &converged)).traceRows(0, kSide));
+  r.tracedVsConverged = psnrOf(traced, reference);
+  PathOptions with, without;
+  with.pointIndex = vtkPointIndexFactory();
+  without.movedEdges = false;
+  const double n = double(kSide) * kSide;
+  r.mustBefore = interpolateAlongPath(around, r.s, kSide, kSide, shading, without)
+                   .counts()[static_cast<std::size_t>(PathMethod::Retrace)] /
+                 n;
+  const PathFrame plain = interpolateAlongPath(around, r.s, kSide, kSide, shading, with);
+  const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
+  r.plainVsConverged = psnrOf(plainRgb, reference);
+  r.plainVsTraced = psnrOf(plainRgb, traced);
+  std::vector<double> est, truth;
+  for (std::size_t p = 0; p < plain.records.size(); ++p)
+    if (plain.method[p] != static_cast<std::uint8_t>(PathMethod::Retrace))
+    {
+      est.push_back(plain.estimate[p]);
+      truth.push_back(error2(plainRgb, traced, p));
+    }
+  r.spearman = spearman(est, truth);
+  PathFrame done = plain;
+  const PathCompletion c = completePathFrame(done, tracer, target);
+  const std::vector<std::uint8_t> doneRgb = rgbOf(done.records);
+  r.share = c.retraced / n;
+  r.doneVsConverged = psnrOf(doneRgb, reference);
+  r.doneVsTraced = psnrOf(doneRgb, traced);
+  return r;
+}
+
+/// The paths table: per path, at its one key spacing, the mean (and worst) over its frames.
+void printPaths(const std::vector<BenchPath>& paths, int frameCount, double target)
+{
+  std::printf("\n**Four paths** at one key spacing each (h: the must-re-trace share without moved "
+              "edges lands near 10–20 %%), %d frames each midway between keys, spread along the "
+              "path; 4 keys around each (`interpolateAlongPath` with moved edges, matched over "
+              "`vtkPointIndexFactory()`); converged: %d×%d point samples a pixel. **Plain**: "
+              "nothing re-traced. **--quality %.0f**: `completePathFrame` against the frame "
+              "traced at s. PSNR as mean / worst; Spearman of the estimate against the true error "
+              "(against the traced frame) over the predicted pixels, mean / worst:\n\n",
+              frameCount, kReferenceSide, kReferenceSide, target);
+  std::printf("| path | scene | h | traced vs converged | must re-trace without moved edges | "
+              "plain vs converged | plain vs traced | --quality %.0f: re-traced | vs converged | "
+              "vs traced | Spearman | time |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+              target);
+  for (const BenchPath& path : paths)
+  {
+    const double t0 = now();
+    const int intervals = static_cast<int>(std::lround((path.to - path.from) / path.h));
+    if (intervals < 1 || std::abs(intervals * path.h - (path.to - path.from)) > 1e-9 * path.to)
+    {
+      std::fprintf(stderr, "%s: the key spacing %g does not divide the path\n", path.name.c_str(),
+                   path.h);
+      std::exit(2);
+    }
+    const SceneDescription shading = pathScene(path, path.from);
+    std::map<int, std::vector<RayRecord>> keys;
+    std::vector<PathScore> scores;
+    for (int f = 0; f < frameCount; ++f)
+    {
+      const int interval = std::max(0, (f + 1) * intervals / frameCount - 1);
+      scores.push_back(scorePathFrame(path, interval, intervals, target, keys, *shading.scene));
+      const PathScore& r = scores.back();
+      std::fprintf(stderr,
+                   "%s, %s = %.4g: plain %.1f dB, must %.1f %%, q%.0f %.1f %% %.1f dB, rho %.2f "
+                   "(%.0f s)\n",
+                   path.name.c_str(), path.parameter.c_str(), r.s, r.plainVsConverged,
+                   100 * r.mustBefore, target, 100 * r.share, r.doneVsConverged, r.spearman,
+                   now() - t0);
+    }
+    auto meanWorst = [&](double PathScore::*field, bool percent)
+    {
+      double sum = 0, worst = 1e300;
+      for (const PathScore& r : scores)
+      {
+        sum += std::min(r.*field, 99.0);
+        worst = std::min(worst, r.*field);
+      }
+      const double mean = sum / static_cast<double>(scores.size());
+      return percent ? pct(mean) : dbs(mean) + " / " + dbs(worst);
+    };
+    char spearmanText[64];
+    double rhoSum = 0, rhoWorst = 1;
+    for (const PathScore& r : scores)
+    {
+      rhoSum += r.spearman;
+      rhoWorst = std::min(rhoWorst, r.spearman);
+    }
+    std::snprintf(spearmanText, sizeof spearmanText, "%.2f / %.2f",
+                  rhoSum / static_cast<double>(scores.size()), rhoWorst);
+    std::printf("| %s | `%s` | %g %s | %s | %s | %s | %s | %s | %s | %s | %s | %.0f s |\n",
+                path.name.c_str(), path.scene.c_str(), path.h, path.parameter.c_str(),
+                meanWorst(&PathScore::tracedVsConverged, false).c_str(),
+                meanWorst(&PathScore::mustBefore, true).c_str(),
+                meanWorst(&PathScore::plainVsConverged, false).c_str(),
+                meanWorst(&PathScore::plainVsTraced, false).c_str(),
+                meanWorst(&PathScore::share, true).c_str(),
+                meanWorst(&PathScore::doneVsConverged, false).c_str(),
+                meanWorst(&PathScore::doneVsTraced, false).c_str(), spearmanText, now() - t0);
+  }
+}
+
+/// The paths ASRT_BENCH_PATH_PATHS names (NAME or NAME:H), all four by default.
+std::vector<BenchPath> selectedPaths()
+{
+  const std::vector<BenchPath> all = benchPaths();
+  const char* v = std::getenv("ASRT_BENCH_PATH_PATHS");
+  if (!v || !*v)
+    return all;
+  std::vector<BenchPath> out;
+  std::stringstream in(v);
+  std::string item;
+  while (std::getline(in, item, ','))
+  {
+    const std::size_t colon = item.find(':');
+    const std::string name = item.substr(0, colon);
+    bool known = name == "none";
+    for (const BenchPath& p : all)
+      if (p.name == name)
+      {
+        known = true;
+        out.push_back(p);
+        if (colon != std::string::npos)
+          out.back().h = std::atof(item.c_str() + colon + 1);
+      }
+    if (!known)
+    {
+      std::fprintf(stderr, "ASRT_BENCH_PATH_PATHS: unknown path \"%s\"\n", name.c_str());
+      std::exit(2);
+    }
+  }
+  return out;
+}
+
 struct Frame
 {
   double mass = 0;
@@ -181,14 +392,11 @@ struct Frame
 };
 }
 
-int main()
+namespace
 {
-  double load[3] = { 0, 0, 0 };
-  if (getloadavg(load, 3) < 0)
-    load[0] = -1;
-  const double tStart = now();
-  kSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_SIDE", 200));
-  kReferenceSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_REFERENCE", 8));
+/// The mass ramp's study: key spacings, targets, moved edges against all re-traced.
+void runRampStudy(double tStart)
+{
   const int movieFrames = static_cast<int>(envNumber("ASRT_BENCH_PATH_FRAMES", 0));
   const std::vector<double> spacings = envList("ASRT_BENCH_PATH_SPACINGS", { 0.11, 0.055 });
   const std::vector<double> targets = envList("ASRT_BENCH_PATH_TARGETS", { 30, 35, 40 });
@@ -234,12 +442,6 @@ int main()
     traceSeconds += f.traceSeconds;
   traceSeconds /= static_cast<double>(frames.size());
 
-  std::printf("<!-- path:begin -->\n## Interpolation along a path, per pixel\n\n");
-  std::printf("- **Machine:** %ld CPU(s), %d OpenMP threads, load average %.1f when the run "
-              "started.\n",
-              sysconf(_SC_NPROCESSORS_ONLN), omp_get_max_threads(), load[0]);
-  std::printf("- **Regenerate:** `bench/run` (`ASRT_BENCH_ONLY=path`); it runs "
-              "`build-bench/bin/asrt_bench_path` from the repository root.\n");
   std::string frameText;
   if (movieFrames >= 2)
     frameText = "the " + std::to_string(masses.size()) + " frames of a " +
@@ -293,10 +495,12 @@ int main()
       for (int k = 0; k < K; ++k)
         path.push_back({ s[k], &keys[k] });
       const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
-      PathOptions without;
+      PathOptions with, without;
+      with.pointIndex = vtkPointIndexFactory();
       without.movedEdges = false;
       const double tPlain = now();
-      const PathFrame plain = interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene);
+      const PathFrame plain =
+        interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, with);
       const double plainSeconds = now() - tPlain;
       const PathFrame plainBefore =
         interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, without);
@@ -425,6 +629,29 @@ int main()
                   pct(mean.estimate35 / count).c_str(), pct(mean.oracle35 / count).c_str(),
                   pct(mean.estimate40 / count).c_str(), pct(mean.oracle40 / count).c_str());
   }
+}
+}
+
+int main()
+{
+  double load[3] = { 0, 0, 0 };
+  if (getloadavg(load, 3) < 0)
+    load[0] = -1;
+  const double tStart = now();
+  kSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_SIDE", 200));
+  kReferenceSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_REFERENCE", 8));
+  const std::vector<BenchPath> paths = selectedPaths();
+  std::printf("<!-- path:begin -->\n## Interpolation along a path, per pixel\n\n");
+  std::printf("- **Machine:** %ld CPU(s), %d OpenMP threads, load average %.1f when the run "
+              "started.\n",
+              sysconf(_SC_NPROCESSORS_ONLN), omp_get_max_threads(), load[0]);
+  std::printf("- **Regenerate:** `bench/run` (`ASRT_BENCH_ONLY=path`); it runs "
+              "`build-bench/bin/asrt_bench_path` from the repository root.\n");
+  if (envNumber("ASRT_BENCH_PATH_STUDY", 1) != 0)
+    runRampStudy(tStart);
+  if (!paths.empty())
+    printPaths(paths, static_cast<int>(envNumber("ASRT_BENCH_PATH_PATH_FRAMES", 4)),
+               envNumber("ASRT_BENCH_PATH_PATH_TARGET", 35));
   std::printf("\nThe whole section took %.0f s.\n<!-- path:end -->\n", now() - tStart);
   return 0;
 }

@@ -11,109 +11,6 @@ namespace asrt
 {
 namespace
 {
-/// A balanced k-d tree: order_[lo, hi) is a subtree whose root is its middle element, split on
-/// the axis of the range's widest spread (axis_ of that element).
-class PointTree final : public PointIndex
-{
-public:
-  explicit PointTree(const std::vector<Vec3>& points)
-    : points_(points)
-  {
-    for (std::size_t k = 0; k < points.size(); ++k)
-      if (points[k].allFinite())
-        order_.push_back(static_cast<std::int64_t>(k));
-    axis_.assign(order_.size(), 0);
-    this->build(0, order_.size());
-  }
-
-  std::int64_t nearestWithin(const Vec3& x, double radius) const override
-  {
-    std::int64_t best = -1;
-    double bestD2 = radius * radius;
-    this->nearest(0, order_.size(), x, best, bestD2);
-    return best;
-  }
-
-  void within(const Vec3& x, double radius, std::vector<std::int64_t>& out) const override
-  {
-    out.clear();
-    this->collect(0, order_.size(), x, radius * radius, out);
-  }
-
-private:
-  void build(std::size_t lo, std::size_t hi)
-  {
-    if (hi - lo < 2)
-      return;
-    Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
-    for (std::size_t k = lo; k < hi; ++k)
-    {
-      low = low.cwiseMin(points_[static_cast<std::size_t>(order_[k])]);
-      high = high.cwiseMax(points_[static_cast<std::size_t>(order_[k])]);
-    }
-    int axis = 0;
-    (high - low).maxCoeff(&axis);
-    const std::size_t mid = lo + (hi - lo) / 2;
-    auto less = [&](std::int64_t a, std::int64_t b)
-    {
-      const double pa = points_[static_cast<std::size_t>(a)][axis];
-      const double pb = points_[static_cast<std::size_t>(b)][axis];
-      return pa != pb ? pa < pb : a < b;
-    };
-    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(lo),
-                     order_.begin() + static_cast<std::ptrdiff_t>(mid),
-                     order_.begin() + static_cast<std::ptrdiff_t>(hi), less);
-    axis_[mid] = static_cast<std::uint8_t>(axis);
-    this->build(lo, mid);
-    this->build(mid + 1, hi);
-  }
-
-  void nearest(std::size_t lo, std::size_t hi, const Vec3& x, std::int64_t& best,
-               double& bestD2) const
-  {
-    if (lo >= hi)
-      return;
-    const std::size_t mid = lo + (hi - lo) / 2;
-    const std::int64_t k = order_[mid];
-    const Vec3& p = points_[static_cast<std::size_t>(k)];
-    const double d2 = (p - x).squaredNorm();
-    if (d2 < bestD2 || (d2 == bestD2 && (best < 0 || k < best)))
-    {
-      best = k;
-      bestD2 = d2;
-    }
-    if (hi - lo == 1)
-      return;
-    const double diff = x[axis_[mid]] - p[axis_[mid]];
-    const bool leftFirst = diff < 0;
-    this->nearest(leftFirst ? lo : mid + 1, leftFirst ? mid : hi, x, best, bestD2);
-    if (diff * diff <= bestD2)
-      this->nearest(leftFirst ? mid + 1 : lo, leftFirst ? hi : mid, x, best, bestD2);
-  }
-
-  void collect(std::size_t lo, std::size_t hi, const Vec3& x, double r2,
-               std::vector<std::int64_t>& out) const
-  {
-    if (lo >= hi)
-      return;
-    const std::size_t mid = lo + (hi - lo) / 2;
-    const Vec3& p = points_[static_cast<std::size_t>(order_[mid])];
-    if ((p - x).squaredNorm() <= r2)
-      out.push_back(order_[mid]);
-    if (hi - lo == 1)
-      return;
-    const double diff = x[axis_[mid]] - p[axis_[mid]];
-    if (diff <= 0 || diff * diff <= r2)
-      this->collect(lo, mid, x, r2, out);
-    if (diff >= 0 || diff * diff <= r2)
-      this->collect(mid + 1, hi, x, r2, out);
-  }
-
-  const std::vector<Vec3> points_;
-  std::vector<std::int64_t> order_;
-  std::vector<std::uint8_t> axis_;
-};
-
 float colorError2(const Color& a, const Color& b)
 {
   const Color d = 255.0 * (a - b);
@@ -181,7 +78,8 @@ constexpr double kGap = 0.25;
 class EdgeMover
 {
 public:
-  EdgeMover(const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height)
+  EdgeMover(const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height,
+            const PointIndexFactory& index)
     : width_(width)
     , height_(height)
   {
@@ -189,13 +87,13 @@ public:
     auto samples = [&](std::size_t k)
     { return samplesFromRecords(*keys[k].records, width, height, va, "key " + std::to_string(k)); };
     const FrameSamples sa = samples(a), sb = samples(a + 1);
-    const Correspondence inner = matchFrames(sa, sb, makePointTree);
+    const Correspondence inner = matchFrames(sa, sb, index);
     Correspondence left, right;
     const bool hasLeft = a > 0, hasRight = a + 2 < keys.size();
     if (hasLeft)
-      left = matchFrames(samples(a - 1), sa, makePointTree);
+      left = matchFrames(samples(a - 1), sa, index);
     if (hasRight)
-      right = matchFrames(sb, samples(a + 2), makePointTree);
+      right = matchFrames(sb, samples(a + 2), index);
     // Per inner key: its map to the other inner key, and to its own outer neighbour.
     const std::vector<PixelMatch>* toOther[2] = { &inner.aToB, &inner.bToA };
     const std::vector<PixelMatch>* toOuter[2] = { hasLeft ? &left.bToA : nullptr,
@@ -437,20 +335,16 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
 }
 }
 
-std::unique_ptr<PointIndex> makePointTree(const std::vector<Vec3>& points)
-{
-  return std::make_unique<PointTree>(points);
-}
-
 std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
                                               double t, int width, int height, const Scene& scene,
+                                              const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
                                               const std::vector<const RayRecord*>& perPixel)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
     return out;
-  const EdgeMover mover(keys, a, t, width, height);
+  const EdgeMover mover(keys, a, t, width, height, index);
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::int64_t q = 0; q < static_cast<std::int64_t>(pixels.size()); ++q)
   {

@@ -29,15 +29,10 @@
 #include "FrameMatching.h"
 #include "PathInterpolation.h"
 
-#include <memory>
 #include <vector>
 
 namespace asrt
 {
-/// A balanced k-d tree over fixed points (non-finite ones are left out), for matchFrames without
-/// VTK's locators. Ties between equally near points go to the lower index.
-std::unique_ptr<PointIndex> makePointTree(const std::vector<Vec3>& points);
-
 /// One pixel predicted by moving the scene points of the keys.
 struct MovedEdgePixel
 {
@@ -47,10 +42,12 @@ struct MovedEdgePixel
 };
 
 /// Predicts the listed pixels (indices into the frame) of the frame at t from the keys, the
-/// inner pair (a, a + 1) bracketing t. `perPixel[k]` is the per-pixel prediction of pixel
-/// `pixels[k]`, or null where the inner pair disagree on it.
+/// inner pair (a, a + 1) bracketing t, the keys' scene points matched with the searches `index`
+/// makes. `perPixel[k]` is the per-pixel prediction of pixel `pixels[k]`, or null where the inner
+/// pair disagree on it.
 std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
                                               double t, int width, int height, const Scene& scene,
+                                              const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
                                               const std::vector<const RayRecord*>& perPixel);
 }

@@ -344,8 +344,8 @@ std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
 /// The pixels left to be re-traced, predicted where the keys' moved scene points cover them and
 /// the ways of predicting them give a finite estimate (PathEdges.h).
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
-                  const std::vector<RayRecord>& own, const std::vector<std::uint8_t>& hasOwn,
-                  PathFrame& f)
+                  const PointIndexFactory& index, const std::vector<RayRecord>& own,
+                  const std::vector<std::uint8_t>& hasOwn, PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -356,7 +356,7 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
     }
   const std::vector<MovedEdgePixel> moved =
-    predictMovedEdges(keys, a, t, f.width, f.height, scene, pixels, perPixel);
+    predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -477,15 +477,11 @@ Color shadePrediction(const Scene& scene, const RayRecord& r)
 }
 
 PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,
-                               const Scene& scene)
-{
-  return interpolateAlongPath(keys, t, width, height, scene, PathOptions{});
-}
-
-PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int width, int height,
                                const Scene& scene, const PathOptions& options)
 {
   checkKeys(keys, t, width, height);
+  if (options.movedEdges && !options.pointIndex)
+    invalid("PathOptions::pointIndex is empty: moved edges need a point index");
   PathFrame f;
   f.width = width;
   f.height = height;
@@ -558,7 +554,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       f.method[p] = static_cast<std::uint8_t>(m);
     }
   if (options.movedEdges)
-    predictEdges(keys, a, t, scene, own, hasOwn, f);
+    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, f);
   return f;
 }
 

@@ -36,6 +36,7 @@
 #ifndef asrt_PathInterpolation_h
 #define asrt_PathInterpolation_h
 
+#include "FrameMatching.h"
 #include "RayRecord.h"
 #include "Scene.h"
 #include "asrtInterpolationModule.h"
@@ -116,13 +117,15 @@ struct PathOptions
   /// Predict the pixels near an edge that the inner keys disagree on by moving the keys' scene
   /// points (PathMethod::MovedEdge), instead of leaving them all to be re-traced.
   bool movedEdges = true;
+  /// The nearest-point search that matches the keys' scene points (matchFrames) for the moved
+  /// edges: the caller's, as for matchFrames (the filters pass asrt::vtkPointIndexFactory()).
+  /// Required when movedEdges is set.
+  PointIndexFactory pointIndex;
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within
 /// [s_first, s_last], every key `width` × `height` records of the same pixels). Throws
-/// InvalidParameter naming what is wrong.
-ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
-                                                        int width, int height, const Scene& scene);
+/// InvalidParameter naming what is wrong, also for moved edges without a point index.
 ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
                                                         int width, int height, const Scene& scene,
                                                         const PathOptions& options);

@@ -4,6 +4,7 @@
 // and the frame completed to a target meets it against that frame, re-tracing fewer pixels than
 // when every pixel near the edge is re-traced.
 #include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 
@@ -112,6 +113,7 @@ protected:
       path.push_back({ keyS()[k], &keys()[k] });
     PathOptions options;
     options.movedEdges = movedEdges;
+    options.pointIndex = vtkPointIndexFactory();
     return interpolateAlongPath(path, T, kSide, kSide, *slidingScene(T).scene, options);
   }
 };

@@ -2,6 +2,7 @@
 // polynomials the Lagrange weights must reproduce, synthetic records that are known cubics of s,
 // and frames the test traces itself at the interpolated parameter.
 #include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 #include "TextureFiles.h"
@@ -20,6 +21,14 @@ using namespace asrt;
 
 namespace
 {
+/// The options the filters interpolate with: moved edges, matched over VTK's point locator.
+PathOptions withMovedEdges()
+{
+  PathOptions options;
+  options.pointIndex = vtkPointIndexFactory();
+  return options;
+}
+
 std::string errorOf(const std::function<void()>& f)
 {
   try
@@ -192,29 +201,39 @@ TEST(PathInterpolation, BadKeysAndTargetsAreRefusedByName)
   const Scene& scene = *d.scene;
   EXPECT_NE(errorOf(
               [&] {
-                interpolateAlongPath({ { 0.0, &r } }, 0.0, 4, 4, scene);
+                interpolateAlongPath({ { 0.0, &r } }, 0.0, 4, 4, scene, withMovedEdges());
               })
               .find("at least 2 key frames"),
             std::string::npos);
+  EXPECT_NE(
+    errorOf(
+      [&] {
+        interpolateAlongPath({ { 0.5, &r }, { 0.5, &r } }, 0.5, 4, 4, scene, withMovedEdges());
+      })
+      .find("strictly increasing"),
+    std::string::npos);
+  EXPECT_NE(
+    errorOf(
+      [&] {
+        interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 1.5, 4, 4, scene, withMovedEdges());
+      })
+      .find("outside the keys' range"),
+    std::string::npos);
+  EXPECT_NE(
+    errorOf(
+      [&] {
+        interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 5, 4, scene, withMovedEdges());
+      })
+      .find("has 16 records"),
+    std::string::npos);
   EXPECT_NE(errorOf(
               [&] {
-                interpolateAlongPath({ { 0.5, &r }, { 0.5, &r } }, 0.5, 4, 4, scene);
+                interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene, PathOptions{});
               })
-              .find("strictly increasing"),
+              .find("PathOptions::pointIndex"),
             std::string::npos);
-  EXPECT_NE(errorOf(
-              [&] {
-                interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 1.5, 4, 4, scene);
-              })
-              .find("outside the keys' range"),
-            std::string::npos);
-  EXPECT_NE(errorOf(
-              [&] {
-                interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 5, 4, scene);
-              })
-              .find("has 16 records"),
-            std::string::npos);
-  PathFrame f = interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene);
+  PathFrame f =
+    interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene, withMovedEdges());
   const FrameTracer tracer(d);
   for (double bad : { 0.0, -3.0, std::nan(""), 100.5 })
     EXPECT_NE(errorOf([&] { completePathFrame(f, tracer, bad); }).find("quality target"),
@@ -249,7 +268,7 @@ protected:
     std::vector<PathKey> path;
     for (int k = 0; k < 4; ++k)
       path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
-    return interpolateAlongPath(path, T, Side, Side, *rampScene(T, Side).scene);
+    return interpolateAlongPath(path, T, Side, Side, *rampScene(T, Side).scene, withMovedEdges());
   }
   static constexpr double T = 0.72;
 };
@@ -259,8 +278,8 @@ TEST_F(PathInterpolationRamp, KeysAreReturnedAsTheyAre)
   std::vector<PathKey> path;
   for (int k = 0; k < 4; ++k)
     path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
-  const PathFrame f =
-    interpolateAlongPath(path, path[1].s, Side, Side, *rampScene(path[1].s, Side).scene);
+  const PathFrame f = interpolateAlongPath(path, path[1].s, Side, Side,
+                                           *rampScene(path[1].s, Side).scene, withMovedEdges());
   ASSERT_EQ(f.records.size(), keys()[1].size());
   for (std::size_t p = 0; p < f.records.size(); ++p)
     ASSERT_EQ(f.records[p].color, keys()[1][p].color) << p;
@@ -356,7 +375,7 @@ TEST(PathInterpolationFarKeys, EveryFrameMeetsItsTargetAgainstTheTracedFrame)
     const SceneDescription atT = rampScene(t, side);
     const FrameTracer tracer(atT);
     const std::vector<RayRecord> truth = tracer.traceRows(0, side);
-    PathFrame frame = interpolateAlongPath(path, t, side, side, *atT.scene);
+    PathFrame frame = interpolateAlongPath(path, t, side, side, *atT.scene, withMovedEdges());
     const PathCompletion done = completePathFrame(frame, tracer, target);
     const double psnr = psnrOf(frame.records, truth);
     std::printf("[ path ] far keys, M = %.3f: estimated %.1f dB, %.1f dB against the traced frame, "
