@@ -16,7 +16,11 @@
 //    rotated by atan(1/n), one in each of its n × n cells and in each of its n² rows and
 //    columns ("n-rooks"); for odd n the centre ray is one of them; each is
 //    filtered over its share of the footprint and they are averaged (a box reconstruction;
-//    FrameAntialiasing.cxx). A pixel's raysPerPixel counts its samples and the midpoint rays
+//    FrameAntialiasing.cxx). A pixel sampled only because its footprint bends takes the
+//    pattern's 4 corner cells first (and its centre sample, for odd n): where those end as the
+//    centre ray does and their colours spread by at most kSettledColorSpread, their mean is its
+//    colour and the rest of the pattern is not traced (a bend shows only where the texture
+//    changes across the pixel). A pixel's raysPerPixel counts its samples and the midpoint rays
 //    counted to it (those on its right and upper edges): at most maxRaysPerPixel + 2.
 //  - `supersample` N > 1 samples every pixel by the same N × N pattern (for references); with
 //    `none`, the samples are point-sampled.
@@ -44,6 +48,10 @@ ASRTTRACING_EXPORT AntialiasMode antialiasModeFromString(const std::string& s);
 
 /// The largest number of rays a pixel may take (a supersample of 32 × 32).
 constexpr int kMaxRaysPerPixel = 1024;
+
+/// The largest spread of any channel (in [0, 1]: three levels of the 8-bit picture) among the
+/// corner samples of a pixel whose footprint bends that lets them settle its colour.
+constexpr double kSettledColorSpread = 3.0 / 255.0;
 
 /// The scene file's "rendering" section.
 struct AntialiasOptions

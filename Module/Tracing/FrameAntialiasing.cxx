@@ -6,8 +6,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <functional>
 
 namespace asrt
 {
@@ -64,11 +66,66 @@ bool endsAlike(const JacobianSample& a, const JacobianSample& b)
 
 /// A neighbour's screen-space misfit above this many pixels marks the footprint as non-linear.
 constexpr double kMaxFootprintMisfit = 0.5;
+
+/// Sample (a, b) of a pixel's n × n pattern: its filtered colour; `alike` says whether its ray
+/// ends as the pixel's centre ray does.
+using PatternSample = std::function<Color(int a, int b, bool& alike)>;
+
+/// The mean of all n × n samples of the pattern.
+Color fullPattern(int n, const PatternSample& sample)
+{
+  Color sum = Color::Zero();
+  bool alike = false;
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+      sum += sample(a, b, alike);
+  return sum / static_cast<double>(n * n);
+}
+
+/// A pixel whose footprint bends, with nothing else to sample it for: the bend shows only where
+/// the texture changes across the pixel. The pattern's 4 corner cells (and, for odd n, the
+/// centre sample) come first; if their rays end as the centre ray does and their colours spread
+/// by at most kSettledColorSpread, their mean is the pixel's colour. Otherwise the other samples
+/// are traced too and all n² averaged, as fullPattern does.
+Color settledByCorners(int n, const PatternSample& sample)
+{
+  const bool odd = n % 2 == 1;
+  // The first samples: the 4 corner cells, then the centre for odd n.
+  std::array<std::pair<int, int>, 5> first = {
+    { { 0, 0 }, { n - 1, 0 }, { 0, n - 1 }, { n - 1, n - 1 }, { n / 2, n / 2 } }
+  };
+  const int count = odd ? 5 : 4;
+  std::array<Color, 5> taken;
+  Color sum = Color::Zero(), lo = Color::Constant(HUGE_VAL), hi = Color::Constant(-HUGE_VAL);
+  bool allAlike = true;
+  for (int k = 0; k < count; ++k)
+  {
+    bool alike = false;
+    taken[k] = sample(first[k].first, first[k].second, alike);
+    allAlike = allAlike && alike;
+    sum += taken[k];
+    lo = lo.cwiseMin(taken[k]);
+    hi = hi.cwiseMax(taken[k]);
+  }
+  if (allAlike && (hi - lo).maxCoeff() <= kSettledColorSpread)
+    return sum / static_cast<double>(count);
+  // The whole pattern, summed in fullPattern's order: the colour is fullPattern's, bit for bit.
+  Color all = Color::Zero();
+  bool alike = false;
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+    {
+      const auto at = std::find(first.begin(), first.begin() + count, std::pair(a, b));
+      all += at != first.begin() + count ? taken[at - first.begin()] : sample(a, b, alike);
+    }
+  return all / static_cast<double>(n * n);
+}
 }
 
 void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
                               const std::vector<JacobianSample>& neighbours, int adaptiveSide,
-                              std::vector<int>& side, std::vector<int>& midpointRays) const
+                              std::vector<int>& side, std::vector<int>& midpointRays,
+                              std::vector<unsigned char>& bendOnly) const
 {
   const AntialiasOptions& opts = this->Desc.rendering;
   const PixelLookup lookup(records, neighbours);
@@ -81,8 +138,10 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   static constexpr int kDirections[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
 
   // 1. Each pixel against its neighbours. A pixel whose footprint is undefined or bends, or
-  // whose colour differs, is sampled outright ("hard"); a neighbour whose centre ray ends
-  // differently marks an edge between the two centres (bit d of `edges`).
+  // whose colour differs, is sampled outright ("hard": kHard, or kBends where the bend is all);
+  // a neighbour whose centre ray ends differently marks an edge between the two centres (bit d
+  // of `edges`).
+  constexpr unsigned char kHard = 1, kBends = 2;
   std::vector<unsigned char> hard(records.size(), 0), edges(records.size(), 0);
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < static_cast<long>(records.size()); ++k)
@@ -91,7 +150,7 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
     const JacobianSample self = jacobianSample(r);
     const Color c = byColor ? this->pointColor(self) : Color::Zero();
     const bool footprint = r.objectId >= 0 && hasFootprint(r);
-    bool h = r.objectId >= 0 && !footprint;
+    unsigned char h = r.objectId >= 0 && !footprint ? kHard : 0;
     unsigned char e = 0;
     for (int d = 0; d < 4; ++d)
     {
@@ -101,9 +160,13 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
         continue;
       if (!endsAlike(*s, self))
         e |= static_cast<unsigned char>(1u << d);
-      else if (!h)
-        h = (byColor && (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold) ||
-            (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit);
+      else if (h != kHard)
+      {
+        if (byColor && (this->pointColor(*s) - c).cwiseAbs().maxCoeff() > opts.colorThreshold)
+          h = kHard;
+        else if (footprint && footprintMisfit(r, *s, di, dj) > kMaxFootprintMisfit)
+          h = kBends;
+      }
     }
     hard[static_cast<std::size_t>(k)] = h;
     edges[static_cast<std::size_t>(k)] = e;
@@ -142,7 +205,7 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   // sampled for it. A midpoint unlike both (a third surface, a thin image) samples both.
   for (std::size_t k = 0; k < records.size(); ++k)
   {
-    bool sample = hard[k] != 0;
+    bool sample = hard[k] == kHard;
     const JacobianSample self = jacobianSample(records[k]);
     for (int d = 0; d < 4 && !sample; ++d)
       if (edges[k] & (1u << d))
@@ -152,8 +215,9 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
         const auto it = std::lower_bound(keys.begin(), keys.end(), key);
         sample = !endsAlike(midpoints[static_cast<std::size_t>(it - keys.begin())], self);
       }
-    if (sample)
+    if (sample || hard[k] == kBends)
       side[k] = adaptiveSide;
+    bendOnly[k] = !sample && hard[k] == kBends;
   }
 }
 
@@ -170,10 +234,11 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   const int adaptiveSide = adaptivePatternSide(opts.maxRaysPerPixel);
   std::vector<int> side(records.size(), 1);
   std::vector<int> midpointRays(records.size(), 0);
+  std::vector<unsigned char> bendOnly(records.size(), 0);
   if (opts.supersample > 1)
     std::fill(side.begin(), side.end(), opts.supersample);
   else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
-    this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays);
+    this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays, bendOnly);
 
   // Filtered centre colours (the colour of a pixel left at one ray).
   for (std::size_t k = 0; k < records.size(); ++k)
@@ -194,7 +259,8 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   // n² samples on a rotated grid (sampleOffset), each filtered over its share of the footprint
   // (the centre ray's, scaled by 1/n); the box reconstruction averages them. For odd n the middle
   // sample is the pixel's centre and takes the centre ray; for even n the centre ray is not a
-  // sample (patternRays).
+  // sample (patternRays). A pixel sampled only because its footprint bends may be settled by
+  // the pattern's corner cells (settledByCorners).
   const long count = static_cast<long>(sampled.size());
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
@@ -208,32 +274,32 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
     {
       if (stop.load(std::memory_order_relaxed))
         continue;
-      RayRecord& r = records[sampled[static_cast<std::size_t>(q)]];
-      const int n = side[sampled[static_cast<std::size_t>(q)]];
+      const std::size_t k = sampled[static_cast<std::size_t>(q)];
+      RayRecord& r = records[k];
+      const int n = side[k];
       const TextureFootprint cell = footprintOf(r, n);
       const bool cellFilter = filter && r.objectId >= 0 && hasFootprint(r);
-      Color sum = Color::Zero();
       int rays = r.traced ? 1 : 0;
-      for (int b = 0; b < n; ++b)
-        for (int a = 0; a < n; ++a)
+      // Sample (a, b) of the pattern: its filtered colour, and whether its ray ends as the
+      // centre's does.
+      const PatternSample sample = [&](int a, int b, bool& alike) -> Color
+      {
+        RayRecord s;
+        if (n % 2 == 1 && a == n / 2 && b == n / 2)
+          s = r;
+        else
         {
-          const bool middle = n % 2 == 1 && a == n / 2 && b == n / 2;
-          RayRecord s;
-          if (middle)
-            s = r;
-          else
-          {
-            const auto [x, y] = sampleOffset(a, b, n);
-            s = this->traceThrough(*prop, r.i + x, r.j + y);
-            ++rays;
-          }
-          if (cellFilter && s.objectId == r.objectId && s.imageOrder == r.imageOrder)
-            sum += scene.shadeFootprint(s.objectId, s.u, s.v, cell);
-          else
-            sum += s.color;
+          const auto [x, y] = sampleOffset(a, b, n);
+          s = this->traceThrough(*prop, r.i + x, r.j + y);
+          ++rays;
         }
-      r.color = sum / static_cast<double>(n * n);
-      r.raysPerPixel = rays + midpointRays[sampled[static_cast<std::size_t>(q)]];
+        alike = endsAlike(jacobianSample(s), jacobianSample(r));
+        if (cellFilter && s.objectId == r.objectId && s.imageOrder == r.imageOrder)
+          return scene.shadeFootprint(s.objectId, s.u, s.v, cell);
+        return s.color;
+      };
+      r.color = bendOnly[k] && n >= 3 ? settledByCorners(n, sample) : fullPattern(n, sample);
+      r.raysPerPixel = rays + midpointRays[k];
       const long d = ++done;
       if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)
       {

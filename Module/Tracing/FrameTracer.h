@@ -90,10 +90,12 @@ private:
                                       std::size_t keep,
                                       const std::function<bool(double)>& progress) const;
   /// The adaptive judgement of antialias(): sets side[k] to `adaptiveSide` for the records to
-  /// sample, and counts in midpointRays[k] the edge-midpoint rays it traced on their behalf.
+  /// sample, bendOnly[k] where a footprint that bends is the only reason, and counts in
+  /// midpointRays[k] the edge-midpoint rays it traced on their behalf.
   void judgePixels(const std::vector<RayRecord>& records,
                    const std::vector<JacobianSample>& neighbours, int adaptiveSide,
-                   std::vector<int>& side, std::vector<int>& midpointRays) const;
+                   std::vector<int>& side, std::vector<int>& midpointRays,
+                   std::vector<unsigned char>& bendOnly) const;
   /// The centre records of traceCentres on the adaptive grid (AdaptiveGrid.h): the whole lattice
   /// blocks holding the pixels are processed, in parallel, and the pixels' records handed out.
   std::vector<RayRecord> traceGrid(const std::vector<std::pair<int, int>>& pixels,
