@@ -36,6 +36,60 @@ double fraction(int x, int xa, int xb)
   return xb > xa ? static_cast<double>(x - xa) / (xb - xa) : 0.0;
 }
 
+/// Lagrange's weights on the nodes 0, m, 1 (0 < m < 1) at s, and their derivatives in s.
+struct QuadraticWeights
+{
+  double w[3], dw[3];
+  QuadraticWeights(double s, double m)
+  {
+    w[0] = (s - m) * (s - 1.0) / m;
+    w[1] = s * (s - 1.0) / (m * (m - 1.0));
+    w[2] = s * (s - m) / (1.0 - m);
+    dw[0] = (2.0 * s - m - 1.0) / m;
+    dw[1] = (2.0 * s - 1.0) / (m * (m - 1.0));
+    dw[2] = (2.0 * s - m) / (1.0 - m);
+  }
+};
+
+/// The biquadratic through a block's 9 points (blockPoints' order) at pixel (i, j), with its
+/// derivatives along i and j.
+struct Biquadratic
+{
+  QuadraticWeights x, y;
+  double wx, wy; // the block's sides in pixels
+  Biquadratic(const GridBlock& b, int i, int j)
+    : x(fraction(i, b.x0, b.x1), fraction(b.xm(), b.x0, b.x1))
+    , y(fraction(j, b.y0, b.y1), fraction(b.ym(), b.y0, b.y1))
+    , wx(b.x1 - b.x0)
+    , wy(b.y1 - b.y0)
+  {
+  }
+  template<typename T, typename Get>
+  T value(const Get& f) const
+  {
+    T sum = x.w[0] * y.w[0] * f(0);
+    for (int k = 1; k < 9; ++k)
+      sum += x.w[k % 3] * y.w[k / 3] * f(k);
+    return sum;
+  }
+  template<typename Get>
+  double di(const Get& f) const
+  {
+    double sum = 0.0;
+    for (int k = 0; k < 9; ++k)
+      sum += x.dw[k % 3] * y.w[k / 3] * f(k);
+    return sum / wx;
+  }
+  template<typename Get>
+  double dj(const Get& f) const
+  {
+    double sum = 0.0;
+    for (int k = 0; k < 9; ++k)
+      sum += x.w[k % 3] * y.dw[k / 3] * f(k);
+    return sum / wy;
+  }
+};
+
 /// The bilinear interpolant on one sub-quad: f(s, t) = f00 + s Δ10 + t Δ01 + s t (Δ11 − Δ10 − Δ01)
 /// with Δ the corners' differences from f00.
 struct Bilinear
@@ -84,14 +138,19 @@ std::array<std::pair<int, int>, 9> blockPoints(const GridBlock& b)
   return p;
 }
 
-bool blockIsSmooth(const GridBlock& b, const std::array<const RayRecord*, 9>& p, double tolerance)
+bool blockEndsAlike(const std::array<const RayRecord*, 9>& p)
 {
   for (const RayRecord* r : p)
     if (!endsAlike(*r, *p[0]))
       return false;
   // Rays the integrator lost are never interpolated: a block of them refines to its pixels.
   const Termination t = p[0]->termination;
-  if (t != Termination::HitObject && t != Termination::Escaped && t != Termination::Captured)
+  return t == Termination::HitObject || t == Termination::Escaped || t == Termination::Captured;
+}
+
+bool blockIsSmooth(const GridBlock& b, const std::array<const RayRecord*, 9>& p, double tolerance)
+{
+  if (!blockEndsAlike(p))
     return false;
   if (p[0]->objectId < 0)
     return true;
@@ -159,6 +218,86 @@ RayRecord interpolateRecord(const GridBlock& b, const std::array<const RayRecord
   r.dvdi = wx > 0 ? ((c10.v - c00.v) + at.t * crossV) / wx : nan;
   r.dudj = wy > 0 ? (d01 + at.s * cross) / wy : nan;
   r.dvdj = wy > 0 ? ((c01.v - c00.v) + at.s * crossV) / wy : nan;
+  return r;
+}
+
+bool admitsQuadratic(const GridBlock& b)
+{
+  return b.x1 - b.x0 >= 8 && b.y1 - b.y0 >= 8;
+}
+
+std::array<std::pair<int, int>, 4> quarterCentres(const GridBlock& b)
+{
+  const int xm = b.xm(), ym = b.ym();
+  const GridBlock q[4] = {
+    { b.x0, b.y0, xm, ym }, { xm, b.y0, b.x1, ym }, { b.x0, ym, xm, b.y1 }, { xm, ym, b.x1, b.y1 }
+  };
+  std::array<std::pair<int, int>, 4> c;
+  for (std::size_t k = 0; k < 4; ++k)
+    c[k] = { q[k].xm(), q[k].ym() };
+  return c;
+}
+
+bool quadraticFits(const GridBlock& b, const std::array<const RayRecord*, 9>& p,
+                   const std::array<const RayRecord*, 4>& q, double tolerance)
+{
+  const RayRecord& c00 = *p[0];
+  auto du = [&](int k) { return shortUDifference(p[static_cast<std::size_t>(k)]->u, c00.u); };
+  auto v = [&](int k) { return p[static_cast<std::size_t>(k)]->v; };
+  for (const RayRecord* r : q)
+  {
+    if (!endsAlike(*r, c00))
+      return false;
+    const Biquadratic at(b, r->i, r->j);
+    const double u = c00.u + at.value<double>(du);
+    if (!(std::abs(shortUDifference(u, r->u)) <= tolerance &&
+          std::abs(at.value<double>(v) - r->v) <= tolerance))
+      return false;
+  }
+  return true;
+}
+
+RayRecord interpolateRecordQuadratic(const GridBlock& b, const std::array<const RayRecord*, 9>& p,
+                                     int i, int j)
+{
+  const RayRecord& c00 = *p[0];
+  const Biquadratic at(b, i, j);
+  auto rec = [&](int k) -> const RayRecord& { return *p[static_cast<std::size_t>(k)]; };
+  RayRecord r;
+  r.i = i;
+  r.j = j;
+  r.origin = c00.origin;
+  r.termination = c00.termination;
+  r.objectId = c00.objectId;
+  r.imageOrder = c00.imageOrder;
+  r.hitPoint = at.value<Vec3>([&](int k) { return rec(k).hitPoint; });
+  r.affineLength = at.value<double>([&](int k) { return rec(k).affineLength; });
+  r.winding = at.value<double>([&](int k) { return rec(k).winding; });
+  for (int k = 0; k < 9; ++k)
+  {
+    r.chordError = std::max(r.chordError, rec(k).chordError);
+    r.maxAbsH = std::max(r.maxAbsH, rec(k).maxAbsH);
+  }
+  r.steps = 0;
+  r.traced = false;
+  r.raysPerPixel = 0;
+  if (r.objectId < 0)
+  {
+    r.dudi = r.dudj = r.dvdi = r.dvdj = std::numeric_limits<double>::quiet_NaN();
+    return r;
+  }
+  const Vec3 n = at.value<Vec3>([&](int k) { return rec(k).hitNormal; });
+  r.hitNormal = n.norm() > 0 ? Vec3(n.normalized()) : c00.hitNormal;
+  auto du = [&](int k) { return shortUDifference(rec(k).u, c00.u); };
+  auto v = [&](int k) { return rec(k).v; };
+  r.u = c00.u + at.value<double>(du);
+  if (r.u < 0.0 || r.u >= 1.0)
+    r.u -= std::floor(r.u);
+  r.v = at.value<double>(v);
+  r.dudi = at.di(du);
+  r.dvdi = at.di(v);
+  r.dudj = at.dj(du);
+  r.dvdj = at.dj(v);
   return r;
 }
 
@@ -260,30 +399,33 @@ struct FrameTracer::GridWork
   int FrameWidth = 0;
 };
 
+const RayRecord& FrameTracer::gridRay(Propagator& prop, int i, int j, GridWork& work) const
+{
+  const std::size_t s = work.slot(i, j);
+  if (!work.Traced[s])
+  {
+    if (work.Shared && work.onBorder(i, j))
+      work.Rays[s] = work.Shared->get(static_cast<long>(j) * work.FrameWidth + i,
+                                      [&] { return this->traceThrough(prop, i, j); });
+    else
+      work.Rays[s] = this->traceThrough(prop, i, j);
+    work.Traced[s] = 1;
+  }
+  return work.Rays[s];
+}
+
 void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const
 {
   const int W = this->Desc.camera.width, H = this->Desc.camera.height;
   const auto points = blockPoints(b);
   std::array<const RayRecord*, 9> p;
   for (std::size_t k = 0; k < 9; ++k)
-  {
-    const auto [i, j] = points[k];
-    const std::size_t s = work.slot(i, j);
-    if (!work.Traced[s])
-    {
-      if (work.Shared && work.onBorder(i, j))
-        work.Rays[s] = work.Shared->get(static_cast<long>(j) * work.FrameWidth + i,
-                                        [&] { return this->traceThrough(prop, i, j); });
-      else
-        work.Rays[s] = this->traceThrough(prop, i, j);
-      work.Traced[s] = 1;
-    }
-    p[k] = &work.Rays[s];
-  }
+    p[k] = &this->gridRay(prop, points[k].first, points[k].second, work);
   // At most 2 pixels a side, every pixel is one of the 9 points.
   if (b.x1 - b.x0 <= 2 && b.y1 - b.y0 <= 2)
     return;
-  if (blockIsSmooth(b, p, this->Desc.rendering.gridTolerance))
+  // Fills the block's pixels that no ray was traced for from an interpolation of its points.
+  auto fill = [&](const auto& interpolate)
   {
     for (int j = b.y0; j <= b.y1; ++j)
       for (int i = b.x0; i <= b.x1; ++i)
@@ -291,14 +433,33 @@ void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& wo
         const std::size_t s = work.slot(i, j);
         if (work.Traced[s] || !ownsPixel(b, i, j, W, H))
           continue;
-        RayRecord r = interpolateRecord(b, p, i, j);
+        RayRecord r = interpolate(i, j);
         r.direction = this->Cam->localDirection(i, j);
         r.momentum = this->Cam->pixelRay(i, j).p;
         r.color = this->pointColor(jacobianSample(r));
         work.Fills[s] = r;
         work.Filled[s] = 1;
       }
+  };
+  const double tolerance = this->Desc.rendering.gridTolerance;
+  if (blockIsSmooth(b, p, tolerance))
+  {
+    fill([&](int i, int j) { return interpolateRecord(b, p, i, j); });
     return;
+  }
+  // Ending alike on a surface whose (u, v) bends: the biquadratic through the 9 points, if it
+  // predicts the quarters' centres (which the quarters would trace anyway).
+  if (admitsQuadratic(b) && p[0]->objectId >= 0 && blockEndsAlike(p))
+  {
+    std::array<const RayRecord*, 4> q;
+    const auto centres = quarterCentres(b);
+    for (std::size_t k = 0; k < 4; ++k)
+      q[k] = &this->gridRay(prop, centres[k].first, centres[k].second, work);
+    if (quadraticFits(b, p, q, tolerance))
+    {
+      fill([&](int i, int j) { return interpolateRecordQuadratic(b, p, i, j); });
+      return;
+    }
   }
   // Split at the midpoints; a side of at most 2 pixels stays whole.
   const int xm = b.xm(), ym = b.ym();

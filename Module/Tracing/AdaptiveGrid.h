@@ -6,9 +6,12 @@
 // block traces its 9 points (corners, edge midpoints, centre) and is smooth when they end alike
 // (object, image order, termination: a hit, the horizon or the sky) and, on a surface, the
 // bilinear map of (u, v) from the 4 corners predicts the 5 other points to within the tolerance
-// (u the short way round: du = (a − b) − round(a − b)). A block that is not smooth splits at its
-// midpoints into 4, down to blocks of at most 2 pixels a side, whose pixels are all among their 9
-// points. A smooth block fills its other pixels bilinearly over its 4 sub-quads from all 9 points.
+// (u the short way round: du = (a − b) − round(a − b)). A smooth block fills its other pixels
+// bilinearly over its 4 sub-quads from all 9 points. A block of at least 8 pixels a side whose
+// points end alike on a surface but whose (u, v) bends traces the centres of its 4 quarters too
+// (which its quarters would trace first): if the biquadratic through the 9 points predicts them
+// to within the tolerance, it fills the block. A block that is neither splits at its midpoints
+// into 4, down to blocks of at most 2 pixels a side, whose pixels are all among their 9 points.
 //
 // A pixel belongs to the block whose half-open range [x0, x1) × [y0, y1) holds it (the frame's
 // last column and row belong to the blocks that end there). Its record is the traced ray if the
@@ -72,6 +75,33 @@ ASRTTRACING_EXPORT bool blockIsSmooth(const GridBlock& b, const std::array<const
 ASRTTRACING_EXPORT RayRecord interpolateRecord(const GridBlock& b,
                                                const std::array<const RayRecord*, 9>& p, int i,
                                                int j);
+
+/// Whether the 9 point records end alike (object, image order, termination) and the way they end
+/// may be interpolated (a hit, the sky or the horizon; not a ray the integrator lost).
+ASRTTRACING_EXPORT bool blockEndsAlike(const std::array<const RayRecord*, 9>& p);
+
+/// Whether a block is large enough (at least 8 pixels a side) to try the biquadratic through its
+/// 9 points where the bilinear map of its corners does not fit. Smaller blocks split down to
+/// their pixels instead: taken at 4 pixels a side, the biquadratic let a rod thinner than a pixel
+/// slip between its points (ThinObjectsBesideTheHoleKeepEveryPixel).
+ASRTTRACING_EXPORT bool admitsQuadratic(const GridBlock& b);
+
+/// The centres of the block's 4 quarters (the blocks it would split into), in blockPoints' order
+/// of the quarters: where the biquadratic is checked.
+ASRTTRACING_EXPORT std::array<std::pair<int, int>, 4> quarterCentres(const GridBlock& b);
+
+/// Whether the biquadratic (u, v) through the 9 point records (u unwrapped from the first, the
+/// short way) predicts the 4 quarter-centre records `q` to within the tolerance, all ending as
+/// the points do.
+ASRTTRACING_EXPORT bool quadraticFits(const GridBlock& b, const std::array<const RayRecord*, 9>& p,
+                                      const std::array<const RayRecord*, 4>& q, double tolerance);
+
+/// The interpolated record of pixel (i, j) from the biquadratic through the block's 9 point
+/// records: the fields interpolateRecord interpolates, over the whole block instead of a
+/// sub-quad; chordError and maxAbsH the largest of the 9; the Jacobian that of the biquadratic.
+ASRTTRACING_EXPORT RayRecord interpolateRecordQuadratic(const GridBlock& b,
+                                                        const std::array<const RayRecord*, 9>& p,
+                                                        int i, int j);
 
 /// The lattice blocks holding the given pixels, each once, in a fixed order (by row, then column).
 ASRTTRACING_EXPORT std::vector<GridBlock> latticeBlocksOf(

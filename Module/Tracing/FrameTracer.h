@@ -101,8 +101,11 @@ private:
   std::vector<RayRecord> traceGrid(const std::vector<std::pair<int, int>>& pixels,
                                    const std::function<bool(double)>& progress) const;
   struct GridWork;
-  /// Traces a block's 9 points into `work`, then fills it if smooth or refines its 4 quarters.
+  /// Traces a block's 9 points into `work`, then fills it if smooth (bilinear, or biquadratic
+  /// where its quarters' centres agree) or refines its 4 quarters.
   void refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const;
+  /// The ray of pixel (i, j) of the block `work` holds, traced on first use.
+  const RayRecord& gridRay(Propagator& prop, int i, int j, GridWork& work) const;
   /// The ray through screen position (x, y) with the given propagator (one per thread).
   RayRecord traceThrough(Propagator& prop, double x, double y) const;
   /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,

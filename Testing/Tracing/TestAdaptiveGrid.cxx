@@ -1,6 +1,7 @@
 // The adaptive ray grid against independent truth: full traces of the same scenes done here, the
-// exactly bilinear (u, v) of a head-on plane in flat space, the same frame at any thread count and
-// in any split into pieces, and its options through the scene text.
+// exactly bilinear (u, v) of a head-on plane in flat space, polynomial maps against the
+// biquadratic fill and its check, the same frame at any thread count and in any split into pieces,
+// and its options through the scene text.
 #include "AdaptiveGrid.h"
 #include "CameraFixtures.h"
 #include "FrameTracer.h"
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -200,6 +202,113 @@ TEST(AdaptiveGrid, FlatHeadOnPlaneIsInterpolatedExactly)
   // Every block is smooth: the lattice and the blocks' midpoints are all that is traced.
   EXPECT_LT(tracedShare(grid), 0.1);
   EXPECT_GT(tracedShare(grid), 0.0);
+}
+
+namespace
+{
+/// A map of the screen onto a surface, (u, v) as polynomials in (i, j); `cubic` scales a cubic
+/// term.
+struct PolynomialMap
+{
+  double u0 = 0.3, cubic = 0.0;
+  double u(double i, double j) const
+  {
+    return u0 + 0.01 * i - 0.004 * j + 8e-4 * i * i - 5e-4 * i * j + 3e-4 * j * j +
+           cubic * i * i * i;
+  }
+  double v(double i, double j) const { return 0.6 - 0.02 * i + 0.015 * j + 6e-4 * j * j; }
+  double dudi(double i, double j) const
+  {
+    return 0.01 + 1.6e-3 * i - 5e-4 * j + 3.0 * cubic * i * i;
+  }
+  double dudj(double i, double j) const { return -0.004 - 5e-4 * i + 6e-4 * j; }
+  RayRecord at(int i, int j) const
+  {
+    RayRecord r;
+    r.i = i;
+    r.j = j;
+    r.termination = Termination::HitObject;
+    r.objectId = 1;
+    r.u = u(i, j) - std::floor(u(i, j));
+    r.v = v(i, j);
+    r.hitPoint = Vec3(i, j, 0.0);
+    r.hitNormal = Vec3(0, 0, 1);
+    return r;
+  }
+};
+
+/// The 9 point records and the 4 quarter-centre records of a block on the map.
+struct BlockRecords
+{
+  std::vector<RayRecord> points, quarters;
+  std::array<const RayRecord*, 9> p;
+  std::array<const RayRecord*, 4> q;
+  BlockRecords(const GridBlock& b, const PolynomialMap& m)
+  {
+    for (const auto& [i, j] : blockPoints(b))
+      this->points.push_back(m.at(i, j));
+    for (const auto& [i, j] : quarterCentres(b))
+      this->quarters.push_back(m.at(i, j));
+    for (std::size_t k = 0; k < 9; ++k)
+      this->p[k] = &this->points[k];
+    for (std::size_t k = 0; k < 4; ++k)
+      this->q[k] = &this->quarters[k];
+  }
+};
+}
+
+TEST(AdaptiveGrid, BiquadraticReproducesAQuadraticMapThatTheBilinearMisses)
+{
+  // (u, v) quadratic in the pixel: the corners' bilinear map misses the midpoints by far more
+  // than the tolerance, the biquadratic through the 9 points is the map itself, every pixel and
+  // its Jacobian exact to rounding, and its check at the quarters' centres passes. u starts just
+  // below the seam, so the block's u wraps.
+  const GridBlock b{ 16, 8, 24, 16 };
+  PolynomialMap m;
+  m.u0 = 0.99 - m.u(16, 8) + m.u0;
+  const BlockRecords r(b, m);
+  ASSERT_TRUE(admitsQuadratic(b));
+  ASSERT_TRUE(blockEndsAlike(r.p));
+  EXPECT_FALSE(blockIsSmooth(b, r.p, 3e-4));
+  EXPECT_TRUE(quadraticFits(b, r.p, r.q, 1e-12));
+  for (int j = b.y0; j <= b.y1; ++j)
+    for (int i = b.x0; i <= b.x1; ++i)
+    {
+      const RayRecord x = interpolateRecordQuadratic(b, r.p, i, j);
+      const double u = m.u(i, j) - std::floor(m.u(i, j));
+      EXPECT_GE(x.u, 0.0);
+      EXPECT_LT(x.u, 1.0);
+      EXPECT_NEAR(shortUDifference(x.u, u), 0.0, 1e-13) << i << ", " << j;
+      EXPECT_NEAR(x.v, m.v(i, j), 1e-13);
+      EXPECT_NEAR(x.dudi, m.dudi(i, j), 1e-13);
+      EXPECT_NEAR(x.dudj, m.dudj(i, j), 1e-13);
+      EXPECT_NEAR(x.dvdi, -0.02, 1e-13);
+      EXPECT_NEAR(x.dvdj, 0.015 + 1.2e-3 * j, 1e-13);
+      EXPECT_LT((x.hitPoint - Vec3(i, j, 0)).norm(), 1e-12);
+      EXPECT_FALSE(x.traced);
+      EXPECT_EQ(x.steps, 0);
+    }
+}
+
+TEST(AdaptiveGrid, BiquadraticCheckRefusesWhatItCannotFollow)
+{
+  // A cubic term: the biquadratic misses the quarters' centres by the cubic's residual there,
+  // so the check passes a tolerance above that residual and refuses one below it; a quarter
+  // centre that ends elsewhere, or a block too small, is refused outright.
+  const GridBlock b{ 0, 0, 8, 8 };
+  PolynomialMap m;
+  m.cubic = 2e-5;
+  const BlockRecords r(b, m);
+  // The cubic i³ against its quadratic interpolant through i = 0, 4, 8 at i = 2 and 6:
+  // i (i − 4)(i − 8) = ±24.
+  const double residual = 24.0 * m.cubic;
+  EXPECT_TRUE(quadraticFits(b, r.p, r.q, 1.01 * residual));
+  EXPECT_FALSE(quadraticFits(b, r.p, r.q, 0.99 * residual));
+  BlockRecords other(b, PolynomialMap{});
+  other.quarters[2].objectId = 2;
+  EXPECT_FALSE(quadraticFits(b, other.p, other.q, 1.0));
+  EXPECT_FALSE(admitsQuadratic(GridBlock{ 0, 0, 8, 4 }));
+  EXPECT_TRUE(admitsQuadratic(GridBlock{ 0, 0, 8, 8 }));
 }
 
 TEST(AdaptiveGrid, ThinObjectsBesideTheHoleKeepEveryPixel)
