@@ -147,7 +147,8 @@ std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const MoviePath& 
       f.describe = path.parameter + " = " + formatNumber(f.s);
       path.apply[k](source);
       errors.first.clear();
-      f.sceneText = source->GetFrameSceneText();
+      // The textures, which the path does not change, are read (and so checked) once.
+      f.sceneText = k == 0 ? source->GetFrameSceneText() : source->GetFrameSceneTextWithoutImages();
       if (!errors.first.empty() || f.sceneText.empty())
       {
         // VTK's messages lead with where they were raised: the reason is after the last ": ".
@@ -341,18 +342,33 @@ struct MovieMaking
     const auto id = maker.Store->findFrame(subset);
     if (!id)
       return std::nullopt;
-    std::map<std::pair<int, int>, RayRecord> byPixel;
-    for (const RayRecord& r : maker.Store->readFrame(*id))
-      byPixel.emplace(std::make_pair(r.i, r.j), r);
+    // Each pixel's record found through the frame's pixel grid: the subset is a few pixels of
+    // it, at most all of them.
+    const std::vector<RayRecord> stored = maker.Store->readFrame(*id);
+    std::vector<std::int32_t> at(static_cast<std::size_t>(maker.Width) * maker.Height, -1);
+    for (std::size_t r = 0; r < stored.size(); ++r)
+    {
+      const RayRecord& ray = stored[r];
+      if (ray.i >= 0 && ray.i < maker.Width && ray.j >= 0 && ray.j < maker.Height)
+      {
+        std::int32_t& slot = at[static_cast<std::size_t>(ray.j) * maker.Width + ray.i];
+        if (slot < 0) // a pixel stored twice: its first record stands
+          slot = static_cast<std::int32_t>(r);
+      }
+    }
     std::vector<RayRecord> records;
+    records.reserve(pixels.size());
     for (const auto& ij : pixels)
     {
-      const auto found = byPixel.find(ij);
-      if (found == byPixel.end())
+      const bool inside =
+        ij.first >= 0 && ij.first < maker.Width && ij.second >= 0 && ij.second < maker.Height;
+      const std::int32_t r =
+        inside ? at[static_cast<std::size_t>(ij.second) * maker.Width + ij.first] : -1;
+      if (r < 0)
         throw StoreError("stored subset frame " + std::to_string(*id) + " lacks pixel (" +
                          std::to_string(ij.first) + ", " + std::to_string(ij.second) +
                          ") that its digest names");
-      records.push_back(found->second);
+      records.push_back(stored[static_cast<std::size_t>(r)]);
     }
     return records;
   }

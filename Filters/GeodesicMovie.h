@@ -94,7 +94,8 @@ struct MovieFrame
 };
 
 /// The frames' scenes of `source` (its scene and overrides) along the path, each checked (a
-/// camera sent inside the horizon, a spin ramped past the mass) before anything is traced. Throws
+/// camera sent inside the horizon, a spin ramped past the mass) before anything is traced; the
+/// textures, which a path does not change, read at the first frame only. Throws
 /// InvalidParameter "frame K (P = V): <the source's error>".
 ASRTFILTERS_EXPORT std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source,
                                                        const MoviePath& path);
