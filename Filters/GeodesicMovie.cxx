@@ -5,6 +5,7 @@
 #include "GeodesicSceneLoading.h"
 #include "PathInterpolation.h"
 #include "RayStore.h"
+#include "RecordAllocation.h"
 #include "SceneFile.h"
 #include "vtkGeodesicSource.h"
 
@@ -16,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <utility>
 
 namespace asrt
@@ -147,7 +149,8 @@ std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const MoviePath& 
       f.describe = path.parameter + " = " + formatNumber(f.s);
       path.apply[k](source);
       errors.first.clear();
-      f.sceneText = source->GetFrameSceneText();
+      // The textures, which the path does not change, are read (and so checked) once.
+      f.sceneText = k == 0 ? source->GetFrameSceneText() : source->GetFrameSceneTextWithoutImages();
       if (!errors.first.empty() || f.sceneText.empty())
       {
         // VTK's messages lead with where they were raised: the reason is after the last ": ".
@@ -179,6 +182,12 @@ namespace
 constexpr double kPriorSlope = 1.0;
 /// completePathFrame's default probe share, the floor of the estimate.
 constexpr double kMovieProbeFraction = 0.01;
+/// The most bytes of records kept of the frames made from the store alone while planning (a
+/// quarter of the memory a read may take, at most 1 GiB): the frames beyond are made again.
+double servedBytesKept()
+{
+  return std::min(double(1 << 30), defaultMemoryLimit() / 4);
+}
 
 double raysOf(const std::vector<RayRecord>& records)
 {
@@ -201,6 +210,10 @@ struct MovieMaker::Internals
   /// digest.
   std::map<std::pair<int, std::string>, std::vector<RayRecord>> retraced;
   std::optional<SceneDescription> shading; ///< the first frame's scene, textures loaded
+  /// Frames the plan made from the store alone between the stored frames, with how: kept when the
+  /// plan interpolates them between the same keys, until frame() hands them out (the same records
+  /// it would make again).
+  std::map<int, std::pair<std::vector<RayRecord>, MovieFrameReport>> served;
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -341,18 +354,33 @@ struct MovieMaking
     const auto id = maker.Store->findFrame(subset);
     if (!id)
       return std::nullopt;
-    std::map<std::pair<int, int>, RayRecord> byPixel;
-    for (const RayRecord& r : maker.Store->readFrame(*id))
-      byPixel.emplace(std::make_pair(r.i, r.j), r);
+    // Each pixel's record found through the frame's pixel grid: the subset is a few pixels of
+    // it, at most all of them.
+    const std::vector<RayRecord> stored = maker.Store->readFrame(*id);
+    std::vector<std::int32_t> at(static_cast<std::size_t>(maker.Width) * maker.Height, -1);
+    for (std::size_t r = 0; r < stored.size(); ++r)
+    {
+      const RayRecord& ray = stored[r];
+      if (ray.i >= 0 && ray.i < maker.Width && ray.j >= 0 && ray.j < maker.Height)
+      {
+        std::int32_t& slot = at[static_cast<std::size_t>(ray.j) * maker.Width + ray.i];
+        if (slot < 0) // a pixel stored twice: its first record stands
+          slot = static_cast<std::int32_t>(r);
+      }
+    }
     std::vector<RayRecord> records;
+    records.reserve(pixels.size());
     for (const auto& ij : pixels)
     {
-      const auto found = byPixel.find(ij);
-      if (found == byPixel.end())
+      const bool inside =
+        ij.first >= 0 && ij.first < maker.Width && ij.second >= 0 && ij.second < maker.Height;
+      const std::int32_t r =
+        inside ? at[static_cast<std::size_t>(ij.second) * maker.Width + ij.first] : -1;
+      if (r < 0)
         throw StoreError("stored subset frame " + std::to_string(*id) + " lacks pixel (" +
                          std::to_string(ij.first) + ", " + std::to_string(ij.second) +
                          ") that its digest names");
-      records.push_back(found->second);
+      records.push_back(stored[static_cast<std::size_t>(r)]);
     }
     return records;
   }
@@ -374,9 +402,9 @@ struct MovieMaking
                                                       subset.subset.digest);
       if (auto found = this->known(k, subset, pixels))
       {
+        report.raysReused += raysOf(*found);
         if (!storeOnly)
         {
-          report.raysReused += raysOf(*found);
           maker.RaysOfMovie += raysOf(*found);
           if (maker.Settings.cacheRetraced)
             in.retraced.emplace(cacheKey, *found);
@@ -483,6 +511,7 @@ const MoviePlan& MovieMaker::plan()
   {
     MovieMaking making{ *this, *this->Impl };
     std::vector<bool> served(n, false);
+    double kept = 0;
     for (std::size_t k = 0; k < n; ++k)
     {
       if (stored[k])
@@ -490,8 +519,15 @@ const MoviePlan& MovieMaker::plan()
       MovieFrameReport dry;
       try
       {
-        making.interpolated(static_cast<int>(k), storedKeys, dry, true);
+        std::vector<RayRecord> records =
+          making.interpolated(static_cast<int>(k), storedKeys, dry, true);
         served[k] = true;
+        const double bytes = static_cast<double>(records.size() * sizeof(RayRecord));
+        if (kept + bytes <= servedBytesKept())
+        {
+          kept += bytes;
+          this->Impl->served.emplace(static_cast<int>(k), std::make_pair(std::move(records), dry));
+        }
       }
       catch (const NotServed&)
       {
@@ -500,6 +536,8 @@ const MoviePlan& MovieMaker::plan()
     const std::optional<MoviePlan> between = planBetweenStored(s, stored, served, model);
     if (between && between->estimatedRays < bisected.estimatedRays)
       bisected = *between;
+    else // other keys: the frames made between the stored ones are not the plan's
+      this->Impl->served.clear();
   }
   this->Plan = bisected;
   return *this->Plan;
@@ -525,6 +563,17 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
   MovieMaking making{ *this, *this->Impl };
   report = MovieFrameReport();
   report.method = plan.frames[static_cast<std::size_t>(k)].method;
+  const auto served = report.method == FrameMethod::Interpolated ? this->Impl->served.find(k)
+                                                                 : this->Impl->served.end();
+  if (served != this->Impl->served.end())
+  {
+    // Made while planning, between the same keys: nothing traced, its re-traced pixels read.
+    std::vector<RayRecord> records = std::move(served->second.first);
+    report = served->second.second;
+    this->RaysOfMovie += report.raysReused;
+    this->Impl->served.erase(served);
+    return records;
+  }
   if (report.method == FrameMethod::Interpolated)
     return making.interpolated(k, plan.keys(), report, false);
   const std::vector<RayRecord>& records = making.whole(k);

@@ -13,7 +13,8 @@
 // is stable under storing its own whole frames (MoviePlan.h), and a denser movie over a stored
 // path is offered the stored frames as its only keys (planBetweenStored), its old interpolated
 // frames then served whole by the store: which of them are is found by making them from the store
-// alone before planning.
+// alone before planning, and the frames so made are kept (within a memory bound) for frame() to
+// hand out rather than made again.
 #ifndef asrt_GeodesicMovie_h
 #define asrt_GeodesicMovie_h
 
@@ -94,7 +95,8 @@ struct MovieFrame
 };
 
 /// The frames' scenes of `source` (its scene and overrides) along the path, each checked (a
-/// camera sent inside the horizon, a spin ramped past the mass) before anything is traced. Throws
+/// camera sent inside the horizon, a spin ramped past the mass) before anything is traced; the
+/// textures, which a path does not change, read at the first frame only. Throws
 /// InvalidParameter "frame K (P = V): <the source's error>".
 ASRTFILTERS_EXPORT std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source,
                                                        const MoviePath& path);

@@ -16,8 +16,22 @@ ImageLoader vtkImageFileLoader()
   };
 }
 
-SceneDescription loadScene(const char* text, const char* fileName, const char* textDirectory)
+ImageLoader neutralImageLoader()
 {
+  return [](const std::string&)
+  {
+    ImagePixels px;
+    px.width = px.height = 1;
+    px.rgb = { 128, 128, 128 };
+    return px;
+  };
+}
+
+SceneDescription loadScene(const char* text, const char* fileName, const char* textDirectory,
+                           ImageLoader loader)
+{
+  if (!loader)
+    loader = vtkImageFileLoader();
   const bool haveFile = fileName && *fileName;
   if (text && *text && haveFile)
   {
@@ -25,7 +39,7 @@ SceneDescription loadScene(const char* text, const char* fileName, const char* t
     const std::string dir = std::filesystem::path(fileName).parent_path().string();
     try
     {
-      return parseScene(text, dir.empty() ? "." : dir, vtkImageFileLoader());
+      return parseScene(text, dir.empty() ? "." : dir, loader);
     }
     catch (const InvalidParameter& e)
     {
@@ -33,10 +47,9 @@ SceneDescription loadScene(const char* text, const char* fileName, const char* t
     }
   }
   if (text && *text)
-    return parseScene(text, textDirectory && *textDirectory ? textDirectory : ".",
-                      vtkImageFileLoader());
+    return parseScene(text, textDirectory && *textDirectory ? textDirectory : ".", loader);
   if (haveFile)
-    return loadSceneFile(fileName, vtkImageFileLoader());
+    return loadSceneFile(fileName, loader);
   throw InvalidParameter("no scene: set SceneFileName or SceneText");
 }
 }

@@ -10,12 +10,16 @@ namespace asrt
 /// formats, sizes checked before decoding); throws InvalidParameter for missing or unreadable
 /// files.
 ImageLoader vtkImageFileLoader();
+/// An ImageLoader that reads nothing: every texture a 1×1 neutral grey (as parseSceneWithoutImages
+/// has them), for a scene's identity and text, never for rendering.
+ImageLoader neutralImageLoader();
 /// The scene from JSON text if given (relative texture paths against `textDirectory`, the working
 /// directory if null or empty), else from the file; throws InvalidParameter if neither is set or
 /// the scene is invalid. Given both, the text is the file's content as the caller read it: its
-/// textures are found beside the file and errors name the file.
+/// textures are found beside the file and errors name the file. Textures are read through
+/// `loader` (vtkImageFileLoader() if empty).
 SceneDescription loadScene(const char* text, const char* fileName,
-                           const char* textDirectory = nullptr);
+                           const char* textDirectory = nullptr, ImageLoader loader = {});
 }
 
 #endif

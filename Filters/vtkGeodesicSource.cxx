@@ -33,6 +33,7 @@
 #include <limits>
 #include <sstream>
 #include <tuple>
+#include <utility>
 
 vtkStandardNewMacro(vtkGeodesicSource);
 
@@ -272,11 +273,12 @@ void vtkGeodesicSource::LoadImagePixels(const std::string& path, int& width, int
 
 struct vtkGeodesicSource::Internals
 {
-  /// The scene with this filter's overrides applied.
-  static asrt::SceneDescription Load(vtkGeodesicSource* self)
+  /// The scene with this filter's overrides applied; its textures read through `loader` (the
+  /// image files if empty).
+  static asrt::SceneDescription Load(vtkGeodesicSource* self, asrt::ImageLoader loader = {})
   {
-    asrt::SceneDescription d =
-      asrt::loadScene(self->SceneText, self->SceneFileName, self->TextureDirectory);
+    asrt::SceneDescription d = asrt::loadScene(self->SceneText, self->SceneFileName,
+                                               self->TextureDirectory, std::move(loader));
     if (self->OverrideSpacetime)
     {
       if (isSet(self->Mass))
@@ -422,6 +424,19 @@ std::string vtkGeodesicSource::GetFrameSceneText()
   try
   {
     return asrt::effectiveSceneText(Internals::Load(this));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return std::string();
+  }
+}
+
+std::string vtkGeodesicSource::GetFrameSceneTextWithoutImages()
+{
+  try
+  {
+    return asrt::effectiveSceneText(Internals::Load(this, asrt::neutralImageLoader()));
   }
   catch (const std::exception& e)
   {

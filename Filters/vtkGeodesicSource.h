@@ -160,6 +160,10 @@ public:
   /// (overrides and subset applied): the frame's identity in the store, as the "SceneJSON" field
   /// data will hold it. Nothing is traced. Empty, with an error, if the scene is invalid.
   std::string GetFrameSceneText();
+  /// GetFrameSceneText() without reading the scene's textures (their pixels are not part of the
+  /// text), so without checking that they can be read: for the frames of a path whose textures
+  /// GetFrameSceneText() read once.
+  std::string GetFrameSceneTextWithoutImages();
 
   /// How the traced rays of a frame ended, counted from its image's "Termination" array (port 0
   /// of this source, or the frame vtkGeodesicDistributedSource assembles): counts[0] the rays

@@ -8,16 +8,19 @@
 #include "vtkOggTheoraWriter.h"
 #include "vtkPointData.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtk_ogg.h"
 
 #include <vtksys/SystemTools.hxx>
 
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -52,6 +55,70 @@ vtkSmartPointer<vtkImageData> rgbFrame(vtkImageData* frame)
     for (int c = 0; c < 3; ++c)
       out[3 * k + c] = in->GetValue(k * nc + c);
   return rgb;
+}
+
+/// The serial number of the movie's one logical stream ("ASRT").
+constexpr std::uint32_t kOggSerial = 0x41535254;
+
+/// vtkOggTheoraWriter numbers its stream with rand() seeded by the clock's second, so the same
+/// frames made other bytes a second later. Every page of the file open at `fd` gets kOggSerial
+/// instead, its checksum computed again (libogg's); the pages keep their sizes, so the file is
+/// patched in place. A file that is not a plain sequence of pages is left as it is.
+void numberOggStream(int fd, const std::string& path)
+{
+  struct stat st;
+  if (fstat(fd, &st) != 0)
+    throw std::runtime_error("cannot write the movie \"" + path + "\": " + std::strerror(errno));
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(st.st_size));
+  for (std::size_t got = 0; got < bytes.size();)
+  {
+    const ssize_t n = pread(fd, bytes.data() + got, bytes.size() - got, static_cast<off_t>(got));
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      throw std::runtime_error("cannot read back the movie \"" + path +
+                               "\": " + std::strerror(n < 0 ? errno : EIO));
+    got += static_cast<std::size_t>(n);
+  }
+  std::vector<ogg_page> pages;
+  for (std::size_t at = 0; at < bytes.size();)
+  {
+    // RFC 3533: "OggS", version, flags, granule position (8), serial (4), sequence (4), checksum
+    // (4), the segment count, then the segments' lengths, then the body.
+    if (bytes.size() - at < 27 || std::memcmp(bytes.data() + at, "OggS", 4) != 0)
+      return;
+    const std::size_t headerLength = 27 + bytes[at + 26];
+    if (bytes.size() - at < headerLength)
+      return;
+    std::size_t bodyLength = 0;
+    for (std::size_t k = 27; k < headerLength; ++k)
+      bodyLength += bytes[at + k];
+    if (bytes.size() - at - headerLength < bodyLength)
+      return;
+    ogg_page page;
+    page.header = bytes.data() + at;
+    page.header_len = static_cast<long>(headerLength);
+    page.body = bytes.data() + at + headerLength;
+    page.body_len = static_cast<long>(bodyLength);
+    pages.push_back(page);
+    at += headerLength + bodyLength;
+  }
+  for (ogg_page& page : pages)
+  {
+    for (int b = 0; b < 4; ++b)
+      page.header[14 + b] = static_cast<unsigned char>(kOggSerial >> (8 * b));
+    ogg_page_checksum_set(&page);
+  }
+  for (std::size_t put = 0; put < bytes.size();)
+  {
+    const ssize_t n = pwrite(fd, bytes.data() + put, bytes.size() - put, static_cast<off_t>(put));
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      throw std::runtime_error("cannot write the movie \"" + path +
+                               "\": " + std::strerror(n < 0 ? errno : EIO));
+    put += static_cast<std::size_t>(n);
+  }
 }
 }
 
@@ -122,6 +189,21 @@ public:
     this->Started = false;
     this->Writer->End();
     this->check();
+    // The temporary is open for writing only: read and patched through a descriptor of its own.
+    const int fd = open(this->File->openName().c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0)
+      throw std::runtime_error("cannot write the movie \"" + this->Path +
+                               "\": " + std::strerror(errno));
+    try
+    {
+      numberOggStream(fd, this->Path);
+    }
+    catch (...)
+    {
+      close(fd);
+      throw;
+    }
+    close(fd);
   }
   void abandon() override
   {

@@ -2,9 +2,9 @@
 # asrt movie against a throwaway server, which asrtWithThrowawayPostgres started and named in the
 # PG* variables: a small mass ramp of Figs. 4-5 at --quality 35, every frame checked against the
 # frame this script traces itself at that frame's parameters; the same movie again traces no ray
-# and writes the same bytes; twice the frames on the same path reuses every old frame and traces
-# fewer rays than its new frames would take traced directly; and the refusals, each with its exit
-# code and nothing written.
+# and writes the same bytes (the movie file too); twice the frames on the same path reuses every
+# old frame and traces fewer rays than its new frames would take traced directly; and the
+# refusals, each with its exit code and nothing written.
 # Usage: cli-movie.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
 asrt="$1"; check="$2"; expect="$3"; scenes="$4"; work="$5"
@@ -45,6 +45,7 @@ for k in 0 1 2 3 4 5 6; do
   cmp "first/fig4-mass-start-00$k.png" "second/fig4-mass-start-00$k.png"
   cmp "first/fig4-mass-start-00$k.vti" "second/fig4-mass-start-00$k.vti"
 done
+cmp first/fig4-mass-start.ogv second/fig4-mass-start.ogv
 
 step "twice the frames on the same path: the old frames reused whole, only the new ones traced"
 out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 13 \

@@ -133,6 +133,32 @@ TEST(GeodesicSourceOverrides, FrameSceneTextIsRefusedToo)
   EXPECT_TRUE(catcher->Mentions("celestial sphere")) << catcher->AllErrors();
 }
 
+TEST(GeodesicSourceOverrides, FrameSceneTextWithoutImagesIsTheTextWithoutReadingATexture)
+{
+  vtkNew<vtkGeodesicSource> s;
+  s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+  s->SetMass(0.7);
+  s->SetCameraPosition(3, -29, 8);
+  const std::string withImages = s->GetFrameSceneText();
+  ASSERT_FALSE(withImages.empty());
+  EXPECT_EQ(s->GetFrameSceneTextWithoutImages(), withImages);
+
+  // A texture that is not there: the scene text with images is refused for it, the one without
+  // them never reads it and names it as the scene does.
+  nlohmann::json doc = nlohmann::json::parse(readFile(scenePath("fig4-mass-start.json")));
+  doc["objects"][0]["texture"]["image"] = "no-such-texture.png";
+  vtkNew<vtkGeodesicSource> t;
+  vtkNew<MessageCatcher> catcher;
+  asrt::testing::watch(t, catcher);
+  t->SetSceneText(doc.dump().c_str());
+  EXPECT_EQ(t->GetFrameSceneText(), "");
+  EXPECT_TRUE(catcher->Mentions("no-such-texture.png")) << catcher->AllErrors();
+  const std::string withoutImages = t->GetFrameSceneTextWithoutImages();
+  ASSERT_FALSE(withoutImages.empty()) << catcher->AllErrors();
+  EXPECT_EQ(nlohmann::json::parse(withoutImages)["objects"][0]["texture"]["image"],
+            "no-such-texture.png");
+}
+
 TEST(GeodesicSourceRayEnds, CountsMatchTheRecordsOfAGoodFrame)
 {
   vtkNew<vtkGeodesicSource> s;
