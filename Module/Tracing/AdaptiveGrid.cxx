@@ -75,18 +75,23 @@ struct Biquadratic
   template<typename Get>
   double di(const Get& f) const
   {
-    double sum = 0.0;
-    for (int k = 0; k < 9; ++k)
-      sum += x.dw[k % 3] * y.w[k / 3] * f(k);
-    return sum / wx;
+    return weighted(x.dw, y.w, f) / wx;
   }
   template<typename Get>
   double dj(const Get& f) const
   {
+    return weighted(x.w, y.dw, f) / wy;
+  }
+
+private:
+  /// Σ a[k mod 3] b[k div 3] f(k) over the 9 points.
+  template<typename Get>
+  static double weighted(const double (&a)[3], const double (&b)[3], const Get& f)
+  {
     double sum = 0.0;
     for (int k = 0; k < 9; ++k)
-      sum += x.w[k % 3] * y.dw[k / 3] * f(k);
-    return sum / wy;
+      sum += a[k % 3] * b[k / 3] * f(k);
+    return sum;
   }
 };
 
