@@ -16,17 +16,6 @@ ImageLoader vtkImageFileLoader()
   };
 }
 
-ImageLoader neutralImageLoader()
-{
-  return [](const std::string&)
-  {
-    ImagePixels px;
-    px.width = px.height = 1;
-    px.rgb = { 128, 128, 128 };
-    return px;
-  };
-}
-
 SceneDescription loadScene(const char* text, const char* fileName, const char* textDirectory,
                            ImageLoader loader)
 {

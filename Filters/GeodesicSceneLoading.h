@@ -10,9 +10,6 @@ namespace asrt
 /// formats, sizes checked before decoding); throws InvalidParameter for missing or unreadable
 /// files.
 ImageLoader vtkImageFileLoader();
-/// An ImageLoader that reads nothing: every texture a 1×1 neutral grey (as parseSceneWithoutImages
-/// has them), for a scene's identity and text, never for rendering.
-ImageLoader neutralImageLoader();
 /// The scene from JSON text if given (relative texture paths against `textDirectory`, the working
 /// directory if null or empty), else from the file; throws InvalidParameter if neither is set or
 /// the scene is invalid. Given both, the text is the file's content as the caller read it: its

@@ -106,6 +106,31 @@ struct Bilinear
     return f00 + s * (f10 - f00) + t * (f01 - f00) + s * t * (f11 - f10 - f01 + f00);
   }
 };
+
+/// The record of pixel (i, j) of a block whose rays end as `c00` does, before its interpolated
+/// fields: the block's ending and eye, no ray traced, and no Jacobian (NaN) until a surface's is
+/// filled in.
+RayRecord untracedRecord(const RayRecord& c00, int i, int j)
+{
+  RayRecord r;
+  r.i = i;
+  r.j = j;
+  r.origin = c00.origin;
+  r.termination = c00.termination;
+  r.objectId = c00.objectId;
+  r.imageOrder = c00.imageOrder;
+  r.steps = 0;
+  r.traced = false;
+  r.raysPerPixel = 0;
+  r.dudi = r.dudj = r.dvdi = r.dvdj = std::numeric_limits<double>::quiet_NaN();
+  return r;
+}
+
+/// u unwrapped past the seam, back in [0, 1).
+double wrappedU(double u)
+{
+  return u < 0.0 || u >= 1.0 ? u - std::floor(u) : u;
+}
 }
 
 GridBlock latticeBlock(int i, int j, int lattice, int width, int height)
@@ -188,34 +213,20 @@ RayRecord interpolateRecord(const GridBlock& b, const std::array<const RayRecord
   const Bilinear at{ fraction(i, xs[a], xs[a + 1]), fraction(j, ys[c], ys[c + 1]) };
   const double nan = std::numeric_limits<double>::quiet_NaN();
 
-  RayRecord r;
-  r.i = i;
-  r.j = j;
-  r.origin = c00.origin;
-  r.termination = c00.termination;
-  r.objectId = c00.objectId;
-  r.imageOrder = c00.imageOrder;
+  RayRecord r = untracedRecord(c00, i, j);
   r.hitPoint = at(c00.hitPoint, c10.hitPoint, c01.hitPoint, c11.hitPoint);
   r.affineLength = at(c00.affineLength, c10.affineLength, c01.affineLength, c11.affineLength);
   r.winding = at(c00.winding, c10.winding, c01.winding, c11.winding);
   r.chordError = std::max({ c00.chordError, c10.chordError, c01.chordError, c11.chordError });
   r.maxAbsH = std::max({ c00.maxAbsH, c10.maxAbsH, c01.maxAbsH, c11.maxAbsH });
-  r.steps = 0;
-  r.traced = false;
-  r.raysPerPixel = 0;
   if (r.objectId < 0)
-  {
-    r.dudi = r.dudj = r.dvdi = r.dvdj = nan;
     return r;
-  }
   const Vec3 n = at(c00.hitNormal, c10.hitNormal, c01.hitNormal, c11.hitNormal);
   r.hitNormal = n.norm() > 0 ? Vec3(n.normalized()) : c00.hitNormal;
   // u unwrapped from the first corner the short way; back in [0, 1) if that crossed the seam.
   const double d10 = shortUDifference(c10.u, c00.u), d01 = shortUDifference(c01.u, c00.u),
                d11 = shortUDifference(c11.u, c00.u);
-  r.u = c00.u + at(0.0, d10, d01, d11);
-  if (r.u < 0.0 || r.u >= 1.0)
-    r.u -= std::floor(r.u);
+  r.u = wrappedU(c00.u + at(0.0, d10, d01, d11));
   r.v = at(c00.v, c10.v, c01.v, c11.v);
   // The derivatives of the bilinear map at the pixel.
   const double cross = d11 - d10 - d01, crossV = c11.v - c10.v - c01.v + c00.v;
@@ -268,13 +279,7 @@ RayRecord interpolateRecordQuadratic(const GridBlock& b, const std::array<const 
   const RayRecord& c00 = *p[0];
   const Biquadratic at(b, i, j);
   auto rec = [&](int k) -> const RayRecord& { return *p[static_cast<std::size_t>(k)]; };
-  RayRecord r;
-  r.i = i;
-  r.j = j;
-  r.origin = c00.origin;
-  r.termination = c00.termination;
-  r.objectId = c00.objectId;
-  r.imageOrder = c00.imageOrder;
+  RayRecord r = untracedRecord(c00, i, j);
   r.hitPoint = at.value<Vec3>([&](int k) { return rec(k).hitPoint; });
   r.affineLength = at.value<double>([&](int k) { return rec(k).affineLength; });
   r.winding = at.value<double>([&](int k) { return rec(k).winding; });
@@ -283,21 +288,13 @@ RayRecord interpolateRecordQuadratic(const GridBlock& b, const std::array<const 
     r.chordError = std::max(r.chordError, rec(k).chordError);
     r.maxAbsH = std::max(r.maxAbsH, rec(k).maxAbsH);
   }
-  r.steps = 0;
-  r.traced = false;
-  r.raysPerPixel = 0;
   if (r.objectId < 0)
-  {
-    r.dudi = r.dudj = r.dvdi = r.dvdj = std::numeric_limits<double>::quiet_NaN();
     return r;
-  }
   const Vec3 n = at.value<Vec3>([&](int k) { return rec(k).hitNormal; });
   r.hitNormal = n.norm() > 0 ? Vec3(n.normalized()) : c00.hitNormal;
   auto du = [&](int k) { return shortUDifference(rec(k).u, c00.u); };
   auto v = [&](int k) { return rec(k).v; };
-  r.u = c00.u + at.value<double>(du);
-  if (r.u < 0.0 || r.u >= 1.0)
-    r.u -= std::floor(r.u);
+  r.u = wrappedU(c00.u + at.value<double>(du));
   r.v = at.value<double>(v);
   r.dudi = at.di(du);
   r.dvdi = at.di(v);

@@ -67,11 +67,11 @@ bool endsAlike(const JacobianSample& a, const JacobianSample& b)
 /// A neighbour's screen-space misfit above this many pixels marks the footprint as non-linear.
 constexpr double kMaxFootprintMisfit = 0.5;
 
-/// Sample (a, b) of a pixel's n × n pattern: its filtered colour; `alike` says whether its ray
-/// ends as the pixel's centre ray does.
-using PatternSample = std::function<Color(int a, int b, bool& alike)>;
+// `sample(a, b, alike)` below is sample (a, b) of a pixel's n × n pattern: its filtered colour;
+// `alike` says whether its ray ends as the pixel's centre ray does.
 
 /// The mean of all n × n samples of the pattern.
+template<typename PatternSample>
 Color fullPattern(int n, const PatternSample& sample)
 {
   Color sum = Color::Zero();
@@ -87,6 +87,7 @@ Color fullPattern(int n, const PatternSample& sample)
 /// centre sample) come first; if their rays end as the centre ray does and their colours spread
 /// by at most kSettledColorSpread, their mean is the pixel's colour. Otherwise the other samples
 /// are traced too and all n² averaged, as fullPattern does.
+template<typename PatternSample>
 Color settledByCorners(int n, const PatternSample& sample)
 {
   const bool odd = n % 2 == 1;
@@ -282,7 +283,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       int rays = r.traced ? 1 : 0;
       // Sample (a, b) of the pattern: its filtered colour, and whether its ray ends as the
       // centre's does.
-      const PatternSample sample = [&](int a, int b, bool& alike) -> Color
+      auto sample = [&](int a, int b, bool& alike) -> Color
       {
         RayRecord s;
         if (n % 2 == 1 && a == n / 2 && b == n / 2)

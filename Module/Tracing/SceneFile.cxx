@@ -972,15 +972,19 @@ std::string effectiveSceneText(const SceneDescription& d)
     j.erase("subset");
   return j.dump();
 }
-SceneDescription parseSceneWithoutImages(const std::string& jsonText)
+ImageLoader neutralImageLoader()
 {
-  const ImageLoader neutral = [](const std::string&)
+  return [](const std::string&)
   {
     ImagePixels px;
     px.width = px.height = 1;
     px.rgb = { 128, 128, 128 };
     return px;
   };
-  return parseScene(jsonText, ".", neutral, SceneOrigin::Program);
+}
+
+SceneDescription parseSceneWithoutImages(const std::string& jsonText)
+{
+  return parseScene(jsonText, ".", neutralImageLoader(), SceneOrigin::Program);
 }
 }

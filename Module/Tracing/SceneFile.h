@@ -76,6 +76,10 @@ ASRTTRACING_EXPORT SceneDescription parseScene(const std::string& jsonText,
 /// exactly as it is traced, for storage, hashing and re-tracing.
 ASRTTRACING_EXPORT std::string effectiveSceneText(const SceneDescription& d);
 
+/// An ImageLoader that reads nothing: every texture a 1×1 neutral grey, for a scene's identity and
+/// text, never for rendering.
+ASRTTRACING_EXPORT ImageLoader neutralImageLoader();
+
 /// Parses a scene for what identifies and parameterises its frames (storage, hashing, re-reading),
 /// without reading image textures: they become a neutral grey. Everything else is validated as by
 /// parseScene, for a text of the program's (SceneOrigin::Program). Not for rendering.
