@@ -9,12 +9,6 @@ namespace asrt
 {
 namespace
 {
-/// Inside this many M the propagator always steps segment by segment, whatever the far field says:
-/// there an outgoing ray may still turn back (the photon sphere is at ≤ 3M) and rays wind.
-constexpr double innerFarFieldLimit = 4.0;
-/// Largest angle about the hole one merged far-field segment may sweep: the tracer's per-segment
-/// winding (the angle between the ends) is exact only below π.
-constexpr double maxMergedSweep = 1.5;
 /// A far-field segment ends this far (relative) beyond the sphere it lands on, so that the sphere's
 /// crossing lies inside the segment, next to its exact end.
 constexpr double landingMargin = 4e-12;
@@ -83,6 +77,13 @@ void PlanarOrbitPropagator::start(const PhasePoint& z)
   const double speed = std::hypot(this->S.U, this->S.V);
   this->NextStep = (speed > 0.0 ? r / speed : 1.0) *
                    std::min(maxStepFraction, 0.5 * std::pow(this->RelTol, 1.0 / 8));
+}
+
+void PlanarOrbitPropagator::start(const PhasePoint& z, double firstStep)
+{
+  this->start(z);
+  if (firstStep > 0.0 && std::isfinite(firstStep))
+    this->NextStep = firstStep;
 }
 
 PlanarOrbitPropagator::Plane PlanarOrbitPropagator::slope(const Plane& s)

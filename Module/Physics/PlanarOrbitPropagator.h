@@ -36,6 +36,9 @@ public:
   /// velocity to (atol + rtol)·|v|.
   PlanarOrbitPropagator(const Spacetime& st, double relativeTolerance, double absoluteTolerance);
   void start(const PhasePoint& z) override;
+  /// Starts a ray whose first step is to try `firstStep` (affine), as one taking over a ray that
+  /// is already far out does: the default start is sized for rays from the camera.
+  void start(const PhasePoint& z, double firstStep);
   bool advance(Segment& seg) override;
   PhasePoint state() const override;
   double affineParameter() const override { return this->Lambda; }
@@ -52,6 +55,12 @@ public:
   /// Largest integration step, as a fraction of r/|v|; a step is cut into segments of at most
   /// maxStepFraction where an object may be near.
   static constexpr double maxIntegrationFraction = 0.5;
+  /// Inside this many M the far field is never used, whatever the scene says: there an outgoing
+  /// ray may still turn back (the photon sphere is at ≤ 3M) and rays wind.
+  static constexpr double innerFarFieldLimit = 4.0;
+  /// Largest angle about the hole one merged far-field segment may sweep: the tracer's per-segment
+  /// winding (the angle between the ends) is exact only below π.
+  static constexpr double maxMergedSweep = 1.5;
 
 private:
   /// The plane state: position (X, Y), velocity (U, V) = d/dλ, and Kerr–Schild t.

@@ -2,6 +2,7 @@
 
 #include "KerrMinoPropagator.h"
 #include "PlanarOrbitPropagator.h"
+#include "PlanarSeriesPropagator.h"
 #include "SchwarzschildPlanePropagator.h"
 
 #include <cmath>
@@ -270,6 +271,14 @@ const std::vector<MethodInfo>& methodTable()
       [](const Spacetime& st, const IntegratorConfig& c) -> std::unique_ptr<Propagator> {
         return std::make_unique<PlanarOrbitPropagator>(st, c.relativeTolerance,
                                                        c.absoluteTolerance);
+      } },
+    { "PlanarSeries", 24, false, MethodFamily::Splitting,
+      "Schwarzschild/Reissner-Nordstrom ray plane: Taylor series of the Binet equation in the "
+      "orbit's angle, lambda and t by quadrature, the outgoing far field as PlanarOrbit",
+      [](const Spacetime& st, const IntegratorConfig& c) -> std::unique_ptr<Propagator>
+      {
+        return std::make_unique<PlanarSeriesPropagator>(st, c.relativeTolerance,
+                                                        c.absoluteTolerance);
       } },
     { "KerrMino2", 2, true, MethodFamily::Splitting,
       "Kerr, separable Mino-time form in w = 1/r, u = cos(theta), leapfrog",

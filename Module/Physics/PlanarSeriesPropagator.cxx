@@ -1,0 +1,411 @@
+#include "PlanarSeriesPropagator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace asrt
+{
+namespace
+{
+/// Gauss–Legendre's four nodes and weights on [−1, 1]: exact for polynomials of degree 7. On a
+/// piece a quarter of r long the integrands r² and r² (E − f L w)/(1 − f) lie far from their
+/// poles (where u = 0, at least about four piece lengths away), so the rule's error, which falls
+/// as the eighth power of that ratio, stays below the tolerances the presets ask.
+constexpr double kNodes[4] = { -0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                               0.8611363115940526 };
+constexpr double kWeights[4] = { 0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                                 0.3478548451374538 };
+/// A series step reaches this fraction of where its last terms meet the tolerance: they estimate
+/// the truncation error only as long as the terms fall geometrically.
+constexpr double kReachSafety = 0.7;
+/// Terms below this fraction of the step's tolerance are left out of evaluations.
+constexpr double kTermFloor = 1e-3;
+/// The affine propagator's first step on the outgoing far field, as a fraction of r/|v|.
+constexpr double kFarFirstStep = 0.5;
+/// No series step sweeps more than this angle.
+constexpr double kMaxReach = 2.0;
+}
+
+PlanarSeriesPropagator::PlanarSeriesPropagator(const Spacetime& st, double relativeTolerance,
+                                               double absoluteTolerance)
+  : M(st.mass())
+  , Q2(st.charge() * st.charge())
+  , RelTol(relativeTolerance)
+  , AbsTol(absoluteTolerance)
+  , HorizonRadius(st.outerHorizon())
+  , Affine(st, relativeTolerance, absoluteTolerance) // checks the spacetime and the tolerances
+  // The quintic interpolant's error grows as the sixth power of the segment's length.
+  , SegmentFraction(segmentFraction * std::min(1.0, std::pow(relativeTolerance / 1e-10, 1.0 / 6)))
+{
+}
+
+void PlanarSeriesPropagator::setLimits(double escapeRadius, double captureRadius)
+{
+  this->EscapeRadius = escapeRadius;
+  this->CaptureRadius = captureRadius;
+  this->Affine.setLimits(escapeRadius, captureRadius);
+}
+
+void PlanarSeriesPropagator::setFarField(const FarField* farField)
+{
+  this->Far = farField;
+  this->Affine.setFarField(farField);
+}
+
+double PlanarSeriesPropagator::nextStopRadius(double r) const
+{
+  if (this->Far)
+  {
+    for (const double sky : this->Far->skyRadii)
+    {
+      if (sky > r)
+        return sky;
+    }
+  }
+  return this->EscapeRadius;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The plane and the chart
+
+void PlanarSeriesPropagator::start(const PhasePoint& z)
+{
+  this->E = -z.p[0];
+  this->Evaluations = 0;
+  this->Delegated = false;
+  this->Entered = false;
+  this->LambdaOffset = 0.0;
+  if (!this->begin(z, 0.0))
+  {
+    // No angle to step in: the affine-parameter propagator takes the whole ray.
+    this->Affine.start(z);
+    this->Delegated = true;
+  }
+}
+
+bool PlanarSeriesPropagator::begin(const PhasePoint& z, double lambda)
+{
+  const Vec3 x = z.x.tail<3>(), p = z.p.tail<3>();
+  const double r = x.norm();
+  if (!(r > 0.0))
+    return false;
+  this->E1 = x / r;
+  // dx/dλ = ∂H/∂p = p − f s n with s = l·p = E + n·p (SphericalKerrSchild.h).
+  const Vec3 v = p - this->f(1.0 / r) * (this->E + this->E1.dot(p)) * this->E1;
+  const Vec3 across = v - v.dot(this->E1) * this->E1;
+  this->L = r * across.norm();
+  if (!(this->L > radialImpact * this->M * std::abs(this->E)))
+    return false;
+  this->E2 = across / across.norm();
+  this->Start = Point{ 0.0, 1.0 / r, -v.dot(this->E1) / this->L, lambda, z.x[0] };
+  this->StartEnd = this->endOf(this->Start);
+  this->expand(this->Start);
+  return true;
+}
+
+PlanarSeriesPropagator::EndPoint PlanarSeriesPropagator::endOf(const Point& q) const
+{
+  const double c = std::cos(q.phi), s = std::sin(q.phi), u = q.u, w = q.w;
+  const double r = 1.0 / u, f = this->f(u);
+  EndPoint e;
+  const Vec3 x = r * (c * this->E1 + s * this->E2);
+  e.x = Vec4(q.t, x.x(), x.y(), x.z());
+  // dx/dλ = L u² dx/dφ; its radial part is dr/dλ = −L w. The momentum as PlanarOrbitPropagator
+  // rebuilds it: n·p = (n·v + fE)/(1 − f), p = v + f (E + n·p) n, p_t = −E.
+  const Vec3 v = this->L * ((-s * u - c * w) * this->E1 + (c * u - s * w) * this->E2);
+  const double np = (-this->L * w + f * this->E) / (1.0 - f);
+  const Vec3 pp = v + f * (this->E + np) * (c * this->E1 + s * this->E2);
+  e.p = Vec4(-this->E, pp.x(), pp.y(), pp.z());
+  // Segments are interpolated in λ, as PlanarOrbitPropagator's: far out x(φ) bends as 1/sin,
+  // x(λ) is nearly a straight line at constant speed. d²x/dλ² = −L² (3M − 2Q²u) u⁵ x.
+  const double dtdl = (this->E + f * (-this->L * w)) / (1.0 - f);
+  const Vec3 acc =
+    -this->L * this->L * (3.0 * this->M - 2.0 * this->Q2 * u) * u * u * u * u * u * x;
+  e.v = Vec4(dtdl, v.x(), v.y(), v.z());
+  e.a = Vec4(0.0, acc.x(), acc.y(), acc.z());
+  return e;
+}
+
+PhasePoint PlanarSeriesPropagator::state() const
+{
+  if (this->Delegated)
+    return this->Affine.state();
+  return { this->StartEnd.x, this->StartEnd.p };
+}
+
+double PlanarSeriesPropagator::affineParameter() const
+{
+  return this->Delegated ? this->LambdaOffset + this->Affine.affineParameter() : this->Start.lambda;
+}
+
+long PlanarSeriesPropagator::evaluations() const
+{
+  return this->Evaluations + (this->Delegated ? this->Affine.evaluations() : 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The series
+
+double PlanarSeriesPropagator::curvature(double u) const
+{
+  return (3.0 * this->M - 2.0 * this->Q2 * u) * u * u - u;
+}
+
+void PlanarSeriesPropagator::expand(const Point& p)
+{
+  Series& S = this->Current;
+  std::array<double, Order + 1>& a = S.a;
+  std::array<double, Order + 1> square{}, cube{};
+  a[0] = p.u;
+  a[1] = p.w;
+  for (int k = 0; k + 2 <= Order; ++k)
+  {
+    // (u²)_k = Σ a_j a_{k−j}, each pair twice but the middle one.
+    double q = 0.0;
+    for (int j = 0; 2 * j < k; ++j)
+      q += a[j] * a[k - j];
+    q *= 2.0;
+    if (k % 2 == 0)
+      q += a[k / 2] * a[k / 2];
+    square[k] = q;
+    double rhs = 3.0 * this->M * q - a[k];
+    if (this->Q2 != 0.0)
+    {
+      double c = 0.0;
+      for (int j = 0; j <= k; ++j)
+        c += square[j] * a[k - j];
+      cube[k] = c;
+      rhs -= 2.0 * this->Q2 * c;
+    }
+    a[k + 2] = rhs / static_cast<double>((k + 1) * (k + 2));
+  }
+  this->Evaluations += Order;
+  // The last two terms bound the truncation of u (against rtol·u + atol·M·u², a length held to
+  // rtol·r + atol·M) and of w = du/dφ (against rtol·|(u, w)|, the direction's error).
+  const double tolU = this->RelTol * p.u + this->AbsTol * this->M * p.u * p.u;
+  const double tolW = this->RelTol * std::sqrt(p.u * p.u + p.w * p.w);
+  double reach = kMaxReach;
+  const double last = std::max(std::abs(a[Order - 1]), std::abs(a[Order]));
+  if (last > 0.0)
+  {
+    // Both terms at the reach within the tolerance: (tol / |a|)^(1/N) of the larger, a little
+    // short for the lower order, whose term falls slower, as the safety factor allows.
+    reach = std::min(reach, std::pow(std::min(tolU, tolW / Order) / last, 1.0 / (Order - 1)));
+  }
+  S.centre = p;
+  S.reach = kReachSafety * reach;
+  S.tolerance = std::min(tolU, tolW / Order);
+}
+
+int PlanarSeriesPropagator::termsWithin(double distance) const
+{
+  // The terms beyond the last one above round-off at this distance from the centre add nothing.
+  // Scanned from the top: the terms fall with k inside the reach.
+  const std::array<double, Order + 1>& a = this->Current.a;
+  const double floor = kTermFloor * this->Current.tolerance;
+  if (!(distance > 0.0))
+    return 1;
+  const double d2 = distance * distance, d4 = d2 * d2, d8 = d4 * d4;
+  static_assert(Order == 24, "the power below is distance^Order");
+  double power = d8 * d8 * d8, inverse = 1.0 / distance;
+  int k = Order;
+  for (; k > 1; --k, power *= inverse)
+  {
+    if (std::abs(a[k]) * power > floor)
+      break;
+  }
+  return k;
+}
+
+PlanarSeriesPropagator::Point PlanarSeriesPropagator::at(double phi, int terms) const
+{
+  const Series& S = this->Current;
+  const double s = phi - S.centre.phi;
+  double u = S.a[terms], w = terms * S.a[terms];
+  for (int k = terms - 1; k >= 1; --k)
+  {
+    u = u * s + S.a[k];
+    w = w * s + k * S.a[k];
+  }
+  u = u * s + S.a[0];
+  return Point{ phi, u, w, S.centre.lambda, S.centre.t };
+}
+
+PlanarSeriesPropagator::Point PlanarSeriesPropagator::advanceTo(const Point& from,
+                                                                const Point& to) const
+{
+  const double phiB = to.phi;
+  // λ and t are integrals along the series: Gauss–Legendre over pieces of at most a quarter of r,
+  // as long as the segments whose quintic interpolant keeps the integration's accuracy.
+  Point p = from;
+  double lambda = from.lambda, t = from.t;
+  while (p.phi < phiB)
+  {
+    const double piece = std::min(phiB - p.phi, PlanarOrbitPropagator::maxStepFraction * p.u /
+                                                  std::sqrt(p.u * p.u + p.w * p.w));
+    const double mid = p.phi + 0.5 * piece, half = 0.5 * piece;
+    const int terms = this->termsWithin(std::abs(mid - this->Current.centre.phi) + half);
+    for (int i = 0; i < 4; ++i)
+    {
+      // dλ/dφ = 1/(L u²) and dt/dφ = (E − f L w)/((1 − f) L u²): one division for both.
+      const Point q = this->at(mid + half * kNodes[i], terms);
+      const double f = this->f(q.u);
+      const double inverse = half * kWeights[i] / ((1.0 - f) * this->L * q.u * q.u);
+      lambda += (1.0 - f) * inverse;
+      t += (this->E - f * this->L * q.w) * inverse;
+    }
+    p = p.phi + piece >= phiB ? to : this->at(p.phi + piece, terms);
+  }
+  p.lambda = lambda;
+  p.t = t;
+  return p;
+}
+
+template<class G>
+double PlanarSeriesPropagator::solve(G g, double lo, double hi) const
+{
+  // Newton on the series (g returns the value and its φ-derivative), kept inside the bracket
+  // [lo, hi] over which g changes sign: bisection where a step would leave it.
+  double gLo = g(this->at(lo)).first;
+  double x = 0.5 * (lo + hi);
+  for (int k = 0; k < 100; ++k)
+  {
+    const std::pair<double, double> gx = g(this->at(x));
+    if (gx.first == 0.0)
+      return x;
+    if ((gx.first > 0.0) == (gLo > 0.0))
+    {
+      lo = x;
+      gLo = gx.first;
+    }
+    else
+      hi = x;
+    double next = x - gx.first / gx.second;
+    if (!(next > lo && next < hi))
+      next = 0.5 * (lo + hi);
+    if (std::abs(next - x) <= 1e-15 * (1.0 + std::abs(x)) || !(hi - lo > 0.0))
+      return next;
+    x = next;
+  }
+  return x;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Segments
+
+void PlanarSeriesPropagator::finishSegment(Segment& seg, const Point& end, bool farField)
+{
+  const EndPoint& a = this->StartEnd;
+  const EndPoint b = this->endOf(end);
+  const double h = end.lambda - this->Start.lambda;
+  seg.x0 = a.x;
+  seg.p0 = a.p;
+  seg.d0 = h * a.v;
+  seg.a0 = h * h * a.a;
+  seg.x1 = b.x;
+  seg.p1 = b.p;
+  seg.d1 = h * b.v;
+  seg.a1 = h * h * b.a;
+  seg.quintic = true;
+  seg.lambda0 = this->Start.lambda;
+  seg.lambda1 = end.lambda;
+  seg.dl0 = seg.dl1 = h;
+  seg.farField = farField;
+  this->Start = end;
+  this->StartEnd = b;
+}
+
+void PlanarSeriesPropagator::handOver()
+{
+  // Beyond the objects the affine steps the tolerance allows are a fair share of r: start there
+  // rather than climbing to them from the camera's cautious first step.
+  const double speed = this->StartEnd.v.tail<3>().norm();
+  this->Affine.start({ this->StartEnd.x, this->StartEnd.p },
+                     speed > 0.0 ? kFarFirstStep / (this->Start.u * speed) : 0.0);
+  this->LambdaOffset = this->Start.lambda;
+}
+
+bool PlanarSeriesPropagator::affineSegment(Segment& seg)
+{
+  if (!this->Affine.advance(seg))
+    return false;
+  seg.lambda0 += this->LambdaOffset;
+  seg.lambda1 += this->LambdaOffset;
+  return true;
+}
+
+bool PlanarSeriesPropagator::advance(Segment& seg)
+{
+  if (this->Delegated)
+    return this->affineSegment(seg);
+  const double r = 1.0 / this->Start.u;
+  const double farRadius = this->Far ? std::max(this->Far->objectRadius,
+                                                PlanarOrbitPropagator::innerFarFieldLimit * this->M)
+                                     : std::numeric_limits<double>::infinity();
+  if (!(r > farRadius) || (this->Start.w > 0.0 && this->Entered))
+    return this->nearSegment(seg);
+  this->handOver();
+  if (this->Start.w <= 0.0)
+  {
+    // Going out beyond the objects: the rest of the ray.
+    this->Delegated = true;
+    return this->affineSegment(seg);
+  }
+  // Coming in from afar: the affine steps cross the nearly straight path in one segment, up to
+  // where the ball of the objects begins; the series take over from its end.
+  if (!this->affineSegment(seg))
+    return false;
+  this->Entered = !seg.farField;
+  if (!this->begin(this->Affine.state(), this->LambdaOffset + this->Affine.affineParameter()))
+    this->Delegated = true;
+  return true;
+}
+
+bool PlanarSeriesPropagator::nearSegment(Segment& seg)
+{
+  const Point from = this->Start;
+  const double r = 1.0 / from.u;
+  // Segments no longer than segmentFraction·r, or as far as the nearest object where none is
+  // near, though no farther than r nor halfway to the sky (PlanarOrbitPropagator's rule).
+  double length = this->SegmentFraction * r;
+  if (this->Far && this->Far->objectDistance)
+  {
+    const double clear = 0.9 * this->Far->objectDistance(this->StartEnd.x.tail<3>());
+    const double sky = 0.5 * (this->nextStopRadius(r) - r);
+    length = std::max(length, std::min({ clear, r, sky }));
+  }
+  // Arc length per angle, ds/dφ = |(u, w)|/u², falls as u grows (w² + u² = 1/b² + 2Mu³ − Q²u⁴):
+  // over a segment on which u is monotonic its larger end value bounds the arc.
+  auto arcRate = [](const Point& q) { return std::sqrt(q.u * q.u + q.w * q.w) / (q.u * q.u); };
+  double step = length / arcRate(from);
+  double seriesEnd = this->Current.centre.phi + this->Current.reach;
+  if (from.phi + step > seriesEnd && from.phi > this->Current.centre.phi)
+  {
+    this->expand(from);
+    seriesEnd = from.phi + this->Current.reach;
+  }
+  // No sliver is left before the series' end.
+  double end = from.phi + step > seriesEnd - 0.25 * step ? seriesEnd : from.phi + step;
+  const int terms = this->termsWithin(end - this->Current.centre.phi);
+  Point q = this->at(end, terms);
+  if ((end - from.phi) * arcRate(q) > length)
+  {
+    end = from.phi + length / arcRate(q);
+    q = this->at(end, terms);
+  }
+  if (!(q.u > 0.0) || !std::isfinite(q.u))
+    return false;
+  // As PlanarOrbitPropagator's: a segment that would end inside the horizon ends between it and
+  // the capture radius instead, where the tracer reports the capture.
+  if (this->CaptureRadius > this->HorizonRadius && 1.0 / q.u < this->HorizonRadius)
+  {
+    const double target = 2.0 / (this->HorizonRadius + this->CaptureRadius);
+    end = this->solve([target](const Point& p) { return std::make_pair(p.u - target, p.w); },
+                      from.phi, end);
+    q = this->at(end);
+  }
+  finishSegment(seg, this->advanceTo(from, q), false);
+  return true;
+}
+}
