@@ -19,6 +19,16 @@ constexpr double kWeights[4] = { 0.3478548451374538, 0.6521451548625461, 0.65214
 /// A series step reaches this fraction of where its last terms meet the tolerance: they estimate
 /// the truncation error only as long as the terms fall geometrically.
 constexpr double kReachSafety = 0.7;
+/// 1/((k + 1)(k + 2)), the recurrence's divisor.
+constexpr std::array<double, PlanarSeriesPropagator::Order - 1> recurrenceScale()
+{
+  std::array<double, PlanarSeriesPropagator::Order - 1> s{};
+  for (int k = 0; k + 2 <= PlanarSeriesPropagator::Order; ++k)
+    s[k] = 1.0 / ((k + 1.0) * (k + 2.0));
+  return s;
+}
+constexpr std::array<double, PlanarSeriesPropagator::Order - 1> kRecurrenceScale =
+  recurrenceScale();
 /// Terms below this fraction of the step's tolerance are left out of evaluations.
 constexpr double kTermFloor = 1e-3;
 /// The affine propagator's first step on the outgoing far field, as a fraction of r/|v|.
@@ -178,7 +188,7 @@ void PlanarSeriesPropagator::expand(const Point& p)
       cube[k] = c;
       rhs -= 2.0 * this->Q2 * c;
     }
-    a[k + 2] = rhs / static_cast<double>((k + 1) * (k + 2));
+    a[k + 2] = rhs * kRecurrenceScale[k];
   }
   this->Evaluations += Order;
   // The last two terms bound the truncation of u (against rtol·u + atol·M·u², a length held to
@@ -206,9 +216,9 @@ int PlanarSeriesPropagator::termsWithin(double distance) const
   const double floor = kTermFloor * this->Current.tolerance;
   if (!(distance > 0.0))
     return 1;
-  const double d2 = distance * distance, d4 = d2 * d2, d8 = d4 * d4;
-  static_assert(Order == 24, "the power below is distance^Order");
-  double power = d8 * d8 * d8, inverse = 1.0 / distance;
+  double power = 1.0, inverse = 1.0 / distance;
+  for (int k = 0; k < Order; ++k)
+    power *= distance;
   int k = Order;
   for (; k > 1; --k, power *= inverse)
   {
