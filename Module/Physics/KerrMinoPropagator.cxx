@@ -29,6 +29,15 @@ constexpr double kMaxRelativeMove = 0.25;
 constexpr double kMinWRatio = 0.25;
 /// The capture step ends with w in [w_c(1 + lo), w_c(1 + hi)]: just inside the capture sphere.
 constexpr double kCaptureLow = 1e-12, kCaptureHigh = 1e-9;
+/// Outside the scene's objects and beyond this many M, steps merge into far-field segments (an
+/// outgoing ray may still turn back near the photon region).
+constexpr double kFarFieldMinRadius = 4.0;
+/// Largest angle about the hole one far-field segment may sweep: the tracer's per-segment winding
+/// (the angle between the ends) is exact only below π.
+constexpr double kMaxMergedSweep = 1.5;
+/// An outgoing far-field segment ends with its Cartesian radius in [R(1 + lo), R(1 + hi)] beyond
+/// the sphere R it lands on, so that the sphere's crossing lies next to its exact end.
+constexpr double kLandingLow = 1e-12, kLandingHigh = 1e-8;
 
 /// log(1 + x)/x, also for x → 0.
 double log1pRatio(double x)
@@ -245,15 +254,18 @@ KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double st
   this->Ray.rMinus = st.innerHorizon();
 }
 
-void KerrMinoPropagator::setLimits(double /*escapeRadius*/, double captureRadius)
+void KerrMinoPropagator::setLimits(double escapeRadius, double captureRadius)
 {
-  // Escape needs no limit: the relative-move bound already keeps every step short of w = 0.
+  // The relative-move bound already keeps every step short of w = 0; the escape sphere is where
+  // an outgoing far-field segment lands if no sky sphere is in the way.
+  this->EscapeRadius = escapeRadius;
   this->CaptureRadius = std::isfinite(captureRadius) ? std::max(0.0, captureRadius) : 0.0;
 }
 
 void KerrMinoPropagator::start(const PhasePoint& z)
 {
   this->Evaluations = 0;
+  this->HasPending = false;
   this->S = State{};
   this->Current = z;
   this->CurrentRate = Vec4::Zero();
@@ -397,27 +409,14 @@ bool KerrMinoPropagator::trial(double h, State& s, long& evaluations) const
   return true;
 }
 
-bool KerrMinoPropagator::advance(Segment& seg)
+bool KerrMinoPropagator::nextStep(Move& next)
 {
-  if (!this->Valid)
-    return false;
-  seg.x0 = this->Current.x;
-  seg.p0 = this->Current.p;
-  seg.lambda0 = this->S.lambda;
-  const Vec4 rate0 = this->CurrentRate;
-  // dλ/dσ = Σ = r² + a² u² at the step's start (state before the step).
-  const double sigma0 = [&]
-  {
-    const double r = 1.0 / this->S.w;
-    return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
-  }();
-
   // Step fraction. Within kFixedStepRadius the step is the fixed h/M in σ (symplectic). Beyond it
   // a Mino step would move the point by ~h r/M relative, without bound as r grows (dλ = Σ dσ), so
   // the step shrinks as 1/r: the relative move stays ~h·kFixedStepRadius, like a step of K = r·H,
   // the accuracy there still follows h, and w = 0 is never reached. kMaxRelativeMove caps huge h.
   double theta = std::min(1.0, kFixedStepRadius * this->Ray.M * this->S.w);
-  const double speed = rate0.tail<3>().norm(), dist = this->Current.x.tail<3>().norm();
+  const double speed = this->CurrentRate.tail<3>().norm(), dist = this->Current.x.tail<3>().norm();
   if (theta * speed * this->Step > kMaxRelativeMove * dist)
     theta = kMaxRelativeMove * dist / (speed * this->Step);
 
@@ -428,7 +427,7 @@ bool KerrMinoPropagator::advance(Segment& seg)
   const double wIn = wCap * (1.0 + kCaptureLow), wOut = wCap * (1.0 + kCaptureHigh);
 
   // Halve the fraction until the trial is valid (finite, w kept off infinity and the horizons).
-  State best = this->S;
+  State& best = next.s;
   bool ok = false;
   for (const double theta0 = theta; theta > 1e-12 * theta0; theta *= 0.5)
   {
@@ -474,23 +473,182 @@ bool KerrMinoPropagator::advance(Segment& seg)
       theta = lo;
     }
   }
-  PhasePoint z;
-  Vec4 rate1;
-  this->output(best, z, rate1);
-  if (!z.x.allFinite() || !z.p.allFinite() || !rate1.allFinite())
-    return false;
-  this->S = best;
-  this->Current = z;
-  this->CurrentRate = rate1;
-  const double h = theta * this->Step;
-  seg.x1 = z.x;
-  seg.p1 = z.p;
-  seg.d0 = h * rate0;
-  seg.d1 = h * rate1;
-  seg.lambda1 = this->S.lambda;
+  next.h = theta * this->Step;
+  this->output(best, next.z, next.rate);
+  return next.z.x.allFinite() && next.z.p.allFinite() && next.rate.allFinite();
+}
+
+void KerrMinoPropagator::take(const Move& next, Segment& seg)
+{
+  // dλ/dσ = Σ = r² + a² u² at both ends.
+  const double a2 = this->Ray.a * this->Ray.a;
+  const double r0 = 1.0 / this->S.w, r1 = 1.0 / next.s.w;
+  seg.x0 = this->Current.x;
+  seg.p0 = this->Current.p;
+  seg.lambda0 = this->S.lambda;
+  seg.d0 = next.h * this->CurrentRate;
+  seg.dl0 = next.h * (r0 * r0 + a2 * this->S.u * this->S.u);
+  seg.x1 = next.z.x;
+  seg.p1 = next.z.p;
+  seg.d1 = next.h * next.rate;
+  seg.lambda1 = next.s.lambda;
+  seg.dl1 = next.h * (r1 * r1 + a2 * next.s.u * next.s.u);
+  seg.farField = false;
+  seg.quintic = false;
+  this->pass(next);
+}
+
+void KerrMinoPropagator::pass(const Move& next)
+{
+  this->S = next.s;
+  this->Current = next.z;
+  this->CurrentRate = next.rate;
+}
+
+double KerrMinoPropagator::nextStopRadius(double r) const
+{
+  for (const double sky : this->Far->skyRadii)
+  {
+    if (sky > r)
+      return sky;
+  }
+  return this->EscapeRadius;
+}
+
+bool KerrMinoPropagator::land(double target, Move& next)
+{
+  // Regula falsi (Illinois) on the step length for the end's Cartesian radius, between the step's
+  // start (short of the sphere) and its end (beyond it): R is smooth and monotonic in the step
+  // out here. The last trial beyond the sphere is kept if none lands in the window.
+  const double a2 = this->Ray.a * this->Ray.a;
+  const double mid = 0.5 * (kLandingLow + kLandingHigh), half = 0.5 * (kLandingHigh - kLandingLow);
+  auto miss = [&](const State& s)
+  {
+    const double r = 1.0 / s.w;
+    return std::sqrt(r * r + a2 * (1.0 - s.u * s.u)) / target - 1.0 - mid;
+  };
+  double lo = 0.0, hi = next.h;
+  double gLo = this->Current.x.tail<3>().norm() / target - 1.0 - mid, gHi = miss(next.s);
+  int side = 0;
+  for (int it = 0; it < 100 && !(std::abs(gHi) <= half); ++it)
+  {
+    double h = (lo * gHi - hi * gLo) / (gHi - gLo);
+    if (!(h > lo && h < hi))
+      h = 0.5 * (lo + hi);
+    if (!(h > lo && h < hi))
+      break;
+    State s = this->S;
+    if (!this->trial(h, s, this->Evaluations))
+      return false;
+    const double g = miss(s);
+    if (g > -half)
+    {
+      hi = h;
+      gHi = g;
+      next.s = s;
+      next.h = h;
+      if (side == 1)
+        gLo *= 0.5;
+      side = 1;
+    }
+    else
+    {
+      lo = h;
+      gLo = g;
+      if (side == -1)
+        gHi *= 0.5;
+      side = -1;
+    }
+  }
+  this->output(next.s, next.z, next.rate);
+  return next.z.x.allFinite() && next.z.p.allFinite() && next.rate.allFinite();
+}
+
+bool KerrMinoPropagator::crossFarField(double farRadius, Segment& seg)
+{
+  const bool outgoing = this->S.vw < 0.0;
+  const double target = outgoing ? this->nextStopRadius(this->Current.x.tail<3>().norm()) : 0.0;
+  const PhasePoint from = this->Current;
+  const Vec4 fromRate = this->CurrentRate;
+  const double fromLambda = this->S.lambda;
+  const double fromSigma = [&]
+  {
+    const double r = 1.0 / this->S.w;
+    return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
+  }();
+  const Vec3 a = from.x.tail<3>();
+  int merged = 0;
+  for (;;)
+  {
+    Move next;
+    if (!this->nextStep(next))
+      return false;
+    const Vec3 b = next.z.x.tail<3>();
+    const double R = b.norm();
+    const bool sweepsLittle = std::atan2(a.cross(b).norm(), a.dot(b)) <= kMaxMergedSweep;
+    bool joins = sweepsLittle && R > farRadius && (next.s.vw < 0.0) == outgoing;
+    if (joins && outgoing && R >= target)
+    {
+      if (!this->land(target, next))
+        return false;
+      this->pass(next);
+      ++merged;
+      break;
+    }
+    if (!joins)
+    {
+      if (merged == 0)
+      {
+        this->take(next, seg);
+        return true;
+      }
+      this->Pending = next;
+      this->HasPending = true;
+      break;
+    }
+    this->pass(next);
+    ++merged;
+  }
+  // The merged segment's tangents are in λ, in which the far-field ray is nearly a straight line
+  // at constant speed: its interpolant stays next to the ray, outside the objects (Segment).
+  const double dl = this->S.lambda - fromLambda;
   const double r1 = 1.0 / this->S.w;
-  seg.dl0 = h * sigma0;
-  seg.dl1 = h * (r1 * r1 + this->Ray.a * this->Ray.a * this->S.u * this->S.u);
+  const double sigma1 = r1 * r1 + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
+  seg.x0 = from.x;
+  seg.p0 = from.p;
+  seg.lambda0 = fromLambda;
+  seg.d0 = (dl / fromSigma) * fromRate;
+  seg.dl0 = dl;
+  seg.x1 = this->Current.x;
+  seg.p1 = this->Current.p;
+  seg.d1 = (dl / sigma1) * this->CurrentRate;
+  seg.lambda1 = this->S.lambda;
+  seg.dl1 = dl;
+  seg.farField = true;
+  seg.quintic = false;
+  return true;
+}
+
+bool KerrMinoPropagator::advance(Segment& seg)
+{
+  if (!this->Valid)
+    return false;
+  if (this->HasPending)
+  {
+    this->HasPending = false;
+    this->take(this->Pending, seg);
+    return true;
+  }
+  if (this->Far)
+  {
+    const double farRadius = std::max(this->Far->objectRadius, kFarFieldMinRadius * this->Ray.M);
+    if (this->Current.x.tail<3>().norm() > farRadius)
+      return this->crossFarField(farRadius, seg);
+  }
+  Move next;
+  if (!this->nextStep(next))
+    return false;
+  this->take(next, seg);
   return true;
 }
 
