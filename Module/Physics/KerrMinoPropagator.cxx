@@ -35,9 +35,7 @@ constexpr double kFarFieldMinRadius = 4.0;
 /// Largest angle about the hole one far-field segment may sweep: the tracer's per-segment winding
 /// (the angle between the ends) is exact only below π.
 constexpr double kMaxMergedSweep = 1.5;
-/// An outgoing far-field segment ends with its Cartesian radius in [R(1 + lo), R(1 + hi)] beyond
-/// the sphere R it lands on, so that the sphere's crossing lies next to its exact end.
-constexpr double kLandingLow = 1e-12, kLandingHigh = 1e-8;
+const double kCosMaxMergedSweep = std::cos(kMaxMergedSweep);
 
 /// log(1 + x)/x, also for x → 0.
 double log1pRatio(double x)
@@ -256,8 +254,8 @@ KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double st
 
 void KerrMinoPropagator::setLimits(double escapeRadius, double captureRadius)
 {
-  // The relative-move bound already keeps every step short of w = 0; the escape sphere is where
-  // an outgoing far-field segment lands if no sky sphere is in the way.
+  // The relative-move bound already keeps every step short of w = 0; the escape sphere bounds an
+  // outgoing far-field segment if no sky sphere is in the way.
   this->EscapeRadius = escapeRadius;
   this->CaptureRadius = std::isfinite(captureRadius) ? std::max(0.0, captureRadius) : 0.0;
 }
@@ -420,11 +418,11 @@ bool KerrMinoPropagator::nextStep(Move& next)
   if (theta * speed * this->Step > kMaxRelativeMove * dist)
     theta = kMaxRelativeMove * dist / (speed * this->Step);
 
-  // A step that would end inside the capture sphere is cut to end just inside it (bisection on
+  // A step that would end inside the capture sphere is cut to end just inside it (a root search on
   // the step fraction), so the tracer sees a capture and not the degenerate chart at Δ = 0.
   const double wCap = this->CaptureRadius > 0.0 ? 1.0 / this->CaptureRadius : 0.0;
   const bool capturing = wCap > 0.0 && this->S.w < wCap;
-  const double wIn = wCap * (1.0 + kCaptureLow), wOut = wCap * (1.0 + kCaptureHigh);
+  const double wOut = wCap * (1.0 + kCaptureHigh);
 
   // Halve the fraction until the trial is valid (finite, w kept off infinity and the horizons).
   State& best = next.s;
@@ -439,30 +437,52 @@ bool KerrMinoPropagator::nextStep(Move& next)
     return false;
   if (capturing && best.w > wOut)
   {
-    // Bisect the fraction for the first w in [w_in, w_out]; fall back to the last one short of it.
+    // Regula falsi (Illinois) on the fraction for w in [w_in, w_out], between the start (short of
+    // it) and this trial (beyond it); an invalid trial counts as beyond and halves the bracket.
+    // If none lands, the last trial short of it is kept.
+    const double mid = 0.5 * (kCaptureLow + kCaptureHigh),
+                 half = 0.5 * (kCaptureHigh - kCaptureLow);
     double lo = 0.0, hi = theta;
+    double gLo = this->S.w / wCap - 1.0 - mid, gHi = best.w / wCap - 1.0 - mid;
     State shortOf = this->S;
-    bool landed = false;
+    bool landed = false, bisect = false;
+    int side = 0;
     for (int it = 0; it < 200 && hi - lo > 1e-16 * theta; ++it)
     {
-      const double mid = 0.5 * (lo + hi);
+      double t = bisect ? 0.5 * (lo + hi) : (lo * gHi - hi * gLo) / (gHi - gLo);
+      if (!(t > lo && t < hi))
+        t = 0.5 * (lo + hi);
       State s = this->S;
-      const bool valid = this->trial(mid * this->Step, s, this->Evaluations);
-      if (valid && s.w < wIn)
+      bisect = !this->trial(t * this->Step, s, this->Evaluations);
+      if (bisect)
       {
-        lo = mid;
-        shortOf = s;
+        hi = t;
+        continue;
       }
-      else if (valid && s.w <= wOut)
+      const double g = s.w / wCap - 1.0 - mid;
+      if (std::abs(g) <= half)
       {
         best = s;
-        theta = mid;
+        theta = t;
         landed = true;
         break;
       }
+      if (g < 0.0)
+      {
+        lo = t;
+        gLo = g;
+        shortOf = s;
+        if (side == -1)
+          gHi *= 0.5;
+        side = -1;
+      }
       else
       {
-        hi = mid;
+        hi = t;
+        gHi = g;
+        if (side == 1)
+          gLo *= 0.5;
+        side = 1;
       }
     }
     if (!landed)
@@ -515,55 +535,6 @@ double KerrMinoPropagator::nextStopRadius(double r) const
   return this->EscapeRadius;
 }
 
-bool KerrMinoPropagator::land(double target, Move& next)
-{
-  // Regula falsi (Illinois) on the step length for the end's Cartesian radius, between the step's
-  // start (short of the sphere) and its end (beyond it): R is smooth and monotonic in the step
-  // out here. The last trial beyond the sphere is kept if none lands in the window.
-  const double a2 = this->Ray.a * this->Ray.a;
-  const double mid = 0.5 * (kLandingLow + kLandingHigh), half = 0.5 * (kLandingHigh - kLandingLow);
-  auto miss = [&](const State& s)
-  {
-    const double r = 1.0 / s.w;
-    return std::sqrt(r * r + a2 * (1.0 - s.u * s.u)) / target - 1.0 - mid;
-  };
-  double lo = 0.0, hi = next.h;
-  double gLo = this->Current.x.tail<3>().norm() / target - 1.0 - mid, gHi = miss(next.s);
-  int side = 0;
-  for (int it = 0; it < 100 && !(std::abs(gHi) <= half); ++it)
-  {
-    double h = (lo * gHi - hi * gLo) / (gHi - gLo);
-    if (!(h > lo && h < hi))
-      h = 0.5 * (lo + hi);
-    if (!(h > lo && h < hi))
-      break;
-    State s = this->S;
-    if (!this->trial(h, s, this->Evaluations))
-      return false;
-    const double g = miss(s);
-    if (g > -half)
-    {
-      hi = h;
-      gHi = g;
-      next.s = s;
-      next.h = h;
-      if (side == 1)
-        gLo *= 0.5;
-      side = 1;
-    }
-    else
-    {
-      lo = h;
-      gLo = g;
-      if (side == -1)
-        gHi *= 0.5;
-      side = -1;
-    }
-  }
-  this->output(next.s, next.z, next.rate);
-  return next.z.x.allFinite() && next.z.p.allFinite() && next.rate.allFinite();
-}
-
 bool KerrMinoPropagator::crossFarField(double farRadius, Segment& seg)
 {
   const bool outgoing = this->S.vw < 0.0;
@@ -585,16 +556,9 @@ bool KerrMinoPropagator::crossFarField(double farRadius, Segment& seg)
       return false;
     const Vec3 b = next.z.x.tail<3>();
     const double R = b.norm();
-    const bool sweepsLittle = std::atan2(a.cross(b).norm(), a.dot(b)) <= kMaxMergedSweep;
-    bool joins = sweepsLittle && R > farRadius && (next.s.vw < 0.0) == outgoing;
-    if (joins && outgoing && R >= target)
-    {
-      if (!this->land(target, next))
-        return false;
-      this->pass(next);
-      ++merged;
-      break;
-    }
+    const bool sweepsLittle = a.dot(b) >= kCosMaxMergedSweep * a.norm() * R;
+    const bool joins =
+      sweepsLittle && R > farRadius && (next.s.vw < 0.0) == outgoing && !(outgoing && R >= target);
     if (!joins)
     {
       if (merged == 0)

@@ -54,11 +54,11 @@ struct KerrMinoState
 /// infinity (w = 0) is never reached. A step that would end inside the capture radius ends just
 /// inside it instead.
 ///
-/// With a far field (setFarField), the steps outside the scene's objects are the same, but they are
-/// reported as one segment: coming in, while they stay outside; going out, up to the next sky
-/// sphere (or the escape sphere), the last step shortened to end just beyond it. Only the segments
-/// that may meet an object are interpolated, and those are exactly the segments of the ray
-/// without a far field.
+/// With a far field (setFarField), the steps outside the scene's objects are the same, but those
+/// that stay outside them (and, going out, inside the next sky sphere) are reported as one segment.
+/// The segments that may meet an object, the step onto a sky sphere among them, are exactly those
+/// of the ray without a far field: a shorter last step landing on the sphere cost more in its root
+/// search than the interpolated step.
 class ASRTPHYSICS_EXPORT KerrMinoPropagator final : public Propagator
 {
 public:
@@ -97,11 +97,9 @@ private:
   void take(const Move& next, Segment& seg);
   /// Takes `next` without a segment of its own (it joins a far-field segment).
   void pass(const Move& next);
-  /// Through the far field in one segment: outgoing to just beyond the next sky sphere (or the
-  /// escape sphere), incoming while the steps stay outside the scene's objects.
+  /// Through the far field in one segment, while the steps stay outside the scene's objects and,
+  /// going out, inside the next sky sphere (or the escape sphere).
   bool crossFarField(double farRadius, Segment& seg);
-  /// Shortens `next` (which crosses the sphere of Cartesian radius `target`) to end just beyond it.
-  bool land(double target, Move& next);
   /// The next sky sphere above radius r, else the escape sphere.
   double nextStopRadius(double r) const;
 
