@@ -37,18 +37,6 @@ constexpr double kFarFieldMinRadius = 4.0;
 constexpr double kMaxMergedSweep = 1.5;
 const double kCosMaxMergedSweep = std::cos(kMaxMergedSweep);
 
-/// log(1 + x)/x, also for x → 0.
-double log1pRatio(double x)
-{
-  return std::abs(x) < 1e-8 ? 1.0 - 0.5 * x : std::log1p(x) / x;
-}
-
-/// atanh(y)/y, also for y → 0.
-double atanhRatio(double y)
-{
-  return std::abs(y) < 1e-8 ? 1.0 : std::atanh(y) / y;
-}
-
 /// X w² = E(1 + a²w²) − aLw², with X = E(r² + a²) − aL.
 double xw(const Consts& c, double w)
 {
@@ -68,13 +56,21 @@ double radialPotential(const Consts& c, double w)
   return X * X - w * w * deltaW(c, w) * c.K;
 }
 
+/// τ log(1 + d/b)/d = ∫₀^τ ds/(b + d s/τ), also for d → 0 (two divisions: divisions dominate the
+/// drift's cost).
+double logQuotient(double tau, double b, double d)
+{
+  const double x = d / b;
+  return std::abs(x) < 1e-8 ? tau * (1.0 - 0.5 * x) / b : tau * std::log1p(x) / d;
+}
+
 /// ∫₀^τ ds/(1 − k w) for w = w₀ + v s, exactly; NaN if the drift reaches the pole w = 1/k.
 double poleIntegral(double k, double w0, double w1, double tau)
 {
   const double b0 = 1.0 - k * w0, b1 = 1.0 - k * w1;
   if (!(b0 > 0.0 && b1 > 0.0))
     return std::numeric_limits<double>::quiet_NaN();
-  return tau * log1pRatio((b1 - b0) / b0) / b0;
+  return logQuotient(tau, b0, b1 - b0);
 }
 
 /// jd = ∫₀^τ ds/D̃ and jw = ∫₀^τ w ds/D̃ with D̃ = w²Δ = (1 − r₊w)(1 − r₋w), for w = w₀ + v s,
@@ -90,8 +86,8 @@ void horizonIntegrals(const Consts& c, double w0, double v, double tau, double& 
   {
     const double ip = poleIntegral(c.rPlus, w0, w1, tau);
     const double im = poleIntegral(c.rMinus, w0, w1, tau);
-    jd = (c.rPlus * ip - c.rMinus * im) / delta;
-    jw = (ip - im) / delta;
+    jd = (c.rPlus * ip - c.rMinus * im) * c.invDelta;
+    jw = (ip - im) * c.invDelta;
     return;
   }
   const double k = 0.5 * (c.rPlus + c.rMinus);
@@ -127,7 +123,7 @@ bool drift(const Consts& c, State& s, double tau)
   // divergence is real: the past horizon.)
   double jd, jw;
   horizonIntegrals(c, w0, vw, tau, jd, jw);
-  const double j1 = tau * log1pRatio(tau * vw / w0) / w0; // ∫dσ/w
+  const double j1 = logQuotient(tau, w0, w1 - w0); // ∫dσ/w
   const double dPhi = -L * tau + (L - a * vw) * jd + 2.0 * c.M * (a * E - L) * jw;
   const double dT = E * intW2 + 2.0 * c.M * (E - vw) * j1 +
                     2.0 * c.M * (2.0 * c.M * (E - vw) * jd + a * (a * vw - L) * jw) +
@@ -151,7 +147,8 @@ bool drift(const Consts& c, State& s, double tau)
     const double one = 1.0 - u0 * u1;
     if (!(one > 0.0))
       return false;
-    dPolar = L * tau * atanhRatio(tau * vu / one) / one;
+    const double y = tau * vu / one;
+    dPolar = std::abs(y) < 1e-8 ? L * tau / one : L * std::atanh(y) / vu;
   }
   s.w = w1;
   s.u = u1;
@@ -268,6 +265,7 @@ KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double st
   this->Ray.a = st.spin();
   this->Ray.rPlus = st.outerHorizon();
   this->Ray.rMinus = st.innerHorizon();
+  this->Ray.invDelta = 1.0 / (this->Ray.rPlus - this->Ray.rMinus);
 }
 
 void KerrMinoPropagator::setLimits(double escapeRadius, double captureRadius)

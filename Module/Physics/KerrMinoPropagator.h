@@ -15,6 +15,7 @@ namespace detail
 struct KerrMinoRay
 {
   double M = 0, a = 0, rPlus = 0, rMinus = 0;
+  double invDelta = 0; ///< 1/(r₊ − r₋), infinite for the extremal hole
   double E = 0, L = 0, Q = 0;
   double K = 0;    ///< Q + (L − aE)², the separation constant of the radial equation
   double a2E2 = 0; ///< a²E²
