@@ -160,24 +160,6 @@ bool drift(const Consts& c, State& s, double tau)
          std::isfinite(s.lambda);
 }
 
-/// dx/dλ = ∂H/∂p of H = ½(η^{μν} − f l^μ l^ν) p_μ p_ν in the Kerr–Schild chart at Boyer–Lindquist
-/// radius r, with l_μ = (1, (rx + ay)/(r² + a²), (ry − ax)/(r² + a²), z/r) and f = 2Mr³/(r⁴ +
-/// a²z²): KerrSpacetime::gradientAt's ∂H/∂p, written the same way, without the ∂H/∂x a rate does
-/// not need.
-Vec4 kerrSchildVelocity(double M, double a, double r, const Vec4& x, const Vec4& p)
-{
-  const double X = x[1], Y = x[2], Z = x[3];
-  const double r2 = r * r;
-  const double invD = 1.0 / (r2 + a * a);
-  const double invSigma = 1.0 / (r2 * r2 + a * a * Z * Z);
-  const double lx = (r * X + a * Y) * invD;
-  const double ly = (r * Y - a * X) * invD;
-  const double lz = Z / r;
-  const double f = 2.0 * M * r2 * r * invSigma;
-  const double fs = f * (-p[0] + lx * p[1] + ly * p[2] + lz * p[3]);
-  return Vec4(-p[0] + fs, p[1] - fs * lx, p[2] - fs * ly, p[3] - fs * lz);
-}
-
 /// R_w'(w)/2 and U'(u)/2 at the current position: one force evaluation.
 void force(const Consts& c, State& s)
 {
@@ -645,8 +627,8 @@ void KerrMinoPropagator::output(const State& s, PhasePoint& z, Vec4& dxds) const
   else if (u2 < c.u2Low)
     u = std::copysign(std::sqrt(c.u2Low), u);
   const double sin2 = std::max(0.0, 1.0 - u * u), sinT = std::sqrt(sin2);
-  const double c2 = r * r + a * a, cc = std::sqrt(c2);
-  const double Sigma = r * r + a * a * u * u;
+  const double c2 = r * r + a * a;
+  const double Sigma = r * r + a * a * u * u, invSigma = 1.0 / Sigma;
 
   // On-shell velocities with the signs of the integrated ones: v_w² = R_w, p_θ² = Θ(θ).
   const double vw = std::copysign(std::sqrt(std::max(0.0, radialPotential(c, w))), s.vw);
@@ -661,16 +643,23 @@ void KerrMinoPropagator::output(const State& s, PhasePoint& z, Vec4& dxds) const
   const double pr = X * vw > 0.0 ? c.K * w * w / (X + vw) - E : (X - vw) / deltaW(c, w) - E;
 
   // Invert p_r = (r P − aL)/c² + u p_z, p_θ = (u/ sin θ)P − r sin θ p_z, L = x p_y − y p_x, in the
-  // frame ê = (r + ia)e^{iφ}/c of x⊥ (regular on the axis; the determinant is Σ/c).
+  // frame c ê = (r + ia)e^{iφ} of x⊥ (regular on the axis; the determinant is Σ/c): p⊥ = q c ê
+  // + m i c ê.
   const double A1 = pr + a * L / c2;
-  const double pPar = cc * (u * pTheta + r * sinT * A1) / Sigma;
-  const double pPerp = sinT > 0.0 ? L / (cc * sinT) : 0.0;
-  const double pz = (u * c2 * A1 - r * sinT * pTheta) / Sigma;
+  const double q = (u * pTheta + r * sinT * A1) * invSigma;
+  const double m = sinT > 0.0 ? L / (c2 * sinT) : 0.0;
+  const double pz = (u * c2 * A1 - r * sinT * pTheta) * invSigma;
   const double phi = s.phiRadial + s.polar + (s.poleChart ? s.azimuth : 0.0);
   const double cp = std::cos(phi), sp = std::sin(phi);
-  const double ex = (r * cp - a * sp) / cc, ey = (r * sp + a * cp) / cc;
-  z.x = Vec4(s.t, sinT * cc * ex, sinT * cc * ey, r * u);
-  z.p = Vec4(-E, pPar * ex - pPerp * ey, pPar * ey + pPerp * ex, pz);
-  dxds = Sigma * kerrSchildVelocity(c.M, a, r, z.x, z.p);
+  const double ex = r * cp - a * sp, ey = r * sp + a * cp;
+  z.x = Vec4(s.t, sinT * ex, sinT * ey, r * u);
+  z.p = Vec4(-E, q * ex - m * ey, q * ey + m * ex, pz);
+  // dx/dσ = Σ ∂H/∂p with H = ½(η^{μν} − f l^μ l^ν) p_μ p_ν (KerrSpacetime): at this point
+  // l_i = ((rx + ay)/c², (ry − ax)/c², z/r) = (sin θ cos φ, sin θ sin φ, cos θ) and
+  // f = 2Mr³/(r⁴ + a²z²) = 2Mr/Σ, so Σ f s = 2Mr s with s = l^μ p_μ.
+  const double lx = sinT * cp, ly = sinT * sp;
+  const double fs = 2.0 * c.M * r * (E + lx * z.p[1] + ly * z.p[2] + u * pz);
+  dxds =
+    Vec4(Sigma * E + fs, Sigma * z.p[1] - fs * lx, Sigma * z.p[2] - fs * ly, Sigma * pz - fs * u);
 }
 }
