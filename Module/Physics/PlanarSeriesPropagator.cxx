@@ -33,6 +33,20 @@ constexpr std::array<double, PlanarSeriesPropagator::Order - 1> kRecurrenceScale
 constexpr double kTermFloor = 1e-3;
 /// The affine propagator's first step on the outgoing far field, as a fraction of r/|v|.
 constexpr double kFarFirstStep = 0.5;
+/// The outgoing far field is run out in closed form when the radial speed at its start is at least
+/// this share of E: the periapsis then lies inside 0.6 of the start radius, far enough from the
+/// radial integrals' interval for eight nodes.
+constexpr double kRunOutRadialShare = 0.8;
+/// A run-out ends this far (relative) beyond the sphere it lands on, so that the sphere's crossing
+/// lies inside the segment, next to its exact end (as PlanarOrbitPropagator's).
+constexpr double kLandingMargin = 4e-12;
+/// Gauss–Legendre's eight nodes and weights on [−1, 1].
+constexpr double kFarNodes[8] = { -0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
+                                  -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
+                                  0.7966664774136267,  0.9602898564975363 };
+constexpr double kFarWeights[8] = { 0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
+                                    0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
+                                    0.2223810344533745, 0.1012285362903763 };
 /// No series step sweeps more than this angle.
 constexpr double kMaxReach = 2.0;
 }
@@ -355,13 +369,17 @@ bool PlanarSeriesPropagator::advance(Segment& seg)
                                      : std::numeric_limits<double>::infinity();
   if (!(r > farRadius) || (this->Start.w > 0.0 && this->Entered))
     return this->nearSegment(seg);
-  this->handOver();
   if (this->Start.w <= 0.0)
   {
-    // Going out beyond the objects: the rest of the ray.
+    // Going out beyond the objects: in closed form where it converges fast, else the affine
+    // propagator takes the rest of the ray.
+    if (this->runOut(seg))
+      return true;
+    this->handOver();
     this->Delegated = true;
     return this->affineSegment(seg);
   }
+  this->handOver();
   // Coming in from afar: the affine steps cross the nearly straight path in one segment, up to
   // where the ball of the objects begins; the series take over from its end.
   if (!this->affineSegment(seg))
@@ -416,6 +434,60 @@ bool PlanarSeriesPropagator::nearSegment(Segment& seg)
     q = this->at(end);
   }
   finishSegment(seg, this->advanceTo(from, q), false);
+  return true;
+}
+
+bool PlanarSeriesPropagator::runOut(Segment& seg)
+{
+  // The outgoing far field in one segment, landing just beyond the next sky sphere (or the escape
+  // sphere): its end angle from the series, λ and t from the radial integrals
+  //   λ = ∫ dr/ṙ,  t = ∫ (E/((1 − f) ṙ) + f/(1 − f)) dr,  ṙ² = E² − (1 − f) L²/r²,
+  // whose integrands tend to constants plus a 1/r term far out. Less those, and in s = 1/r, what is
+  // left is smooth from the start to s = 0 when the periapsis (ṙ = 0) lies well inside the start:
+  // Gauss–Legendre's eight nodes then reach round-off.
+  const Point from = this->Start;
+  const double r0 = 1.0 / from.u;
+  const double E2 = this->E * this->E;
+  auto rdot2 = [&](double s) { return E2 - (1.0 - this->f(s)) * this->L * this->L * s * s; };
+  if (!(rdot2(from.u) >= kRunOutRadialShare * kRunOutRadialShare * E2))
+    return false;
+  const double goal = this->nextStopRadius(r0) * (1.0 + kLandingMargin), uGoal = 1.0 / goal;
+  const double limit = from.phi + PlanarOrbitPropagator::maxMergedSweep;
+  // The angle where u falls to 1/goal, series after series.
+  double end = std::numeric_limits<double>::quiet_NaN();
+  Point p = from;
+  for (int series = 0; series < 64 && std::isnan(end); ++series)
+  {
+    if (p.phi > this->Current.centre.phi)
+      this->expand(p);
+    const double stop = std::min(this->Current.centre.phi + this->Current.reach, limit);
+    const Point q = this->at(stop);
+    if (q.u <= uGoal)
+      end = this->solve([uGoal](const Point& z) { return std::make_pair(z.u - uGoal, z.w); }, p.phi,
+                        stop);
+    else if (stop == limit || !(q.w < 0.0))
+      return false; // sweeps too far round for one segment, or turns
+    p = q;
+  }
+  if (std::isnan(end))
+    return false;
+  Point q = this->at(end);
+  // Far out 1/ṙ → 1/|E|, and dt/dr → σ + 2M (σ + 1)/r with σ the sign of E (rays traced back in
+  // time have E < 0).
+  const double E = std::abs(this->E), sigma = this->E < 0.0 ? -1.0 : 1.0;
+  const double logTerm = 2.0 * this->M * (sigma + 1.0);
+  double lambda = (goal - r0) / E, t = sigma * (goal - r0) + logTerm * std::log(goal / r0);
+  const double mid = 0.5 * (from.u + uGoal), half = 0.5 * (from.u - uGoal);
+  for (int i = 0; i < 8; ++i)
+  {
+    const double s = mid + half * kFarNodes[i], f = this->f(s);
+    const double rdot = std::sqrt(rdot2(s)), weight = half * kFarWeights[i] / (s * s);
+    lambda += weight * (1.0 / rdot - 1.0 / E);
+    t += weight * (this->E / ((1.0 - f) * rdot) + f / (1.0 - f) - sigma - logTerm * s);
+  }
+  q.lambda = from.lambda + lambda;
+  q.t = from.t + t;
+  this->finishSegment(seg, q, true);
   return true;
 }
 }

@@ -90,6 +90,9 @@ private:
   bool nearSegment(Segment& seg);
   /// Fills `seg` from Start to `end` (which becomes Start).
   void finishSegment(Segment& seg, const Point& end, bool farField);
+  /// The outgoing far field in one segment from Start, in closed form; false where that does not
+  /// converge fast (a periapsis just inside the start, or a sweep beyond maxMergedSweep).
+  bool runOut(Segment& seg);
   /// Starts the affine-parameter propagator from Start.
   void handOver();
   /// Its next segment, on this ray's λ.

@@ -95,3 +95,55 @@ TEST(PlanarSeries, SegmentEndsStayOnTheLightCone)
       EXPECT_LT(std::abs(st.value(s.x1, s.p1)), 1e-9 * s.p1.squaredNorm()) << "b = " << b;
   }
 }
+
+TEST(PlanarSeries, TheFarFieldRunsOutInOneSegmentOnTheRadialIntegrals)
+{
+  // Beyond the objects (a ball of 20 M here) an outgoing ray runs out to the sky sphere in one
+  // segment; its λ and t are the radial integrals between its end radii, and it lands on the sky.
+  // Both ways in time: a ray passing the hole (E = 1), and one leaving at once along the reversed
+  // momentum (E = −1, as the camera's rays traced back from the eye).
+  const SchwarzschildSpacetime st(1.0);
+  const double b = 10.0, sky = 500.0;
+  for (const double E : { 1.0, -1.0 })
+  {
+    PhasePoint z = equatorialRay(st, 31.0, b);
+    if (E < 0.0)
+      z.p = -z.p;
+    IntegratorConfig cfg = integratorPreset("balanced");
+    cfg.method = "PlanarSeries";
+    auto prop = makePropagator(st, cfg);
+    TraceOptions opts;
+    opts.escapeRadius = 1000.0;
+    opts.farField.objectRadius = 20.0;
+    opts.farField.skyRadii = { sky };
+    std::vector<Segment> far;
+    const TraceResult r = traceRay(st, *prop, z, opts,
+                                   [&](const Segment& s)
+                                   {
+                                     const Vec3 a = s.x0.tail<3>(), e = s.x1.tail<3>();
+                                     if (s.farField && e.norm() > a.norm())
+                                       far.push_back(s);
+                                     return false;
+                                   });
+    ASSERT_EQ(r.termination, Termination::Escaped) << "E = " << E;
+    ASSERT_EQ(far.size(), 2u) << "one segment to the sky, one beyond it; E = " << E;
+    const Segment& s = far.front();
+    const double r0 = s.x0.tail<3>().norm(), r1 = s.x1.tail<3>().norm();
+    EXPECT_GE(r0, 20.0);
+    EXPECT_GT(r1, sky);
+    EXPECT_LT(r1, sky * (1 + 1e-10)) << "lands just beyond the sky sphere";
+    // ṙ² = E² − (1 − 2M/r) b²/r², dλ = dr/ṙ, dt = (E + f ṙ)/((1 − f) ṙ) dr.
+    auto rdot = [b](double x) { return std::sqrt(1.0 - (1.0 - 2.0 / x) * b * b / (x * x)); };
+    const double dl = simpson([&](double x) { return 1.0 / rdot(x); }, r0, r1, 200000);
+    const double dt = simpson(
+      [&](double x)
+      {
+        const double f = 2.0 / x;
+        return (E + f * rdot(x)) / ((1.0 - f) * rdot(x));
+      },
+      r0, r1, 200000);
+    EXPECT_NEAR(s.lambda1 - s.lambda0, dl, 1e-9 * dl) << "E = " << E;
+    EXPECT_NEAR(s.x1[0] - s.x0[0], dt, 1e-9 * std::abs(dt)) << "E = " << E;
+    EXPECT_LT(std::abs(st.value(s.x1, s.p1)), 1e-12 * s.p1.squaredNorm()) << "E = " << E;
+  }
+}

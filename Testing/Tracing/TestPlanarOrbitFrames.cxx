@@ -155,15 +155,21 @@ TEST_P(PlanarOrbitFrames, MatchATightGeneralTracePixelByPixel)
 
 TEST_P(PlanarOrbitFrames, ErrorFallsWithTheTolerance)
 {
-  // An adaptive method of order 8: tightening rtol by 10⁴ must shrink the hit error by a wide
-  // margin (not necessarily 10⁴: the error sits near the reference's floor at the tight end).
+  // An adaptive method: tightening rtol by 10⁴ must shrink the hit error by a wide margin (not
+  // necessarily 10⁴: the error sits near the reference's floor at the tight end). From rtol 1e-5,
+  // where both methods' errors lie far above that floor (the series already reach it at the fast
+  // preset's 1e-8).
   const int W = 24, H = 24;
   const std::vector<RayRecord> reference = traceAll(cylinderScene(0.0, W, H, tightGeneral()));
-  const IntegratorConfig loose = this->preset("fast"), tight = this->preset("accurate");
+  IntegratorConfig loose = this->preset("fast"), tight = this->preset("fast");
+  loose.relativeTolerance = 1e-5;
+  loose.absoluteTolerance = 1e-7;
+  tight.relativeTolerance = 1e-9;
+  tight.absoluteTolerance = 1e-11;
   const Comparison a = compare(traceAll(cylinderScene(0.0, W, H, loose)), reference, W, H);
   const Comparison b = compare(traceAll(cylinderScene(0.0, W, H, tight)), reference, W, H);
   ASSERT_GT(a.p99(), 0.0);
-  EXPECT_LT(b.p99(), 0.01 * a.p99()) << "rtol 1e-8: " << a.p99() << ", 1e-12: " << b.p99();
+  EXPECT_LT(b.p99(), 0.01 * a.p99()) << "rtol 1e-5: " << a.p99() << ", 1e-9: " << b.p99();
 }
 
 TEST_P(PlanarOrbitFrames, FarFieldKeepsTheAccuracyAndSavesSegments)
