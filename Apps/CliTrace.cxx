@@ -308,30 +308,38 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
   const bool hits =
     formats.vtp ||
     (formats.vtpIfSmall && static_cast<long long>(dims[0]) * dims[1] <= kHitsByDefaultPixels);
+  // Each file is encoded on its own (the PNG while the VTI is compressed): the temporaries are
+  // made first, in order, then written side by side.
+  std::vector<std::function<void()>> writes;
+  vtkImageData* image = source->GetImageOutput();
   if (formats.png)
   {
     names.png = base + ".png";
-    tools::writePng(source->GetImageOutput(), files.add(names.png));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.png);
+    writes.push_back([image, &file] { tools::writePng(image, file); });
   }
   if (formats.vti)
   {
     names.vti = base + ".vti";
-    tools::writeVti(source->GetImageOutput(), files.add(names.vti));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.vti);
+    writes.push_back([image, &file] { tools::writeVti(image, file); });
   }
   if (hits)
   {
     names.hits = base + "-hits.vtp";
-    tools::writeVtp(source->GetHitsOutput(), files.add(names.hits));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.hits);
+    vtkPolyData* data = source->GetHitsOutput();
+    writes.push_back([data, &file] { tools::writeVtp(data, file); });
   }
   if (polylines)
   {
     names.rays = base + "-rays.vtp";
-    tools::writeVtp(source->GetPolylinesOutput(), files.add(names.rays));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.rays);
+    vtkPolyData* data = source->GetPolylinesOutput();
+    writes.push_back([data, &file] { tools::writeVtp(data, file); });
   }
+  tools::writeSideBySide(writes);
+  stopIfInterrupted();
   return names;
 }
 

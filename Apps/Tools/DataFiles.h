@@ -8,7 +8,9 @@
 
 #include "AtomicFile.h"
 
+#include <functional>
 #include <string>
+#include <vector>
 
 class vtkImageData;
 class vtkPolyData;
@@ -42,6 +44,11 @@ void writePng(vtkImageData* image, TemporaryFile& file);
 void writeVti(vtkImageData* image, TemporaryFile& file,
               XmlCompression compression = kXmlCompression);
 void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression = kXmlCompression);
+
+/// Runs the writes on up to two threads, each on its own data object (the writers share only
+/// arrays, which they read), and rethrows the first one's exception after all have ended. A
+/// frame's PNG is encoded while its VTI is compressed.
+void writeSideBySide(const std::vector<std::function<void()>>& writes);
 
 /// The directory holding the example data (scenes/, textures/): <prefix>/share/asrt when the
 /// running program is an installed one (<prefix>/bin/asrt, in whatever prefix it was installed
