@@ -16,9 +16,11 @@
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkNew.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 
 #include <vtksys/SystemTools.hxx>
@@ -343,6 +345,22 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
   return names;
 }
 
+/// Whether a frame's hit points may be written: asked for, or by default at frames of at most
+/// kHitsByDefaultPixels. Frames whose hit points are neither written nor stored are traced
+/// without them (vtkGeodesicSource::GenerateHitPoints), saving their memory.
+bool hitPointsWritten(vtkGeodesicSource* source, const Formats& formats)
+{
+  if (formats.vtp)
+    return true;
+  if (!formats.vtpIfSmall)
+    return false;
+  // The frame's size where -r gives it; the scene's own (not read until the trace) keeps them.
+  const int* resolution = source->GetResolution();
+  if (resolution[0] <= 0 || resolution[1] <= 0)
+    return true;
+  return static_cast<long long>(resolution[0]) * resolution[1] <= kHitsByDefaultPixels;
+}
+
 /// The .pvd files of a series, as one set.
 void writeCollections(const std::vector<std::pair<const tools::PvdCollection*, std::string>>& all)
 {
@@ -622,6 +640,7 @@ int runTrace(const std::vector<std::string>& args)
     {
       if (store)
         refuseStoredFrame(*store, source, options.has("replace"));
+      source->SetGenerateHitPoints(output.store || hitPointsWritten(source, formats));
       traceFrame(source, "trace " + label, quiet);
     }
     if (!speaks)

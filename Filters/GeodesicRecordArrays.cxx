@@ -223,8 +223,11 @@ struct RowsBuilder::Parts
   vtkPolyData* hits;
   int width, rowBegin, rowEnd;
   vtkIdType count, next = 0;
-  HitsBuilder hitArrays;
+  std::unique_ptr<HitsBuilder> hitArrays; ///< null without hits
   vtkSmartPointer<vtkUnsignedCharArray> colors;
+  /// Without hits, the image's own arrays.
+  vtkSmartPointer<vtkIntArray> objectId, order, termination, raysPerPixel;
+  vtkSmartPointer<vtkDoubleArray> pathLength;
   Parts(vtkImageData* i, vtkPolyData* h, int w, int b, int e)
     : image(i)
     , hits(h)
@@ -232,9 +235,18 @@ struct RowsBuilder::Parts
     , rowBegin(b)
     , rowEnd(e)
     , count(static_cast<vtkIdType>(w) * (e - b))
-    , hitArrays(h, count)
     , colors(makeArray<vtkUnsignedCharArray>("Colors", 3, count))
   {
+    if (h)
+      this->hitArrays = std::make_unique<HitsBuilder>(h, count);
+    else
+    {
+      this->objectId = makeArray<vtkIntArray>("ObjectId", 1, count);
+      this->order = makeArray<vtkIntArray>("ImageOrder", 1, count);
+      this->pathLength = makeArray<vtkDoubleArray>("PathLength", 1, count);
+      this->termination = makeArray<vtkIntArray>("Termination", 1, count);
+      this->raysPerPixel = makeArray<vtkIntArray>("RaysPerPixel", 1, count);
+    }
   }
 };
 
@@ -258,19 +270,44 @@ void RowsBuilder::add(const RayRecord* records, std::size_t count)
                              " is not the traced pixel (" + std::to_string(i) + ", " +
                              std::to_string(j) + ") of the rows");
     setColorBytes(p.colors, p.next, *r);
+    if (!p.hitArrays)
+    {
+      p.objectId->SetValue(p.next, r->objectId);
+      p.order->SetValue(p.next, r->imageOrder);
+      p.pathLength->SetValue(p.next, r->affineLength);
+      p.termination->SetValue(p.next, static_cast<int>(r->termination));
+      p.raysPerPixel->SetValue(p.next, r->raysPerPixel);
+    }
   }
-  p.hitArrays.add(records, count);
+  if (p.hitArrays)
+    p.hitArrays->add(records, count);
 }
 
 void RowsBuilder::finish()
 {
   Parts& p = *this->P;
-  p.hitArrays.finish();
+  if (p.hitArrays)
+    p.hitArrays->finish();
+  else if (p.next != p.count)
+    throw std::logic_error("RowsBuilder: " + std::to_string(p.count - p.next) +
+                           " records of the rows missing");
   setRowsExtent(p.image, p.width, p.rowBegin, p.rowEnd);
   vtkPointData* pd = p.image->GetPointData();
   pd->SetScalars(p.colors);
-  for (const char* name : { "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
-    pd->AddArray(p.hits->GetPointData()->GetArray(name));
+  if (p.hitArrays)
+  {
+    for (const char* name :
+         { "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
+      pd->AddArray(p.hits->GetPointData()->GetArray(name));
+  }
+  else
+  {
+    pd->AddArray(p.objectId);
+    pd->AddArray(p.order);
+    pd->AddArray(p.pathLength);
+    pd->AddArray(p.termination);
+    pd->AddArray(p.raysPerPixel);
+  }
 }
 
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)

@@ -1095,3 +1095,39 @@ TEST(GeodesicSourceErrors, PixelSubsetWithThreeComponents)
     },
     [](vtkGeodesicSource* s) { s->SetPixelSubset(nullptr); }, { "component" });
 }
+
+TEST(GeodesicSource, WithoutHitPointsTheImageIsTheSame)
+{
+  // GenerateHitPoints off: the hits output keeps the frame's field data but no point, and the
+  // image's every array equals the one traced with the hit points, value for value.
+  auto configure = [](bool hits)
+  {
+    return [hits](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+      s->SetResolution(40, 30);
+      s->SetGenerateHitPoints(hits);
+    };
+  };
+  const Frame with = traceFrame(configure(true));
+  const Frame without = traceFrame(configure(false));
+  ASSERT_TRUE(with.errors.empty() && without.errors.empty());
+  EXPECT_EQ(with.hits->GetNumberOfPoints(), 40 * 30);
+  EXPECT_EQ(without.hits->GetNumberOfPoints(), 0);
+  EXPECT_EQ(fieldValue(without.hits, "Resolution", 0), 40.0);
+  vtkPointData* a = with.image->GetPointData();
+  vtkPointData* b = without.image->GetPointData();
+  ASSERT_EQ(a->GetNumberOfArrays(), b->GetNumberOfArrays());
+  for (int k = 0; k < a->GetNumberOfArrays(); ++k)
+  {
+    vtkDataArray* x = a->GetArray(k);
+    vtkDataArray* y = b->GetArray(x->GetName());
+    ASSERT_NE(y, nullptr) << x->GetName();
+    ASSERT_EQ(x->GetNumberOfTuples(), y->GetNumberOfTuples()) << x->GetName();
+    ASSERT_EQ(x->GetNumberOfComponents(), y->GetNumberOfComponents()) << x->GetName();
+    for (vtkIdType t = 0; t < x->GetNumberOfTuples(); ++t)
+      for (int c = 0; c < x->GetNumberOfComponents(); ++c)
+        ASSERT_EQ(x->GetComponent(t, c), y->GetComponent(t, c)) << x->GetName() << " " << t;
+  }
+  EXPECT_STREQ(b->GetScalars()->GetName(), "Colors");
+}
