@@ -230,9 +230,12 @@ int PlanarSeriesPropagator::termsWithin(double distance) const
   const double floor = kTermFloor * this->Current.tolerance;
   if (!(distance > 0.0))
     return 1;
-  double power = 1.0, inverse = 1.0 / distance;
-  for (int k = 0; k < Order; ++k)
-    power *= distance;
+  // distance^Order by squaring.
+  double power = 1.0, square = distance;
+  for (int e = Order; e > 0; e >>= 1, square *= square)
+    if (e & 1)
+      power *= square;
+  const double inverse = 1.0 / distance;
   int k = Order;
   for (; k > 1; --k, power *= inverse)
   {
