@@ -131,15 +131,7 @@ PhasePoint PlanarOrbitPropagator::state() const
 
 double PlanarOrbitPropagator::nextStopRadius(double r) const
 {
-  if (this->Far)
-  {
-    for (const double sky : this->Far->skyRadii)
-    {
-      if (sky > r)
-        return sky;
-    }
-  }
-  return this->EscapeRadius;
+  return asrt::nextStopRadius(this->Far, r, this->EscapeRadius);
 }
 
 // ---------------------------------------------------------------------------------------------

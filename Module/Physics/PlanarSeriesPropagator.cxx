@@ -79,15 +79,7 @@ void PlanarSeriesPropagator::setFarField(const FarField* farField)
 
 double PlanarSeriesPropagator::nextStopRadius(double r) const
 {
-  if (this->Far)
-  {
-    for (const double sky : this->Far->skyRadii)
-    {
-      if (sky > r)
-        return sky;
-    }
-  }
-  return this->EscapeRadius;
+  return asrt::nextStopRadius(this->Far, r, this->EscapeRadius);
 }
 
 // ---------------------------------------------------------------------------------------------

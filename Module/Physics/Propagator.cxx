@@ -10,6 +10,19 @@
 
 namespace asrt
 {
+double nextStopRadius(const FarField* far, double r, double escapeRadius)
+{
+  if (far)
+  {
+    for (const double sky : far->skyRadii)
+    {
+      if (sky > r)
+        return sky;
+    }
+  }
+  return escapeRadius;
+}
+
 Vec4 Segment::position(double t) const
 {
   const double t2 = t * t, t3 = t2 * t;

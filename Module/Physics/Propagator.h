@@ -72,6 +72,10 @@ struct FarField
   std::function<double(const Vec3&)> objectDistance;
 };
 
+/// Where a ray going out from radius r stops next: the smallest sky radius of `far` beyond r, or
+/// the escape radius (`far` may be null).
+ASRTPHYSICS_EXPORT double nextStopRadius(const FarField* far, double r, double escapeRadius);
+
 class ASRTPHYSICS_EXPORT Propagator
 {
 public:
