@@ -310,36 +310,48 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
   const bool hits =
     formats.vtp ||
     (formats.vtpIfSmall && static_cast<long long>(dims[0]) * dims[1] <= kHitsByDefaultPixels);
-  // Each file is encoded on its own (the PNG while the VTI is compressed): the temporaries are
-  // made first, in order, then written side by side.
-  std::vector<std::function<void()>> writes;
+  // The PNG is encoded while the XML files are compressed. The XML writers go one after the
+  // other: the image and the hit points share five arrays, whose ranges both writers compute and
+  // cache on the array. The PNG writer reads the colours alone, which the hit points do not share.
+  // The temporaries are made first, in order.
   vtkImageData* image = source->GetImageOutput();
+  tools::TemporaryFile* pngFile = nullptr;
+  std::vector<std::function<void()>> xml;
   if (formats.png)
   {
     names.png = base + ".png";
-    tools::TemporaryFile& file = files.add(names.png);
-    writes.push_back([image, &file] { tools::writePng(image, file); });
+    pngFile = &files.add(names.png);
   }
   if (formats.vti)
   {
     names.vti = base + ".vti";
     tools::TemporaryFile& file = files.add(names.vti);
-    writes.push_back([image, &file] { tools::writeVti(image, file); });
+    xml.push_back([image, &file] { tools::writeVti(image, file); });
   }
   if (hits)
   {
     names.hits = base + "-hits.vtp";
     tools::TemporaryFile& file = files.add(names.hits);
     vtkPolyData* data = source->GetHitsOutput();
-    writes.push_back([data, &file] { tools::writeVtp(data, file); });
+    xml.push_back([data, &file] { tools::writeVtp(data, file); });
   }
   if (polylines)
   {
     names.rays = base + "-rays.vtp";
     tools::TemporaryFile& file = files.add(names.rays);
     vtkPolyData* data = source->GetPolylinesOutput();
-    writes.push_back([data, &file] { tools::writeVtp(data, file); });
+    xml.push_back([data, &file] { tools::writeVtp(data, file); });
   }
+  std::vector<std::function<void()>> writes;
+  if (pngFile)
+    writes.push_back([image, pngFile] { tools::writePng(image, *pngFile); });
+  if (!xml.empty())
+    writes.push_back(
+      [&xml]
+      {
+        for (const std::function<void()>& write : xml)
+          write();
+      });
   tools::writeSideBySide(writes);
   stopIfInterrupted();
   return names;
