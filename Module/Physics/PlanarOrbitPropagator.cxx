@@ -357,25 +357,10 @@ bool PlanarOrbitPropagator::runOut(double target)
 
 void PlanarOrbitPropagator::finishSegment(Segment& seg, bool farField)
 {
-  // The segment runs from the end point kept since the last one to the current state; d²x/dτ² =
-  // h² d²x/dλ², with t's second derivative left out (the scene does not look at t, and its ends
-  // and slopes stay exact).
-  const EndPoint& a = this->Start;
+  // The segment runs from the end point kept since the last one to the current state, with t's
+  // second derivative left out (the scene does not look at t, and its ends and slopes stay exact).
   const EndPoint b = this->endPoint();
-  const double h = b.lambda - a.lambda;
-  seg.x0 = a.x;
-  seg.p0 = a.p;
-  seg.d0 = h * a.v;
-  seg.a0 = h * h * a.a;
-  seg.x1 = b.x;
-  seg.p1 = b.p;
-  seg.d1 = h * b.v;
-  seg.a1 = h * h * b.a;
-  seg.quintic = true;
-  seg.lambda0 = a.lambda;
-  seg.lambda1 = b.lambda;
-  seg.dl0 = seg.dl1 = h;
-  seg.farField = farField;
+  setAffineSegment(seg, this->Start, b, farField);
   this->Start = b;
 }
 

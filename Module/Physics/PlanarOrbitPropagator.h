@@ -111,11 +111,8 @@ private:
   Vec4 position(const Plane& s) const;
   Vec4 momentum(const Plane& s) const;
   /// A state in the Kerr–Schild chart, as a segment's end needs it.
-  struct EndPoint
-  {
-    Vec4 x, p, v, a; ///< position, momentum, dx/dλ, d²x/dλ² (t's left at 0)
-    double lambda = 0;
-  };
+  /// A state in the Kerr–Schild chart, as a segment's end needs it (t's acceleration left at 0).
+  using EndPoint = AffineEnd;
   /// The current state and slope as an EndPoint.
   EndPoint endPoint() const;
   double f(double r) const { return (2.0 * this->M - this->Q2 / r) / r; }

@@ -140,6 +140,7 @@ PlanarSeriesPropagator::EndPoint PlanarSeriesPropagator::endOf(const Point& q) c
     -this->L * this->L * (3.0 * this->M - 2.0 * this->Q2 * u) * u * u * u * u * u * x;
   e.v = Vec4(dtdl, v.x(), v.y(), v.z());
   e.a = Vec4(0.0, acc.x(), acc.y(), acc.z());
+  e.lambda = q.lambda;
   return e;
 }
 
@@ -251,8 +252,8 @@ PlanarSeriesPropagator::Point PlanarSeriesPropagator::at(double phi, int terms) 
   return Point{ phi, u, w, S.centre.lambda, S.centre.t };
 }
 
-PlanarSeriesPropagator::Point PlanarSeriesPropagator::advanceTo(const Point& from,
-                                                                const Point& to) const
+PlanarSeriesPropagator::Point PlanarSeriesPropagator::advanceTo(const Point& from, const Point& to,
+                                                                int terms) const
 {
   const double phiB = to.phi;
   // λ and t are integrals along the series: Gauss–Legendre over pieces of at most a quarter of r,
@@ -264,7 +265,6 @@ PlanarSeriesPropagator::Point PlanarSeriesPropagator::advanceTo(const Point& fro
     const double piece = std::min(phiB - p.phi, PlanarOrbitPropagator::maxStepFraction * p.u /
                                                   std::sqrt(p.u * p.u + p.w * p.w));
     const double mid = p.phi + 0.5 * piece, half = 0.5 * piece;
-    const int terms = this->termsWithin(std::abs(mid - this->Current.centre.phi) + half);
     for (int i = 0; i < 4; ++i)
     {
       // dλ/dφ = 1/(L u²) and dt/dφ = (E − f L w)/((1 − f) L u²): one division for both.
@@ -315,22 +315,8 @@ double PlanarSeriesPropagator::solve(G g, double lo, double hi) const
 
 void PlanarSeriesPropagator::finishSegment(Segment& seg, const Point& end, bool farField)
 {
-  const EndPoint& a = this->StartEnd;
   const EndPoint b = this->endOf(end);
-  const double h = end.lambda - this->Start.lambda;
-  seg.x0 = a.x;
-  seg.p0 = a.p;
-  seg.d0 = h * a.v;
-  seg.a0 = h * h * a.a;
-  seg.x1 = b.x;
-  seg.p1 = b.p;
-  seg.d1 = h * b.v;
-  seg.a1 = h * h * b.a;
-  seg.quintic = true;
-  seg.lambda0 = this->Start.lambda;
-  seg.lambda1 = end.lambda;
-  seg.dl0 = seg.dl1 = h;
-  seg.farField = farField;
+  setAffineSegment(seg, this->StartEnd, b, farField);
   this->Start = end;
   this->StartEnd = b;
 }
@@ -428,7 +414,7 @@ bool PlanarSeriesPropagator::nearSegment(Segment& seg)
                       from.phi, end);
     q = this->at(end);
   }
-  finishSegment(seg, this->advanceTo(from, q), false);
+  finishSegment(seg, this->advanceTo(from, q, terms), false);
   return true;
 }
 

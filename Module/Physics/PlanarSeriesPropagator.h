@@ -81,8 +81,9 @@ private:
   int termsWithin(double distance) const;
   /// u″ from the Binet equation.
   double curvature(double u) const;
-  /// `to` (u and w known, on the current series) with λ and t integrated from `from`.
-  Point advanceTo(const Point& from, const Point& to) const;
+  /// `to` (u and w known, on the current series) with λ and t integrated from `from`, evaluating
+  /// the series to `terms` (termsWithin the farther end's distance from the centre).
+  Point advanceTo(const Point& from, const Point& to, int terms) const;
   /// The angle in [lo, hi] where g(at(φ)) = 0, g changing sign over it.
   template<class G>
   double solve(G g, double lo, double hi) const;
@@ -98,12 +99,8 @@ private:
   /// Its next segment, on this ray's λ.
   bool affineSegment(Segment& seg);
 
-  /// What a segment's end needs in the Kerr–Schild chart.
-  struct EndPoint
-  {
-    Vec4 x, p; ///< position and momentum
-    Vec4 v, a; ///< dx/dλ and d²x/dλ² (t's second derivative left at 0)
-  };
+  /// What a segment's end needs in the Kerr–Schild chart (t's acceleration left at 0).
+  using EndPoint = AffineEnd;
   EndPoint endOf(const Point& q) const;
   double dlambda(double u) const { return 1.0 / (this->L * u * u); }
   /// dt/dφ = (dt/dλ)(dλ/dφ), dt/dλ = (E + f n·v)/(1 − f) and n·v = dr/dλ = −L w.

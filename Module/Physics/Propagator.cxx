@@ -10,6 +10,24 @@
 
 namespace asrt
 {
+void setAffineSegment(Segment& seg, const AffineEnd& a, const AffineEnd& b, bool farField)
+{
+  const double h = b.lambda - a.lambda;
+  seg.x0 = a.x;
+  seg.p0 = a.p;
+  seg.d0 = h * a.v;
+  seg.a0 = h * h * a.a;
+  seg.x1 = b.x;
+  seg.p1 = b.p;
+  seg.d1 = h * b.v;
+  seg.a1 = h * h * b.a;
+  seg.quintic = true;
+  seg.lambda0 = a.lambda;
+  seg.lambda1 = b.lambda;
+  seg.dl0 = seg.dl1 = h;
+  seg.farField = farField;
+}
+
 double nextStopRadius(const FarField* far, double r, double escapeRadius)
 {
   if (far)
