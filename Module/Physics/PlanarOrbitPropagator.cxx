@@ -7,13 +7,6 @@
 
 namespace asrt
 {
-namespace
-{
-/// A far-field segment ends this far (relative) beyond the sphere it lands on, so that the sphere's
-/// crossing lies inside the segment, next to its exact end.
-constexpr double landingMargin = 4e-12;
-}
-
 PlanarOrbitPropagator::PlanarOrbitPropagator(const Spacetime& st, double relativeTolerance,
                                              double absoluteTolerance)
   : M(st.mass())

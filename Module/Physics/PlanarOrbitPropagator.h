@@ -61,6 +61,9 @@ public:
   /// Largest angle about the hole one merged far-field segment may sweep: the tracer's per-segment
   /// winding (the angle between the ends) is exact only below π.
   static constexpr double maxMergedSweep = 1.5;
+  /// A far-field segment ends this far (relative) beyond the sphere it lands on, so that the
+  /// sphere's crossing lies inside the segment, next to its exact end.
+  static constexpr double landingMargin = 4e-12;
 
 private:
   /// The plane state: position (X, Y), velocity (U, V) = d/dλ, and Kerr–Schild t.

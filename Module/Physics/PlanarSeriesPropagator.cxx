@@ -37,9 +37,6 @@ constexpr double kFarFirstStep = 0.5;
 /// this share of E: the periapsis then lies inside 0.6 of the start radius, far enough from the
 /// radial integrals' interval for eight nodes.
 constexpr double kRunOutRadialShare = 0.8;
-/// A run-out ends this far (relative) beyond the sphere it lands on, so that the sphere's crossing
-/// lies inside the segment, next to its exact end (as PlanarOrbitPropagator's).
-constexpr double kLandingMargin = 4e-12;
 /// Gauss–Legendre's eight nodes and weights on [−1, 1].
 constexpr double kFarNodes[8] = { -0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
                                   -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
@@ -432,7 +429,8 @@ bool PlanarSeriesPropagator::runOut(Segment& seg)
   auto rdot2 = [&](double s) { return E2 - (1.0 - this->f(s)) * this->L * this->L * s * s; };
   if (!(rdot2(from.u) >= kRunOutRadialShare * kRunOutRadialShare * E2))
     return false;
-  const double goal = this->nextStopRadius(r0) * (1.0 + kLandingMargin), uGoal = 1.0 / goal;
+  const double goal = this->nextStopRadius(r0) * (1.0 + PlanarOrbitPropagator::landingMargin),
+               uGoal = 1.0 / goal;
   const double limit = from.phi + PlanarOrbitPropagator::maxMergedSweep;
   // The angle where u falls to 1/goal, series after series.
   double end = std::numeric_limits<double>::quiet_NaN();
