@@ -21,8 +21,9 @@ namespace asrt
 ///
 /// Segments are cut from the series in φ with the same length rule as PlanarOrbitPropagator and
 /// interpolated as its are, in λ (quintic Hermite from dx/dλ and d²x/dλ²); λ and t, which the
-/// series do not carry, come from Gauss–Legendre quadrature of dλ/dφ = 1/(L u²) and
-/// dt/dφ = (E − f L w) / ((1 − f) L u²) over pieces no longer than a quarter of r.
+/// series do not carry, come from Gauss–Lobatto quadrature of dλ/dφ = 1/(L u²) and
+/// dt/dφ = (E − f L w) / ((1 − f) L u²) over pieces no longer than a quarter of r (t's term in w
+/// in closed form in Schwarzschild).
 ///
 /// Three parts of a ray are handed to PlanarOrbitPropagator, restarted from the exact state there:
 /// a ray that is nearly radial (no angle to step in), and the far field beyond the scene's
@@ -77,6 +78,8 @@ private:
   /// u and w at angle φ (within the series' reach) from its first `terms` terms, λ and t left at
   /// the centre's.
   Point at(double phi, int terms = Order) const;
+  /// u alone at angle φ, from the series' first `terms` terms.
+  double uAt(double phi, int terms) const;
   /// The terms that matter up to `distance` from the centre.
   int termsWithin(double distance) const;
   /// u″ from the Binet equation.

@@ -39,6 +39,9 @@ struct Segment
   /// a high-order method keep hit points as accurate as the steps themselves.
   bool quintic = false;
   Vec4 a0 = Vec4::Zero(), a1 = Vec4::Zero();
+  /// The angle about the origin from x0 to x1, in [0, π], where the propagator knows it (a
+  /// planar orbit stepped in its angle); NaN otherwise, and the tracer takes it from the ends.
+  double sweep = std::numeric_limits<double>::quiet_NaN();
 
   /// Position at step fraction τ ∈ [0, 1].
   Vec4 position(double tau) const;

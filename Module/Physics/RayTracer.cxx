@@ -1,6 +1,7 @@
 #include "RayTracer.h"
 
 #include <cmath>
+#include <limits>
 
 namespace asrt
 {
@@ -39,6 +40,7 @@ TraceResult traceRay(const Spacetime& st, Propagator& prop, const PhasePoint& st
       res.termination = Termination::StepBudget;
       break;
     }
+    seg.sweep = std::numeric_limits<double>::quiet_NaN();
     if (!prop.advance(seg) || !seg.x1.allFinite() || !seg.p1.allFinite())
     {
       res.termination = Termination::NumericalFailure;
@@ -46,7 +48,7 @@ TraceResult traceRay(const Spacetime& st, Propagator& prop, const PhasePoint& st
     }
     ++res.steps;
     const Vec3 a = seg.x0.tail<3>(), b = seg.x1.tail<3>();
-    const double dphi = std::atan2(a.cross(b).norm(), a.dot(b));
+    const double dphi = std::isnan(seg.sweep) ? std::atan2(a.cross(b).norm(), a.dot(b)) : seg.sweep;
     const double y = dphi - carry;
     const double t = sum + y;
     carry = (t - sum) - y;
