@@ -276,18 +276,28 @@ void RowsBuilder::add(const RayRecord* records, std::size_t count)
 {
   Parts& p = *this->P;
   // The image shares the hits' arrays only if the hits are its pixels in order, all traced.
-  for (const RayRecord* r = records; r != records + count; ++r, ++p.next)
+  for (std::size_t k = 0; k < count; ++k)
   {
-    const vtkIdType i = p.next % p.width, j = p.rowBegin + p.next / p.width;
-    if (p.next >= p.count || r->i != i || r->j != j || r->termination == Termination::Running)
-      throw std::logic_error("RowsBuilder: record " + std::to_string(p.next) +
+    const RayRecord& r = records[k];
+    const vtkIdType n = p.next + static_cast<vtkIdType>(k);
+    const vtkIdType i = n % p.width, j = p.rowBegin + n / p.width;
+    if (n >= p.count || r.i != i || r.j != j || r.termination == Termination::Running)
+      throw std::logic_error("RowsBuilder: record " + std::to_string(n) +
                              " is not the traced pixel (" + std::to_string(i) + ", " +
                              std::to_string(j) + ") of the rows");
-    if (p.hitArrays)
-      setColorBytes(p.own.colors, p.next, *r);
-    else
-      p.own.set(p.next, *r);
   }
+  // Each record fills its own tuples of the preallocated arrays.
+  const vtkIdType first = p.next;
+  const long n = static_cast<long>(count);
+#pragma omp parallel for schedule(static) if (n > 16384)
+  for (long k = 0; k < n; ++k)
+  {
+    if (p.hitArrays)
+      setColorBytes(p.own.colors, first + k, records[k]);
+    else
+      p.own.set(first + k, records[k]);
+  }
+  p.next += static_cast<vtkIdType>(count);
   if (p.hitArrays)
     p.hitArrays->add(records, count);
 }

@@ -308,7 +308,12 @@ std::vector<GridBlock> latticeBlocksOf(const std::vector<std::pair<int, int>>& p
 {
   std::vector<GridBlock> blocks;
   for (const auto& [i, j] : pixels)
-    blocks.push_back(latticeBlock(i, j, lattice, width, height));
+  {
+    // Pixels come mostly in rows: a run of them in one block adds it once.
+    const GridBlock g = latticeBlock(i, j, lattice, width, height);
+    if (blocks.empty() || !(blocks.back() == g))
+      blocks.push_back(g);
+  }
   auto order = [](const GridBlock& a, const GridBlock& b)
   { return std::tie(a.y0, a.x0, a.y1, a.x1) < std::tie(b.y0, b.x0, b.y1, b.x1); };
   std::sort(blocks.begin(), blocks.end(), order);
@@ -489,12 +494,18 @@ std::vector<RayRecord> FrameTracer::traceGrid(const std::vector<std::pair<int, i
   auto order = [](const GridBlock& a, const GridBlock& b)
   { return std::tie(a.y0, a.x0, a.y1, a.x1) < std::tie(b.y0, b.x0, b.y1, b.x1); };
   std::vector<std::vector<std::size_t>> wanted(blocks.size());
+  GridBlock last{ -1, -1, -1, -1 };
+  std::size_t lastIndex = 0;
   for (std::size_t k = 0; k < pixels.size(); ++k)
   {
     const GridBlock g = latticeBlock(pixels[k].first, pixels[k].second, lattice, W, H);
-    wanted[static_cast<std::size_t>(std::lower_bound(blocks.begin(), blocks.end(), g, order) -
-                                    blocks.begin())]
-      .push_back(k);
+    if (!(g == last))
+    {
+      last = g;
+      lastIndex = static_cast<std::size_t>(
+        std::lower_bound(blocks.begin(), blocks.end(), g, order) - blocks.begin());
+    }
+    wanted[lastIndex].push_back(k);
   }
 
   std::vector<RayRecord> out(pixels.size());

@@ -204,8 +204,10 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   // 3. A straight edge crosses the segment between two centres once: where the midpoint ends as
   // the pixel's centre does, the crossing lies in the neighbour's half, and the pixel need not be
   // sampled for it. A midpoint unlike both (a third surface, a thin image) samples both.
-  for (std::size_t k = 0; k < records.size(); ++k)
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < static_cast<long>(records.size()); ++q)
   {
+    const std::size_t k = static_cast<std::size_t>(q);
     bool sample = hard[k] == kHard;
     const JacobianSample self = jacobianSample(records[k]);
     for (int d = 0; d < 4 && !sample; ++d)
@@ -241,9 +243,11 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
     this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays, bendOnly);
 
-  // Filtered centre colours (the colour of a pixel left at one ray).
-  for (std::size_t k = 0; k < records.size(); ++k)
+    // Filtered centre colours (the colour of a pixel left at one ray).
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < static_cast<long>(records.size()); ++q)
   {
+    const std::size_t k = static_cast<std::size_t>(q);
     RayRecord& r = records[k];
     if (filter && side[k] == 1 && r.objectId >= 0 && hasFootprint(r))
       r.color = scene.shadeFootprint(r.objectId, r.u, r.v, footprintOf(r, 1));
