@@ -46,6 +46,21 @@ constexpr double kFarNodes[8] = { -0.9602898564975363, -0.7966664774136267, -0.5
 constexpr double kFarWeights[8] = { 0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
                                     0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
                                     0.2223810344533745, 0.1012285362903763 };
+/// Σ c_k s^k over k ≤ terms (and c_{terms+1}, for even `terms`: the coefficient arrays end in a
+/// zero, and a term past those that matter changes nothing), as even and odd parts in s², two
+/// Horner chains of half the length side by side.
+inline double evenOddHorner(const double* c, int terms, double s)
+{
+  const int top = terms & ~1;
+  const double s2 = s * s;
+  double even = c[top], odd = c[top + 1];
+  for (int k = top - 2; k >= 0; k -= 2)
+  {
+    even = even * s2 + c[k];
+    odd = odd * s2 + c[k + 1];
+  }
+  return even + s * odd;
+}
 /// No series step sweeps more than this angle.
 constexpr double kMaxReach = 2.0;
 }
@@ -171,7 +186,7 @@ double PlanarSeriesPropagator::curvature(double u) const
 void PlanarSeriesPropagator::expand(const Point& p)
 {
   Series& S = this->Current;
-  std::array<double, Order + 1>& a = S.a;
+  std::array<double, Order + 2>& a = S.a;
   std::array<double, Order + 1> square{}, cube{};
   a[0] = p.u;
   a[1] = p.w;
@@ -196,6 +211,8 @@ void PlanarSeriesPropagator::expand(const Point& p)
     }
     a[k + 2] = rhs * kRecurrenceScale[k];
   }
+  for (int k = 0; k < Order; ++k)
+    S.d[k] = (k + 1) * a[k + 1];
   this->Evaluations += Order;
   // The last two terms bound the truncation of u (against rtol·u + atol·M·u², a length held to
   // rtol·r + atol·M) and of w = du/dφ (against rtol·|(u, w)|, the direction's error).
@@ -218,7 +235,7 @@ int PlanarSeriesPropagator::termsWithin(double distance) const
 {
   // The terms beyond the last one above round-off at this distance from the centre add nothing.
   // Scanned from the top: the terms fall with k inside the reach.
-  const std::array<double, Order + 1>& a = this->Current.a;
+  const std::array<double, Order + 2>& a = this->Current.a;
   const double floor = kTermFloor * this->Current.tolerance;
   if (!(distance > 0.0))
     return 1;
@@ -241,23 +258,16 @@ PlanarSeriesPropagator::Point PlanarSeriesPropagator::at(double phi, int terms) 
 {
   const Series& S = this->Current;
   const double s = phi - S.centre.phi;
-  double u = S.a[terms], w = terms * S.a[terms];
-  for (int k = terms - 1; k >= 1; --k)
-  {
-    u = u * s + S.a[k];
-    w = w * s + k * S.a[k];
-  }
-  u = u * s + S.a[0];
-  return Point{ phi, u, w, S.centre.lambda, S.centre.t };
+  return Point{ phi, evenOddHorner(S.a.data(), terms, s),
+                terms >= 1 ? evenOddHorner(S.d.data(), terms - 1, s) : 0.0, S.centre.lambda,
+                S.centre.t };
 }
 
-double PlanarSeriesPropagator::uAt(double phi, int terms) const
+std::array<double, 3> PlanarSeriesPropagator::uAt(const std::array<double, 3>& phi, int terms) const
 {
-  const Series& S = this->Current;
-  const double s = phi - S.centre.phi;
-  double u = S.a[terms];
-  for (int k = terms - 1; k >= 0; --k)
-    u = u * s + S.a[k];
+  std::array<double, 3> u;
+  for (int n = 0; n < 3; ++n)
+    u[n] = evenOddHorner(this->Current.a.data(), terms, phi[n] - this->Current.centre.phi);
   return u;
 }
 
@@ -287,19 +297,22 @@ PlanarSeriesPropagator::Point PlanarSeriesPropagator::advanceTo(const Point& fro
     const double mid = 0.5 * (p.phi + q.phi), half = 0.5 * (q.phi - p.phi);
     add(p.u, p.w, half * kLobattoEndWeight);
     add(q.u, q.w, half * kLobattoEndWeight);
-    for (const auto& [node, weight] :
-         { std::pair(-kLobattoNode, kLobattoWeight), std::pair(0.0, kLobattoMiddleWeight),
-           std::pair(kLobattoNode, kLobattoWeight) })
+    if (closedRadialTerm)
     {
-      const double phi = mid + half * node;
-      if (closedRadialTerm)
-        add(this->uAt(phi, terms), 0.0, half * weight);
-      else
+      const std::array<double, 3> u =
+        this->uAt({ mid - half * kLobattoNode, mid, mid + half * kLobattoNode }, terms);
+      add(u[0], 0.0, half * kLobattoWeight);
+      add(u[1], 0.0, half * kLobattoMiddleWeight);
+      add(u[2], 0.0, half * kLobattoWeight);
+    }
+    else
+      for (const auto& [node, weight] :
+           { std::pair(-kLobattoNode, kLobattoWeight), std::pair(0.0, kLobattoMiddleWeight),
+             std::pair(kLobattoNode, kLobattoWeight) })
       {
-        const Point z = this->at(phi, terms);
+        const Point z = this->at(mid + half * node, terms);
         add(z.u, z.w, half * weight);
       }
-    }
     p = q;
   }
   if (closedRadialTerm)

@@ -68,7 +68,9 @@ private:
     Point centre;
     double reach = 0;
     double tolerance = 0; ///< of u at the reach
-    std::array<double, Order + 1> a{};
+    /// u's coefficients, and du/dφ's (d_k = (k + 1) a_{k+1}); the last entries stay 0, so that
+    /// an evaluation may take its terms in pairs.
+    std::array<double, Order + 2> a{}, d{};
   };
   /// Sets up the plane and the series from a state at affine parameter `lambda`; false for a ray
   /// too nearly radial to step in φ.
@@ -78,8 +80,8 @@ private:
   /// u and w at angle φ (within the series' reach) from its first `terms` terms, λ and t left at
   /// the centre's.
   Point at(double phi, int terms = Order) const;
-  /// u alone at angle φ, from the series' first `terms` terms.
-  double uAt(double phi, int terms) const;
+  /// u alone at three angles, from the series' first `terms` terms.
+  std::array<double, 3> uAt(const std::array<double, 3>& phi, int terms) const;
   /// The terms that matter up to `distance` from the centre.
   int termsWithin(double distance) const;
   /// u″ from the Binet equation.
