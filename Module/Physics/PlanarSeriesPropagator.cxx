@@ -192,11 +192,18 @@ void PlanarSeriesPropagator::expand(const Point& p)
   a[1] = p.w;
   for (int k = 0; k + 2 <= Order; ++k)
   {
-    // (u²)_k = Σ a_j a_{k−j}, each pair twice but the middle one.
-    double q = 0.0;
-    for (int j = 0; 2 * j < k; ++j)
-      q += a[j] * a[k - j];
-    q *= 2.0;
+    // (u²)_k = Σ a_j a_{k−j}, each pair twice but the middle one; two partial sums, so that
+    // each addition waits on every other one only.
+    double q0 = 0.0, q1 = 0.0;
+    int j = 0;
+    for (; 2 * (j + 1) < k; j += 2)
+    {
+      q0 += a[j] * a[k - j];
+      q1 += a[j + 1] * a[k - j - 1];
+    }
+    if (2 * j < k)
+      q0 += a[j] * a[k - j];
+    double q = 2.0 * (q0 + q1);
     if (k % 2 == 0)
       q += a[k / 2] * a[k / 2];
     square[k] = q;
