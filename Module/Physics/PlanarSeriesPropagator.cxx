@@ -74,7 +74,8 @@ PlanarSeriesPropagator::PlanarSeriesPropagator(const Spacetime& st, double relat
   , HorizonRadius(st.outerHorizon())
   , Affine(st, relativeTolerance, absoluteTolerance) // checks the spacetime and the tolerances
   // The quintic interpolant's error grows as the sixth power of the segment's length.
-  , SegmentFraction(segmentFraction * std::min(1.0, std::pow(relativeTolerance / 1e-10, 1.0 / 6)))
+  , SegmentFraction(
+      std::min(maxSegmentFraction, segmentFraction * std::pow(relativeTolerance / 1e-10, 1.0 / 6)))
 {
 }
 

@@ -49,12 +49,16 @@ public:
   static constexpr int Order = 24;
   /// Rays of impact parameter below this (in M) are stepped in λ: in φ they barely move.
   static constexpr double radialImpact = 1e-3;
-  /// Largest segment where an object may be near, as a fraction of r, at rtol 1e-10 and above
-  /// (shorter as rtol^(1/6) below, the quintic interpolant's order). PlanarOrbitPropagator's
-  /// segments of up to a quarter of r mostly end early, at its steps' ends; these run their full
-  /// length, and at a quarter of r the affine parameter of Fig. 1's hit points, read off the
-  /// interpolant, strayed from the reference's by 10⁻⁸ relative.
+  /// Largest segment where an object may be near, as a fraction of r, at rtol 1e-10 (scaled as
+  /// rtol^(1/6), the quintic interpolant's order, at other tolerances, up to
+  /// maxSegmentFraction). PlanarOrbitPropagator's segments of up to a quarter of r mostly end
+  /// early, at its steps' ends; these run their full length, and at a quarter of r the affine
+  /// parameter of Fig. 1's hit points, read off the interpolant, strayed from the reference's by
+  /// 10⁻⁸ relative.
   static constexpr double segmentFraction = 0.15;
+  /// The longest segments, as a fraction of r, at loose tolerances: a series reaches about
+  /// half a radian of the orbit.
+  static constexpr double maxSegmentFraction = 0.5;
 
 private:
   /// A point of the orbit: the angle, u = 1/r, w = du/dφ, λ and t.

@@ -53,6 +53,14 @@ constexpr int kMaxRaysPerPixel = 1024;
 /// corner samples of a pixel whose footprint bends that lets them settle its colour.
 constexpr double kSettledColorSpread = 3.0 / 255.0;
 
+/// The relative tolerance (where the frame's is tighter) of the rays an adaptively sampled pixel
+/// adds to its centre ray. A sample adds only colour: the frame keeps the centre ray's record, and
+/// the rays that decide where to sample are traced as it is. On Fig. 1, strongly lensed, samples
+/// at 1e-6 land within a thousandth of a pixel of rays traced at 1e-12 (99 %), and within a few
+/// hundredths where the map nearly folds (TestAntialiasing); the planar orbit's segments may be
+/// three times as long, and the picture against a converged one does not change.
+constexpr double kSampleRelativeTolerance = 1e-6;
+
 /// The scene file's "rendering" section.
 struct AntialiasOptions
 {

@@ -58,6 +58,17 @@ std::pair<double, double> sampleOffset(int a, int b, int n)
   return { (n * a + b + 0.5) / n2 - 0.5, (n * b + (n - 1 - a) + 0.5) / n2 - 0.5 };
 }
 
+IntegratorConfig sampleIntegrator(const IntegratorConfig& frame)
+{
+  IntegratorConfig c = frame;
+  if (c.relativeTolerance < kSampleRelativeTolerance)
+  {
+    c.absoluteTolerance *= kSampleRelativeTolerance / c.relativeTolerance;
+    c.relativeTolerance = kSampleRelativeTolerance;
+  }
+  return c;
+}
+
 /// Whether two rays end alike: on the same object in the same image order, or the same way.
 bool endsAlike(const JacobianSample& a, const JacobianSample& b)
 {
@@ -270,9 +281,12 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, count / 200);
+  // A supersample is a reference: its samples are traced as tightly as the frame's centre rays.
+  const IntegratorConfig sampling =
+    opts.supersample > 1 ? this->Desc.integrator : sampleIntegrator(this->Desc.integrator);
 #pragma omp parallel
   {
-    std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
+    std::unique_ptr<Propagator> prop = makePropagator(*this->St, sampling);
     long lastReported = 0;
 #pragma omp for schedule(dynamic, 1)
     for (long q = 0; q < count; ++q)
