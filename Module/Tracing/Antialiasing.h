@@ -16,12 +16,16 @@
 //    rotated by atan(1/n), one in each of its n × n cells and in each of its n² rows and
 //    columns ("n-rooks"); for odd n the centre ray is one of them; each is
 //    filtered over its share of the footprint and they are averaged (a box reconstruction;
-//    FrameAntialiasing.cxx). A pixel sampled only because its footprint bends takes the
-//    pattern's 4 corner cells first (and its centre sample, for odd n): where those end as the
-//    centre ray does and their colours spread by at most kSettledColorSpread, their mean is its
-//    colour and the rest of the pattern is not traced (a bend shows only where the texture
-//    changes across the pixel). A pixel's raysPerPixel counts its samples and the midpoint rays
-//    counted to it (those on its right and upper edges): at most maxRaysPerPixel + 2.
+//    FrameAntialiasing.cxx). A pixel sampled only because its footprint bends (odd n) is first
+//    seen through its local quadratic map of (u, v), through its centre ray, its 4 edge
+//    neighbours' and the pattern's first corner: where the opposite corner lands within
+//    kQuadraticMisfit of a cell's footprint of where the map puts it, in the colour the map
+//    predicts, the map places the pattern's other samples. Else it takes the pattern's 4 corner
+//    cells (and its centre sample): where those end as the centre ray does and their colours
+//    spread by at most kSettledColorSpread, their mean is its colour and the rest of the
+//    pattern is not traced (a bend shows only where the texture changes across the pixel). A
+//    pixel's raysPerPixel counts its samples and the midpoint rays counted to it (those on its
+//    right and upper edges): at most maxRaysPerPixel + 2.
 //  - `supersample` N > 1 samples every pixel by the same N × N pattern (for references); with
 //    `none`, the samples are point-sampled.
 // Every sample position is fixed by the pixel alone, so that a frame is the same bit for bit at

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <tuple>
 
 namespace asrt
 {
@@ -132,6 +133,61 @@ Color settledByCorners(int n, const PatternSample& sample)
     }
   return all / static_cast<double>(n * n);
 }
+
+/// A bending footprint's second-order picture: the quadratic map of (u, v) over a pixel,
+///   u(x, y) = c + a x + b y + d x² + e y² + f x y  (x, y in pixels from the centre),
+/// through its centre ray and its 4 edge neighbours' (which every piece of a frame has: a band's
+/// halo rows, a subset's halo pixels), and one sample ray off the axes for the cross term f.
+/// u is unwrapped the short way about the centre's.
+class LocalQuadraticMap
+{
+public:
+  /// False where an edge neighbour is missing (the frame's border) or ends unlike the centre.
+  bool fit(const PixelLookup& lookup, const JacobianSample& centre)
+  {
+    static constexpr int kSteps[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
+    std::array<JacobianSample, 4> n;
+    for (int d = 0; d < 4; ++d)
+    {
+      const JacobianSample* s = lookup.at(centre.i + kSteps[d][0], centre.j + kSteps[d][1]);
+      if (!s || !endsAlike(*s, centre) || !std::isfinite(s->u) || !std::isfinite(s->v))
+        return false;
+      n[d] = *s;
+    }
+    this->U0 = centre.u;
+    auto set = [&](Coefficients& k, double c, double xm, double xp, double ym, double yp)
+    { k = { c, 0.5 * (xp - xm), 0.5 * (yp - ym), 0.5 * (xp + xm) - c, 0.5 * (yp + ym) - c, 0.0 }; };
+    auto du = [&](const JacobianSample& s) { return shortUDifference(s.u, centre.u); };
+    set(this->U, 0.0, du(n[0]), du(n[1]), du(n[2]), du(n[3]));
+    set(this->V, centre.v, n[0].v, n[1].v, n[2].v, n[3].v);
+    return true;
+  }
+  /// Sets the cross terms so that the map passes through (u, v) at (x, y), x y ≠ 0.
+  void passThrough(double x, double y, double u, double v)
+  {
+    this->U[5] = (shortUDifference(u, this->U0) - value(this->U, x, y)) / (x * y);
+    this->V[5] = (v - value(this->V, x, y)) / (x * y);
+  }
+  /// (u, v) at (x, y), u in [0, 1).
+  std::pair<double, double> at(double x, double y) const
+  {
+    const double u = this->U0 + value(this->U, x, y);
+    return { u - std::floor(u), value(this->V, x, y) };
+  }
+
+private:
+  using Coefficients = std::array<double, 6>; // c, a, b, d, e, f
+  static double value(const Coefficients& k, double x, double y)
+  {
+    return k[0] + k[1] * x + k[2] * y + k[3] * x * x + k[4] * y * y + k[5] * x * y;
+  }
+  double U0 = 0;
+  Coefficients U{}, V{};
+};
+
+/// How far, in units of a pattern cell's footprint, a traced sample may land from where the local
+/// quadratic map puts it for the map to stand in for the pattern's other rays.
+constexpr double kQuadraticMisfit = 0.05;
 }
 
 void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
@@ -254,10 +310,10 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
     this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays, bendOnly);
 
-    // Filtered centre colours (the colour of a pixel left at one ray).
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < static_cast<long>(records.size()); ++q)
   {
+    // Filtered centre colours (the colour of a pixel left at one ray).
     const std::size_t k = static_cast<std::size_t>(q);
     RayRecord& r = records[k];
     if (filter && side[k] == 1 && r.objectId >= 0 && hasFootprint(r))
@@ -281,6 +337,8 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, count / 200);
+  // The centre rays around each pixel, for the local quadratic maps of bending footprints.
+  const PixelLookup lookup(records, neighbours);
   // A supersample is a reference: its samples are traced as tightly as the frame's centre rays.
   const IntegratorConfig sampling =
     opts.supersample > 1 ? this->Desc.integrator : sampleIntegrator(this->Desc.integrator);
@@ -299,25 +357,89 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
       const TextureFootprint cell = footprintOf(r, n);
       const bool cellFilter = filter && r.objectId >= 0 && hasFootprint(r);
       int rays = r.traced ? 1 : 0;
-      // Sample (a, b) of the pattern: its filtered colour, and whether its ray ends as the
-      // centre's does.
-      auto sample = [&](int a, int b, bool& alike) -> Color
+      // The pattern's rays traced for the local quadratic map are kept for the pattern, should
+      // the map not stand in for it.
+      std::array<std::pair<int, int>, 2> keptAt;
+      std::array<RayRecord, 2> kept;
+      int keptCount = 0;
+      auto traced = [&](int a, int b) -> RayRecord
       {
-        RayRecord s;
-        if (n % 2 == 1 && a == n / 2 && b == n / 2)
-          s = r;
-        else
+        for (int m = 0; m < keptCount; ++m)
+          if (keptAt[m] == std::pair(a, b))
+            return kept[m];
+        const auto [x, y] = sampleOffset(a, b, n);
+        const RayRecord s = this->traceThrough(*prop, r.i + x, r.j + y);
+        ++rays;
+        if (keptCount < 2)
         {
-          const auto [x, y] = sampleOffset(a, b, n);
-          s = this->traceThrough(*prop, r.i + x, r.j + y);
-          ++rays;
+          keptAt[keptCount] = { a, b };
+          kept[keptCount++] = s;
         }
-        alike = endsAlike(jacobianSample(s), jacobianSample(r));
+        return s;
+      };
+      auto colourOf = [&](const RayRecord& s) -> Color
+      {
         if (cellFilter && s.objectId == r.objectId && s.imageOrder == r.imageOrder)
           return scene.shadeFootprint(s.objectId, s.u, s.v, cell);
         return s.color;
       };
-      r.color = bendOnly[k] && n >= 3 ? settledByCorners(n, sample) : fullPattern(n, sample);
+      // Sample (a, b) of the pattern: its filtered colour, and whether its ray ends as the
+      // centre's does.
+      auto sample = [&](int a, int b, bool& alike) -> Color
+      {
+        const RayRecord s = n % 2 == 1 && a == n / 2 && b == n / 2 ? r : traced(a, b);
+        alike = endsAlike(jacobianSample(s), jacobianSample(r));
+        return colourOf(s);
+      };
+      // A footprint that bends, seen by the quadratic map through the centre, its edge
+      // neighbours and the pattern's first corner: where the opposite corner lands where the map
+      // puts it, with the colour it predicts, the map places the pattern's other samples.
+      auto byQuadraticMap = [&](Color& colour)
+      {
+        LocalQuadraticMap map;
+        if (!map.fit(lookup, jacobianSample(r)))
+          return false;
+        const RayRecord first = traced(0, 0), last = traced(n - 1, n - 1);
+        if (!endsAlike(jacobianSample(first), jacobianSample(r)) ||
+            !endsAlike(jacobianSample(last), jacobianSample(r)))
+          return false;
+        const auto [x0, y0] = sampleOffset(0, 0, n);
+        map.passThrough(x0, y0, first.u, first.v);
+        const auto [x1, y1] = sampleOffset(n - 1, n - 1, n);
+        RayRecord predicted = r;
+        std::tie(predicted.u, predicted.v) = map.at(x1, y1);
+        const double allowed =
+          kQuadraticMisfit / n * std::max(std::hypot(r.dudi, r.dvdi), std::hypot(r.dudj, r.dvdj));
+        if (!(std::abs(shortUDifference(last.u, predicted.u)) <= allowed &&
+              std::abs(last.v - predicted.v) <= allowed) ||
+            (colourOf(predicted) - colourOf(last)).cwiseAbs().maxCoeff() > kSettledColorSpread)
+          return false;
+        // Summed in fullPattern's order.
+        Color sum = Color::Zero();
+        for (int b = 0; b < n; ++b)
+          for (int a = 0; a < n; ++a)
+          {
+            if (a == 0 && b == 0)
+              sum += colourOf(first);
+            else if (a == n - 1 && b == n - 1)
+              sum += colourOf(last);
+            else if (n % 2 == 1 && a == n / 2 && b == n / 2)
+              sum += colourOf(r);
+            else
+            {
+              const auto [x, y] = sampleOffset(a, b, n);
+              std::tie(predicted.u, predicted.v) = map.at(x, y);
+              sum += colourOf(predicted);
+            }
+          }
+        colour = sum / static_cast<double>(n * n);
+        return true;
+      };
+      Color colour;
+      if (bendOnly[k] && n >= 3 && cellFilter && byQuadraticMap(colour))
+        r.color = colour;
+      else
+        r.color = bendOnly[k] && n >= 3 ? settledByCorners(n, sample) : fullPattern(n, sample);
       r.raysPerPixel = rays + midpointRays[k];
       const long d = ++done;
       if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)

@@ -256,8 +256,9 @@ TEST(Antialiasing, BendingFootprintsOverOneColourAreSettledByTheirCornerCells)
 {
   // A long floor of one colour seen from just above it, past a hole: towards its far edge the
   // perspective bends its map within a pixel, which samples the pixel, but the bend cannot show
-  // in one colour. Every such pixel inside an image of the floor is settled by the pattern's 4
-  // corner cells and its centre, to the floor's colour.
+  // in one colour. Every such pixel inside an image of the floor is settled, by the local
+  // quadratic map and two of the pattern's corners or by its 4 corner cells and its centre, to
+  // the floor's colour.
   const int W = 40, H = 40;
   SceneDescription d = checkerWall(1.0, W, H);
   const Color wall(0.7, 0.4, 0.2);
@@ -288,7 +289,7 @@ TEST(Antialiasing, BendingFootprintsOverOneColourAreSettledByTheirCornerCells)
       continue;
     ++interior;
     EXPECT_LT(r.raysPerPixel, 8) << "pixel " << r.i << ", " << r.j << " took its whole pattern";
-    if (r.raysPerPixel >= 5)
+    if (r.raysPerPixel >= 3) // its centre and two corners at least
     {
       ++settled;
       EXPECT_LT((r.color - wall).cwiseAbs().maxCoeff(), 1e-12);
@@ -301,22 +302,97 @@ TEST(Antialiasing, BendingFootprintsOverOneColourAreSettledByTheirCornerCells)
 TEST(Antialiasing, SettledPixelsStayWithinTheirSpreadOfTheSupersample)
 {
   // The lensed checker wall: where a bending footprint's corner cells agree, the pixel's colour
-  // is their mean; against the 8 × 8 supersample the test traces, those pixels are off by no
-  // more than the spread that settled them, in the mean square.
+  // is their mean, and where its local quadratic map predicts a corner, the map places the other
+  // samples; against the 8 × 8 supersample the test traces, those pixels are off by no more than
+  // the spread that settled them, in the mean square.
   const int W = 32, H = 32;
   SceneDescription d = checkerWall(1.0, W, H);
   const std::vector<RayRecord> reference = traceFrame(d, options(AntialiasMode::Filter, 1, 8));
   const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::Adaptive, 9));
   double sum = 0;
-  long settled = 0;
+  long settled = 0, byMap = 0;
   for (std::size_t k = 0; k < frame.size(); ++k)
-    if (frame[k].raysPerPixel >= 5 && frame[k].raysPerPixel <= 7)
+  {
+    // Sampled pixels that took fewer rays than the pattern's 9: the map's (the centre and two
+    // corners, and no midpoint ray: its edge neighbours end as it does) or the corners' (5, and
+    // up to two midpoint rays).
+    const RayRecord& r = frame[k];
+    bool inside = r.i > 0 && r.i + 1 < W && r.j > 0 && r.j + 1 < H;
+    for (const auto& [di, dj] :
+         { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
+      inside = inside && frame[k + di + dj * W].objectId == r.objectId &&
+               frame[k + di + dj * W].imageOrder == r.imageOrder;
+    const bool mapped = inside && r.raysPerPixel == 3;
+    if (mapped || (r.raysPerPixel >= 5 && r.raysPerPixel <= 7))
     {
       ++settled;
-      sum += (frame[k].color - reference[k].color).squaredNorm() / 3.0;
+      byMap += mapped;
+      sum += (r.color - reference[k].color).squaredNorm() / 3.0;
     }
+  }
   ASSERT_GT(settled, 0) << "no pixel was settled: the test sees nothing";
+  EXPECT_GT(byMap, 0) << "no pixel was settled by its quadratic map";
   EXPECT_LE(std::sqrt(sum / settled), kSettledColorSpread);
+}
+
+TEST(Antialiasing, QuadraticMapsPlaceTheSamplesOfABendingFootprint)
+{
+  // A floor seen from just above it, past a hole, its texture a ramp in u and v (red and green):
+  // a sample's filtered colour tells where it landed. Where a bending footprint was settled by
+  // its local quadratic map (its centre, two corners and no midpoint ray), the pixel's colour
+  // against the 8 × 8 supersample the test traces is as good as that of the pixels whose 9
+  // samples were traced.
+  const int W = 64, H = 64, T = 256;
+  SceneDescription d = checkerWall(1.0, W, H);
+  std::vector<std::uint8_t> ramp(3 * T * T);
+  for (int y = 0; y < T; ++y)
+    for (int x = 0; x < T; ++x)
+    {
+      ramp[3 * (y * T + x)] = static_cast<std::uint8_t>(x);
+      ramp[3 * (y * T + x) + 1] = static_cast<std::uint8_t>(y);
+      ramp[3 * (y * T + x) + 2] = 128;
+    }
+  d.camera = looking(Vec3(0, -30, 1), Vec3(0, 0, 0.5), Vec3(0, 0, 1), 40, W, H);
+  d.scene = std::make_shared<Scene>();
+  d.scene->add(std::make_unique<Rectangle>(1, "floor", std::make_shared<ImageTexture>(T, T, ramp),
+                                           Vec3(0, 60, -1), Vec3(1, 0, 0), Vec3(0, 1, 0), 100.0,
+                                           150.0));
+  d.scene->add(std::make_unique<CelestialSphere>(
+    0, "sky", std::make_shared<SolidTexture>(Color(0, 0, 0)), 200.0));
+  const std::vector<RayRecord> reference = traceFrame(d, options(AntialiasMode::Filter, 1, 8));
+  const std::vector<RayRecord> frame = traceFrame(d, options(AntialiasMode::Adaptive, 9));
+  double mapped = 0, full = 0;
+  long nMapped = 0, nFull = 0;
+  for (std::size_t k = 0; k < frame.size(); ++k)
+  {
+    const RayRecord& r = frame[k];
+    bool inside = r.objectId == 1 && r.i > 0 && r.i + 1 < W && r.j > 0 && r.j + 1 < H &&
+                  r.u > 0.05 && r.u < 0.95 && r.v > 0.05 && r.v < 0.95;
+    for (const auto& [di, dj] :
+         { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
+      inside = inside && frame[k + di + dj * W].objectId == r.objectId &&
+               frame[k + di + dj * W].imageOrder == r.imageOrder;
+    if (!inside)
+      continue;
+    const double e = (r.color - reference[k].color).squaredNorm() / 3.0;
+    if (r.raysPerPixel == 3)
+    {
+      mapped += e;
+      ++nMapped;
+    }
+    else if (r.raysPerPixel == 9)
+    {
+      full += e;
+      ++nFull;
+    }
+  }
+  // The ramp is linear in (u, v), so a pixel's error is where its samples were placed: the traced
+  // ones land within a few tenths of a level of the supersample, the mapped ones far closer (a
+  // map without its cross term misplaces them by a quarter of a level).
+  ASSERT_GT(nMapped, 5) << "no bending footprint was settled by its quadratic map";
+  ASSERT_GT(nFull, 5);
+  EXPECT_LE(std::sqrt(mapped / nMapped), 0.05 / 255);
+  EXPECT_LE(std::sqrt(mapped / nMapped), std::sqrt(full / nFull));
 }
 
 TEST(Antialiasing, FramesAreTheSameAtAnyThreadCountAndInAnySplit)
