@@ -85,7 +85,8 @@ Options:
   -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/') gets the
                         scene's file name: -o out/ gives out/fig4-mass-start-000.png
   --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
-  --plan                print the plan and its estimated cost, trace and write nothing
+  --plan                print the plan and its estimated cost, trace and write nothing (the
+                        plan from the prior estimate: a run learns as it makes its keys)
   --store[=LABEL]       accumulate in PostgreSQL and reuse what is stored (label of new frames)
   -q, --quiet           no progress on stderr
 )";
