@@ -16,9 +16,11 @@
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkNew.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 
 #include <vtksys/SystemTools.hxx>
@@ -308,31 +310,67 @@ FrameFiles writeFrameFiles(vtkGeodesicSource* source, const Formats& formats, bo
   const bool hits =
     formats.vtp ||
     (formats.vtpIfSmall && static_cast<long long>(dims[0]) * dims[1] <= kHitsByDefaultPixels);
+  // The PNG is encoded while the XML files are compressed. The XML writers go one after the
+  // other: the image and the hit points share five arrays, whose ranges both writers compute and
+  // cache on the array. The PNG writer reads the colours alone, which the hit points do not share.
+  // The temporaries are made first, in order.
+  vtkImageData* image = source->GetImageOutput();
+  tools::TemporaryFile* pngFile = nullptr;
+  std::vector<std::function<void()>> xml;
   if (formats.png)
   {
     names.png = base + ".png";
-    tools::writePng(source->GetImageOutput(), files.add(names.png));
-    stopIfInterrupted();
+    pngFile = &files.add(names.png);
   }
   if (formats.vti)
   {
     names.vti = base + ".vti";
-    tools::writeVti(source->GetImageOutput(), files.add(names.vti));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.vti);
+    xml.push_back([image, &file] { tools::writeVti(image, file); });
   }
   if (hits)
   {
     names.hits = base + "-hits.vtp";
-    tools::writeVtp(source->GetHitsOutput(), files.add(names.hits));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.hits);
+    vtkPolyData* data = source->GetHitsOutput();
+    xml.push_back([data, &file] { tools::writeVtp(data, file); });
   }
   if (polylines)
   {
     names.rays = base + "-rays.vtp";
-    tools::writeVtp(source->GetPolylinesOutput(), files.add(names.rays));
-    stopIfInterrupted();
+    tools::TemporaryFile& file = files.add(names.rays);
+    vtkPolyData* data = source->GetPolylinesOutput();
+    xml.push_back([data, &file] { tools::writeVtp(data, file); });
   }
+  std::vector<std::function<void()>> writes;
+  if (pngFile)
+    writes.push_back([image, pngFile] { tools::writePng(image, *pngFile); });
+  if (!xml.empty())
+    writes.push_back(
+      [&xml]
+      {
+        for (const std::function<void()>& write : xml)
+          write();
+      });
+  tools::writeSideBySide(writes);
+  stopIfInterrupted();
   return names;
+}
+
+/// Whether a frame's hit points may be written: asked for, or by default at frames of at most
+/// kHitsByDefaultPixels. Frames whose hit points are neither written nor stored are traced
+/// without them (vtkGeodesicSource::GenerateHitPoints), saving their memory.
+bool hitPointsWritten(vtkGeodesicSource* source, const Formats& formats)
+{
+  if (formats.vtp)
+    return true;
+  if (!formats.vtpIfSmall)
+    return false;
+  // The frame's size where -r gives it; the scene's own (not read until the trace) keeps them.
+  const int* resolution = source->GetResolution();
+  if (resolution[0] <= 0 || resolution[1] <= 0)
+    return true;
+  return static_cast<long long>(resolution[0]) * resolution[1] <= kHitsByDefaultPixels;
 }
 
 /// The .pvd files of a series, as one set.
@@ -614,6 +652,7 @@ int runTrace(const std::vector<std::string>& args)
     {
       if (store)
         refuseStoredFrame(*store, source, options.has("replace"));
+      source->SetGenerateHitPoints(output.store || hitPointsWritten(source, formats));
       traceFrame(source, "trace " + label, quiet);
     }
     if (!speaks)

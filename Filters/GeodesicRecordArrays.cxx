@@ -62,45 +62,68 @@ void setRowsExtent(vtkImageData* image, int width, int rowBegin, int rowEnd)
   image->SetSpacing(1, 1, 1);
   image->SetOrigin(0, 0, 0);
 }
+
+/// The image's own arrays, "Colors" (its scalars), "ObjectId", "ImageOrder", "PathLength",
+/// "Termination" and "RaysPerPixel", one value a pixel.
+struct ImageArrays
+{
+  vtkSmartPointer<vtkUnsignedCharArray> colors;
+  vtkSmartPointer<vtkIntArray> objectId, order, termination, raysPerPixel;
+  vtkSmartPointer<vtkDoubleArray> pathLength;
+  explicit ImageArrays(vtkIdType n)
+    : colors(makeArray<vtkUnsignedCharArray>("Colors", 3, n))
+    , objectId(makeArray<vtkIntArray>("ObjectId", 1, n))
+    , order(makeArray<vtkIntArray>("ImageOrder", 1, n))
+    , termination(makeArray<vtkIntArray>("Termination", 1, n))
+    , raysPerPixel(makeArray<vtkIntArray>("RaysPerPixel", 1, n))
+    , pathLength(makeArray<vtkDoubleArray>("PathLength", 1, n))
+  {
+  }
+  /// Pixels no record reaches: black, no object, not traced.
+  void clear()
+  {
+    this->colors->Fill(0);
+    this->objectId->Fill(-1);
+    this->order->Fill(0);
+    this->pathLength->Fill(0);
+    this->termination->Fill(0);
+    this->raysPerPixel->Fill(0);
+  }
+  void set(vtkIdType k, const RayRecord& r)
+  {
+    setColorBytes(this->colors, k, r);
+    this->objectId->SetValue(k, r.objectId);
+    this->order->SetValue(k, r.imageOrder);
+    this->pathLength->SetValue(k, r.affineLength);
+    this->termination->SetValue(k, static_cast<int>(r.termination));
+    this->raysPerPixel->SetValue(k, r.raysPerPixel);
+  }
+  void addTo(vtkPointData* pd) const
+  {
+    pd->SetScalars(this->colors);
+    pd->AddArray(this->objectId);
+    pd->AddArray(this->order);
+    pd->AddArray(this->pathLength);
+    pd->AddArray(this->termination);
+    pd->AddArray(this->raysPerPixel);
+  }
+};
 }
 
 void recordsToImage(const std::vector<RayRecord>& records, int width, int rowBegin, int rowEnd,
                     vtkImageData* image)
 {
   setRowsExtent(image, width, rowBegin, rowEnd);
-  const vtkIdType n = image->GetNumberOfPoints();
-  auto colors = makeArray<vtkUnsignedCharArray>("Colors", 3, n);
-  auto objectId = makeArray<vtkIntArray>("ObjectId", 1, n);
-  auto order = makeArray<vtkIntArray>("ImageOrder", 1, n);
-  auto pathLength = makeArray<vtkDoubleArray>("PathLength", 1, n);
-  auto termination = makeArray<vtkIntArray>("Termination", 1, n);
-  auto raysPerPixel = makeArray<vtkIntArray>("RaysPerPixel", 1, n);
-  colors->Fill(0);
-  objectId->Fill(-1);
-  order->Fill(0);
-  pathLength->Fill(0);
-  termination->Fill(0);
-  raysPerPixel->Fill(0);
+  ImageArrays arrays(image->GetNumberOfPoints());
+  arrays.clear();
   for (const RayRecord& r : records)
   {
     if (r.termination == Termination::Running || r.j < rowBegin || r.j >= rowEnd || r.i < 0 ||
         r.i >= width)
       continue; // not traced, or outside these rows
-    const vtkIdType k = static_cast<vtkIdType>(r.j - rowBegin) * width + r.i;
-    setColorBytes(colors, k, r);
-    objectId->SetValue(k, r.objectId);
-    order->SetValue(k, r.imageOrder);
-    pathLength->SetValue(k, r.affineLength);
-    termination->SetValue(k, static_cast<int>(r.termination));
-    raysPerPixel->SetValue(k, r.raysPerPixel);
+    arrays.set(static_cast<vtkIdType>(r.j - rowBegin) * width + r.i, r);
   }
-  vtkPointData* pd = image->GetPointData();
-  pd->SetScalars(colors);
-  pd->AddArray(objectId);
-  pd->AddArray(order);
-  pd->AddArray(pathLength);
-  pd->AddArray(termination);
-  pd->AddArray(raysPerPixel);
+  arrays.addTo(image->GetPointData());
 }
 
 struct HitsBuilder::Arrays
@@ -223,8 +246,9 @@ struct RowsBuilder::Parts
   vtkPolyData* hits;
   int width, rowBegin, rowEnd;
   vtkIdType count, next = 0;
-  HitsBuilder hitArrays;
-  vtkSmartPointer<vtkUnsignedCharArray> colors;
+  std::unique_ptr<HitsBuilder> hitArrays; ///< null without hits
+  /// The colours; without hits, every array of the image.
+  ImageArrays own;
   Parts(vtkImageData* i, vtkPolyData* h, int w, int b, int e)
     : image(i)
     , hits(h)
@@ -232,9 +256,11 @@ struct RowsBuilder::Parts
     , rowBegin(b)
     , rowEnd(e)
     , count(static_cast<vtkIdType>(w) * (e - b))
-    , hitArrays(h, count)
-    , colors(makeArray<vtkUnsignedCharArray>("Colors", 3, count))
+    , hitArrays(h ? std::make_unique<HitsBuilder>(h, count) : nullptr)
+    , own(h ? 0 : count)
   {
+    if (h)
+      this->own.colors = makeArray<vtkUnsignedCharArray>("Colors", 3, count);
   }
 };
 
@@ -257,18 +283,31 @@ void RowsBuilder::add(const RayRecord* records, std::size_t count)
       throw std::logic_error("RowsBuilder: record " + std::to_string(p.next) +
                              " is not the traced pixel (" + std::to_string(i) + ", " +
                              std::to_string(j) + ") of the rows");
-    setColorBytes(p.colors, p.next, *r);
+    if (p.hitArrays)
+      setColorBytes(p.own.colors, p.next, *r);
+    else
+      p.own.set(p.next, *r);
   }
-  p.hitArrays.add(records, count);
+  if (p.hitArrays)
+    p.hitArrays->add(records, count);
 }
 
 void RowsBuilder::finish()
 {
   Parts& p = *this->P;
-  p.hitArrays.finish();
+  if (p.hitArrays)
+    p.hitArrays->finish();
+  else if (p.next != p.count)
+    throw std::logic_error("RowsBuilder: " + std::to_string(p.count - p.next) +
+                           " records of the rows missing");
   setRowsExtent(p.image, p.width, p.rowBegin, p.rowEnd);
   vtkPointData* pd = p.image->GetPointData();
-  pd->SetScalars(p.colors);
+  if (!p.hitArrays)
+  {
+    p.own.addTo(pd);
+    return;
+  }
+  pd->SetScalars(p.own.colors);
   for (const char* name : { "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel" })
     pd->AddArray(p.hits->GetPointData()->GetArray(name));
 }

@@ -65,8 +65,8 @@ private:
 /// recordsToPolyData and `image` what recordsToImage would, except that the image's "ObjectId",
 /// "ImageOrder", "PathLength", "Termination" and "RaysPerPixel" are the hits' arrays of these
 /// names: for such records they hold the same values in the same order, and a copy would only
-/// double them. add() throws std::logic_error at a record out of that order or untraced, finish()
-/// if some are missing.
+/// double them. With `hits` null only the image is made, with arrays of its own. add() throws
+/// std::logic_error at a record out of that order or untraced, finish() if some are missing.
 class RowsBuilder
 {
 public:

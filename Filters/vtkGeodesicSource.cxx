@@ -399,14 +399,16 @@ struct vtkGeodesicSource::Internals
       if (!aborted)
       {
         asrt::recordsToImage(records, W, rowBegin, rowEnd, image);
-        asrt::recordsToPolyData(records, hits);
+        if (self->GenerateHitPoints)
+          asrt::recordsToPolyData(records, hits);
       }
     }
     else
     {
       // The records of a band go into the outputs as soon as they are finished: a frame's
       // records are never all held beside the arrays made of them.
-      asrt::RowsBuilder outputs(image, hits, W, rowBegin, rowEnd);
+      asrt::RowsBuilder outputs(image, self->GenerateHitPoints ? hits : nullptr, W, rowBegin,
+                                rowEnd);
       const bool traced = asrt::traceRowsInBands(
         tracer, rowBegin, rowEnd,
         [&](const asrt::RayRecord* records, std::size_t count) { outputs.add(records, count); },
@@ -570,6 +572,8 @@ int vtkGeodesicSource::RequestData(vtkInformation*, vtkInformationVector**,
     };
     requirePairs(this->PixelSubset, "PixelSubset");
     requirePairs(this->PolylinePixels, "PolylinePixels");
+    if (!this->GenerateHitPoints)
+      hits->Initialize(); // no points of an earlier run stay behind
     if (!Internals::Trace(this, tracer, rowBegin, rowEnd, image, hits))
     {
       asrt::reportAbort(this);
@@ -654,6 +658,7 @@ void vtkGeodesicSource::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "ViewAngle: " << this->ViewAngle << "\n";
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
+  os << indent << "GenerateHitPoints: " << this->GenerateHitPoints << "\n";
   os << indent
      << "IntegrationMethod: " << (this->IntegrationMethod ? this->IntegrationMethod : "(scene)")
      << "\n";

@@ -26,6 +26,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <ostream>
 #include <stdexcept>
@@ -325,6 +326,27 @@ void writeOne(const std::string& path, Write write)
   write(files.add(path));
   files.commit();
 }
+}
+
+void writeSideBySide(const std::vector<std::function<void()>>& writes)
+{
+  std::vector<std::exception_ptr> errors(writes.size());
+  const int n = static_cast<int>(writes.size());
+#pragma omp parallel for num_threads(2) schedule(dynamic, 1) if (n > 1)
+  for (int k = 0; k < n; ++k)
+  {
+    try
+    {
+      writes[static_cast<std::size_t>(k)]();
+    }
+    catch (...)
+    {
+      errors[static_cast<std::size_t>(k)] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& e : errors)
+    if (e)
+      std::rethrow_exception(e);
 }
 
 void writePng(vtkImageData* image, const std::string& path)

@@ -8,7 +8,9 @@
 
 #include "AtomicFile.h"
 
+#include <functional>
 #include <string>
+#include <vector>
 
 class vtkImageData;
 class vtkPolyData;
@@ -42,6 +44,13 @@ void writePng(vtkImageData* image, TemporaryFile& file);
 void writeVti(vtkImageData* image, TemporaryFile& file,
               XmlCompression compression = kXmlCompression);
 void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression = kXmlCompression);
+
+/// Runs the writes on up to two threads and rethrows the first one's exception after all have
+/// ended. Writes that run side by side must not share an array that either writer changes: the
+/// XML writers compute each array's range and cache it on the array, so two XML files sharing
+/// arrays go in one write, one after the other. A frame's PNG is encoded while its VTI is
+/// compressed.
+void writeSideBySide(const std::vector<std::function<void()>>& writes);
 
 /// The directory holding the example data (scenes/, textures/): <prefix>/share/asrt when the
 /// running program is an installed one (<prefix>/bin/asrt, in whatever prefix it was installed

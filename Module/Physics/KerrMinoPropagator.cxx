@@ -29,18 +29,13 @@ constexpr double kMaxRelativeMove = 0.25;
 constexpr double kMinWRatio = 0.25;
 /// The capture step ends with w in [w_c(1 + lo), w_c(1 + hi)]: just inside the capture sphere.
 constexpr double kCaptureLow = 1e-12, kCaptureHigh = 1e-9;
-
-/// log(1 + x)/x, also for x → 0.
-double log1pRatio(double x)
-{
-  return std::abs(x) < 1e-8 ? 1.0 - 0.5 * x : std::log1p(x) / x;
-}
-
-/// atanh(y)/y, also for y → 0.
-double atanhRatio(double y)
-{
-  return std::abs(y) < 1e-8 ? 1.0 : std::atanh(y) / y;
-}
+/// Outside the scene's objects and beyond this many M, steps merge into far-field segments (an
+/// outgoing ray may still turn back near the photon region).
+constexpr double kFarFieldMinRadius = 4.0;
+/// Largest angle about the hole one far-field segment may sweep: the tracer's per-segment winding
+/// (the angle between the ends) is exact only below π.
+constexpr double kMaxMergedSweep = 1.5;
+const double kCosMaxMergedSweep = std::cos(kMaxMergedSweep);
 
 /// X w² = E(1 + a²w²) − aLw², with X = E(r² + a²) − aL.
 double xw(const Consts& c, double w)
@@ -61,13 +56,21 @@ double radialPotential(const Consts& c, double w)
   return X * X - w * w * deltaW(c, w) * c.K;
 }
 
+/// τ log(1 + d/b)/d = ∫₀^τ ds/(b + d s/τ), also for d → 0 (two divisions: divisions dominate the
+/// drift's cost).
+double logQuotient(double tau, double b, double d)
+{
+  const double x = d / b;
+  return std::abs(x) < 1e-8 ? tau * (1.0 - 0.5 * x) / b : tau * std::log1p(x) / d;
+}
+
 /// ∫₀^τ ds/(1 − k w) for w = w₀ + v s, exactly; NaN if the drift reaches the pole w = 1/k.
 double poleIntegral(double k, double w0, double w1, double tau)
 {
   const double b0 = 1.0 - k * w0, b1 = 1.0 - k * w1;
   if (!(b0 > 0.0 && b1 > 0.0))
     return std::numeric_limits<double>::quiet_NaN();
-  return tau * log1pRatio((b1 - b0) / b0) / b0;
+  return logQuotient(tau, b0, b1 - b0);
 }
 
 /// jd = ∫₀^τ ds/D̃ and jw = ∫₀^τ w ds/D̃ with D̃ = w²Δ = (1 − r₊w)(1 − r₋w), for w = w₀ + v s,
@@ -83,8 +86,8 @@ void horizonIntegrals(const Consts& c, double w0, double v, double tau, double& 
   {
     const double ip = poleIntegral(c.rPlus, w0, w1, tau);
     const double im = poleIntegral(c.rMinus, w0, w1, tau);
-    jd = (c.rPlus * ip - c.rMinus * im) / delta;
-    jw = (ip - im) / delta;
+    jd = (c.rPlus * ip - c.rMinus * im) * c.invDelta;
+    jw = (ip - im) * c.invDelta;
     return;
   }
   const double k = 0.5 * (c.rPlus + c.rMinus);
@@ -120,7 +123,7 @@ bool drift(const Consts& c, State& s, double tau)
   // divergence is real: the past horizon.)
   double jd, jw;
   horizonIntegrals(c, w0, vw, tau, jd, jw);
-  const double j1 = tau * log1pRatio(tau * vw / w0) / w0; // ∫dσ/w
+  const double j1 = logQuotient(tau, w0, w1 - w0); // ∫dσ/w
   const double dPhi = -L * tau + (L - a * vw) * jd + 2.0 * c.M * (a * E - L) * jw;
   const double dT = E * intW2 + 2.0 * c.M * (E - vw) * j1 +
                     2.0 * c.M * (2.0 * c.M * (E - vw) * jd + a * (a * vw - L) * jw) +
@@ -144,7 +147,8 @@ bool drift(const Consts& c, State& s, double tau)
     const double one = 1.0 - u0 * u1;
     if (!(one > 0.0))
       return false;
-    dPolar = L * tau * atanhRatio(tau * vu / one) / one;
+    const double y = tau * vu / one;
+    dPolar = std::abs(y) < 1e-8 ? L * tau / one : L * std::atanh(y) / vu;
   }
   s.w = w1;
   s.u = u1;
@@ -243,17 +247,21 @@ KerrMinoPropagator::KerrMinoPropagator(const Spacetime& st, int order, double st
   this->Ray.a = st.spin();
   this->Ray.rPlus = st.outerHorizon();
   this->Ray.rMinus = st.innerHorizon();
+  this->Ray.invDelta = 1.0 / (this->Ray.rPlus - this->Ray.rMinus);
 }
 
-void KerrMinoPropagator::setLimits(double /*escapeRadius*/, double captureRadius)
+void KerrMinoPropagator::setLimits(double escapeRadius, double captureRadius)
 {
-  // Escape needs no limit: the relative-move bound already keeps every step short of w = 0.
+  // The relative-move bound already keeps every step short of w = 0; the escape sphere bounds an
+  // outgoing far-field segment if no sky sphere is in the way.
+  this->EscapeRadius = escapeRadius;
   this->CaptureRadius = std::isfinite(captureRadius) ? std::max(0.0, captureRadius) : 0.0;
 }
 
 void KerrMinoPropagator::start(const PhasePoint& z)
 {
   this->Evaluations = 0;
+  this->HasPending = false;
   this->S = State{};
   this->Current = z;
   this->CurrentRate = Vec4::Zero();
@@ -397,38 +405,25 @@ bool KerrMinoPropagator::trial(double h, State& s, long& evaluations) const
   return true;
 }
 
-bool KerrMinoPropagator::advance(Segment& seg)
+bool KerrMinoPropagator::nextStep(Move& next)
 {
-  if (!this->Valid)
-    return false;
-  seg.x0 = this->Current.x;
-  seg.p0 = this->Current.p;
-  seg.lambda0 = this->S.lambda;
-  const Vec4 rate0 = this->CurrentRate;
-  // dλ/dσ = Σ = r² + a² u² at the step's start (state before the step).
-  const double sigma0 = [&]
-  {
-    const double r = 1.0 / this->S.w;
-    return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
-  }();
-
   // Step fraction. Within kFixedStepRadius the step is the fixed h/M in σ (symplectic). Beyond it
   // a Mino step would move the point by ~h r/M relative, without bound as r grows (dλ = Σ dσ), so
   // the step shrinks as 1/r: the relative move stays ~h·kFixedStepRadius, like a step of K = r·H,
   // the accuracy there still follows h, and w = 0 is never reached. kMaxRelativeMove caps huge h.
   double theta = std::min(1.0, kFixedStepRadius * this->Ray.M * this->S.w);
-  const double speed = rate0.tail<3>().norm(), dist = this->Current.x.tail<3>().norm();
+  const double speed = this->CurrentRate.tail<3>().norm(), dist = this->Current.x.tail<3>().norm();
   if (theta * speed * this->Step > kMaxRelativeMove * dist)
     theta = kMaxRelativeMove * dist / (speed * this->Step);
 
-  // A step that would end inside the capture sphere is cut to end just inside it (bisection on
+  // A step that would end inside the capture sphere is cut to end just inside it (a root search on
   // the step fraction), so the tracer sees a capture and not the degenerate chart at Δ = 0.
   const double wCap = this->CaptureRadius > 0.0 ? 1.0 / this->CaptureRadius : 0.0;
   const bool capturing = wCap > 0.0 && this->S.w < wCap;
-  const double wIn = wCap * (1.0 + kCaptureLow), wOut = wCap * (1.0 + kCaptureHigh);
+  const double wOut = wCap * (1.0 + kCaptureHigh);
 
   // Halve the fraction until the trial is valid (finite, w kept off infinity and the horizons).
-  State best = this->S;
+  State& best = next.s;
   bool ok = false;
   for (const double theta0 = theta; theta > 1e-12 * theta0; theta *= 0.5)
   {
@@ -440,30 +435,52 @@ bool KerrMinoPropagator::advance(Segment& seg)
     return false;
   if (capturing && best.w > wOut)
   {
-    // Bisect the fraction for the first w in [w_in, w_out]; fall back to the last one short of it.
+    // Regula falsi (Illinois) on the fraction for w in [w_in, w_out], between the start (short of
+    // it) and this trial (beyond it); an invalid trial counts as beyond and halves the bracket.
+    // If none lands, the last trial short of it is kept.
+    const double mid = 0.5 * (kCaptureLow + kCaptureHigh),
+                 half = 0.5 * (kCaptureHigh - kCaptureLow);
     double lo = 0.0, hi = theta;
+    double gLo = this->S.w / wCap - 1.0 - mid, gHi = best.w / wCap - 1.0 - mid;
     State shortOf = this->S;
-    bool landed = false;
+    bool landed = false, bisect = false;
+    int side = 0;
     for (int it = 0; it < 200 && hi - lo > 1e-16 * theta; ++it)
     {
-      const double mid = 0.5 * (lo + hi);
+      double t = bisect ? 0.5 * (lo + hi) : (lo * gHi - hi * gLo) / (gHi - gLo);
+      if (!(t > lo && t < hi))
+        t = 0.5 * (lo + hi);
       State s = this->S;
-      const bool valid = this->trial(mid * this->Step, s, this->Evaluations);
-      if (valid && s.w < wIn)
+      bisect = !this->trial(t * this->Step, s, this->Evaluations);
+      if (bisect)
       {
-        lo = mid;
-        shortOf = s;
+        hi = t;
+        continue;
       }
-      else if (valid && s.w <= wOut)
+      const double g = s.w / wCap - 1.0 - mid;
+      if (std::abs(g) <= half)
       {
         best = s;
-        theta = mid;
+        theta = t;
         landed = true;
         break;
       }
+      if (g < 0.0)
+      {
+        lo = t;
+        gLo = g;
+        shortOf = s;
+        if (side == -1)
+          gHi *= 0.5;
+        side = -1;
+      }
       else
       {
-        hi = mid;
+        hi = t;
+        gHi = g;
+        if (side == 1)
+          gLo *= 0.5;
+        side = 1;
       }
     }
     if (!landed)
@@ -474,23 +491,126 @@ bool KerrMinoPropagator::advance(Segment& seg)
       theta = lo;
     }
   }
-  PhasePoint z;
-  Vec4 rate1;
-  this->output(best, z, rate1);
-  if (!z.x.allFinite() || !z.p.allFinite() || !rate1.allFinite())
-    return false;
-  this->S = best;
-  this->Current = z;
-  this->CurrentRate = rate1;
-  const double h = theta * this->Step;
-  seg.x1 = z.x;
-  seg.p1 = z.p;
-  seg.d0 = h * rate0;
-  seg.d1 = h * rate1;
-  seg.lambda1 = this->S.lambda;
+  next.h = theta * this->Step;
+  this->output(best, next.z, next.rate);
+  return next.z.x.allFinite() && next.z.p.allFinite() && next.rate.allFinite();
+}
+
+void KerrMinoPropagator::take(const Move& next, Segment& seg)
+{
+  // dλ/dσ = Σ = r² + a² u² at both ends.
+  const double a2 = this->Ray.a * this->Ray.a;
+  const double r0 = 1.0 / this->S.w, r1 = 1.0 / next.s.w;
+  seg.x0 = this->Current.x;
+  seg.p0 = this->Current.p;
+  seg.lambda0 = this->S.lambda;
+  seg.d0 = next.h * this->CurrentRate;
+  seg.dl0 = next.h * (r0 * r0 + a2 * this->S.u * this->S.u);
+  seg.x1 = next.z.x;
+  seg.p1 = next.z.p;
+  seg.d1 = next.h * next.rate;
+  seg.lambda1 = next.s.lambda;
+  seg.dl1 = next.h * (r1 * r1 + a2 * next.s.u * next.s.u);
+  seg.farField = false;
+  seg.quintic = false;
+  this->pass(next);
+}
+
+void KerrMinoPropagator::pass(const Move& next)
+{
+  this->S = next.s;
+  this->Current = next.z;
+  this->CurrentRate = next.rate;
+}
+
+double KerrMinoPropagator::nextStopRadius(double r) const
+{
+  for (const double sky : this->Far->skyRadii)
+  {
+    if (sky > r)
+      return sky;
+  }
+  return this->EscapeRadius;
+}
+
+bool KerrMinoPropagator::crossFarField(double farRadius, Segment& seg)
+{
+  const bool outgoing = this->S.vw < 0.0;
+  const double target = outgoing ? this->nextStopRadius(this->Current.x.tail<3>().norm()) : 0.0;
+  const PhasePoint from = this->Current;
+  const Vec4 fromRate = this->CurrentRate;
+  const double fromLambda = this->S.lambda;
+  const double fromSigma = [&]
+  {
+    const double r = 1.0 / this->S.w;
+    return r * r + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
+  }();
+  const Vec3 a = from.x.tail<3>();
+  int merged = 0;
+  for (;;)
+  {
+    Move next;
+    if (!this->nextStep(next))
+      return false;
+    const Vec3 b = next.z.x.tail<3>();
+    const double R = b.norm();
+    const bool sweepsLittle = a.dot(b) >= kCosMaxMergedSweep * a.norm() * R;
+    const bool joins =
+      sweepsLittle && R > farRadius && (next.s.vw < 0.0) == outgoing && !(outgoing && R >= target);
+    if (!joins)
+    {
+      if (merged == 0)
+      {
+        this->take(next, seg);
+        return true;
+      }
+      this->Pending = next;
+      this->HasPending = true;
+      break;
+    }
+    this->pass(next);
+    ++merged;
+  }
+  // The merged segment's tangents are in λ, in which the far-field ray is nearly a straight line
+  // at constant speed: its interpolant stays next to the ray, outside the objects (Segment).
+  const double dl = this->S.lambda - fromLambda;
   const double r1 = 1.0 / this->S.w;
-  seg.dl0 = h * sigma0;
-  seg.dl1 = h * (r1 * r1 + this->Ray.a * this->Ray.a * this->S.u * this->S.u);
+  const double sigma1 = r1 * r1 + this->Ray.a * this->Ray.a * this->S.u * this->S.u;
+  seg.x0 = from.x;
+  seg.p0 = from.p;
+  seg.lambda0 = fromLambda;
+  seg.d0 = (dl / fromSigma) * fromRate;
+  seg.dl0 = dl;
+  seg.x1 = this->Current.x;
+  seg.p1 = this->Current.p;
+  seg.d1 = (dl / sigma1) * this->CurrentRate;
+  seg.lambda1 = this->S.lambda;
+  seg.dl1 = dl;
+  seg.farField = true;
+  seg.quintic = false;
+  return true;
+}
+
+bool KerrMinoPropagator::advance(Segment& seg)
+{
+  if (!this->Valid)
+    return false;
+  if (this->HasPending)
+  {
+    this->HasPending = false;
+    this->take(this->Pending, seg);
+    return true;
+  }
+  if (this->Far)
+  {
+    const double farRadius = std::max(this->Far->objectRadius, kFarFieldMinRadius * this->Ray.M);
+    if (this->Current.x.tail<3>().norm() > farRadius)
+      return this->crossFarField(farRadius, seg);
+  }
+  Move next;
+  if (!this->nextStep(next))
+    return false;
+  this->take(next, seg);
   return true;
 }
 
@@ -507,8 +627,8 @@ void KerrMinoPropagator::output(const State& s, PhasePoint& z, Vec4& dxds) const
   else if (u2 < c.u2Low)
     u = std::copysign(std::sqrt(c.u2Low), u);
   const double sin2 = std::max(0.0, 1.0 - u * u), sinT = std::sqrt(sin2);
-  const double c2 = r * r + a * a, cc = std::sqrt(c2);
-  const double Sigma = r * r + a * a * u * u;
+  const double c2 = r * r + a * a;
+  const double Sigma = r * r + a * a * u * u, invSigma = 1.0 / Sigma;
 
   // On-shell velocities with the signs of the integrated ones: v_w² = R_w, p_θ² = Θ(θ).
   const double vw = std::copysign(std::sqrt(std::max(0.0, radialPotential(c, w))), s.vw);
@@ -523,18 +643,23 @@ void KerrMinoPropagator::output(const State& s, PhasePoint& z, Vec4& dxds) const
   const double pr = X * vw > 0.0 ? c.K * w * w / (X + vw) - E : (X - vw) / deltaW(c, w) - E;
 
   // Invert p_r = (r P − aL)/c² + u p_z, p_θ = (u/ sin θ)P − r sin θ p_z, L = x p_y − y p_x, in the
-  // frame ê = (r + ia)e^{iφ}/c of x⊥ (regular on the axis; the determinant is Σ/c).
+  // frame c ê = (r + ia)e^{iφ} of x⊥ (regular on the axis; the determinant is Σ/c): p⊥ = q c ê
+  // + m i c ê.
   const double A1 = pr + a * L / c2;
-  const double pPar = cc * (u * pTheta + r * sinT * A1) / Sigma;
-  const double pPerp = sinT > 0.0 ? L / (cc * sinT) : 0.0;
-  const double pz = (u * c2 * A1 - r * sinT * pTheta) / Sigma;
+  const double q = (u * pTheta + r * sinT * A1) * invSigma;
+  const double m = sinT > 0.0 ? L / (c2 * sinT) : 0.0;
+  const double pz = (u * c2 * A1 - r * sinT * pTheta) * invSigma;
   const double phi = s.phiRadial + s.polar + (s.poleChart ? s.azimuth : 0.0);
   const double cp = std::cos(phi), sp = std::sin(phi);
-  const double ex = (r * cp - a * sp) / cc, ey = (r * sp + a * cp) / cc;
-  z.x = Vec4(s.t, sinT * cc * ex, sinT * cc * ey, r * u);
-  z.p = Vec4(-E, pPar * ex - pPerp * ey, pPar * ey + pPerp * ex, pz);
-  Vec4 dHdx, dHdp;
-  this->St.gradient(z.x, z.p, dHdx, dHdp);
-  dxds = Sigma * dHdp;
+  const double ex = r * cp - a * sp, ey = r * sp + a * cp;
+  z.x = Vec4(s.t, sinT * ex, sinT * ey, r * u);
+  z.p = Vec4(-E, q * ex - m * ey, q * ey + m * ex, pz);
+  // dx/dσ = Σ ∂H/∂p with H = ½(η^{μν} − f l^μ l^ν) p_μ p_ν (KerrSpacetime): at this point
+  // l_i = ((rx + ay)/c², (ry − ax)/c², z/r) = (sin θ cos φ, sin θ sin φ, cos θ) and
+  // f = 2Mr³/(r⁴ + a²z²) = 2Mr/Σ, so Σ f s = 2Mr s with s = l^μ p_μ.
+  const double lx = sinT * cp, ly = sinT * sp;
+  const double fs = 2.0 * c.M * r * (E + lx * z.p[1] + ly * z.p[2] + u * pz);
+  dxds =
+    Vec4(Sigma * E + fs, Sigma * z.p[1] - fs * lx, Sigma * z.p[2] - fs * ly, Sigma * pz - fs * u);
 }
 }

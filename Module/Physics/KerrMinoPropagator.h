@@ -4,6 +4,7 @@
 
 #include "Propagator.h"
 
+#include <limits>
 #include <vector>
 
 namespace asrt
@@ -14,6 +15,7 @@ namespace detail
 struct KerrMinoRay
 {
   double M = 0, a = 0, rPlus = 0, rMinus = 0;
+  double invDelta = 0; ///< 1/(r₊ − r₋), infinite for the extremal hole
   double E = 0, L = 0, Q = 0;
   double K = 0;    ///< Q + (L − aE)², the separation constant of the radial equation
   double a2E2 = 0; ///< a²E²
@@ -52,6 +54,12 @@ struct KerrMinoState
 /// (never more than a quarter): segments stay interpolable, accuracy still follows h, and
 /// infinity (w = 0) is never reached. A step that would end inside the capture radius ends just
 /// inside it instead.
+///
+/// With a far field (setFarField), the steps outside the scene's objects are the same, but those
+/// that stay outside them (and, going out, inside the next sky sphere) are reported as one segment.
+/// The segments that may meet an object, the step onto a sky sphere among them, are exactly those
+/// of the ray without a far field: a shorter last step landing on the sphere cost more in its root
+/// search than the interpolated step.
 class ASRTPHYSICS_EXPORT KerrMinoPropagator final : public Propagator
 {
 public:
@@ -64,6 +72,7 @@ public:
   double affineParameter() const override { return this->S.lambda; }
   long evaluations() const override { return this->Evaluations; }
   void setLimits(double escapeRadius, double captureRadius) override;
+  void setFarField(const FarField* farField) override { this->Far = farField; }
 
   /// Constants of motion of the current ray (exact by construction).
   double energy() const { return this->Ray.E; }
@@ -71,8 +80,29 @@ public:
   double carterConstant() const { return this->Ray.Q; }
 
 private:
+  /// One step from the current state, not yet taken: the state it ends in, its end point and
+  /// dx/dσ there, and its length in σ.
+  struct Move
+  {
+    detail::KerrMinoState s;
+    PhasePoint z;
+    Vec4 rate = Vec4::Zero();
+    double h = 0;
+  };
   bool trial(double h, detail::KerrMinoState& s, long& evaluations) const;
   void output(const detail::KerrMinoState& s, PhasePoint& z, Vec4& dxds) const;
+  /// The next step as the fixed-step rule makes it (shortened to end just inside the capture
+  /// sphere); false on numerical failure.
+  bool nextStep(Move& next);
+  /// Takes `next` and describes it as one segment.
+  void take(const Move& next, Segment& seg);
+  /// Takes `next` without a segment of its own (it joins a far-field segment).
+  void pass(const Move& next);
+  /// Through the far field in one segment, while the steps stay outside the scene's objects and,
+  /// going out, inside the next sky sphere (or the escape sphere).
+  bool crossFarField(double farRadius, Segment& seg);
+  /// The next sky sphere above radius r, else the escape sphere.
+  double nextStopRadius(double r) const;
 
   const Spacetime& St;
   double Step;                       ///< in σ: the given h divided by M
@@ -84,6 +114,11 @@ private:
   bool Valid = false;
   long Evaluations = 0;
   double CaptureRadius = 0;
+  double EscapeRadius = std::numeric_limits<double>::infinity();
+  const FarField* Far = nullptr;
+  /// A step computed while merging far-field steps that could not join them: the next segment.
+  Move Pending;
+  bool HasPending = false;
 };
 }
 

@@ -7,19 +7,6 @@
 
 namespace asrt
 {
-namespace
-{
-/// Inside this many M the propagator always steps segment by segment, whatever the far field says:
-/// there an outgoing ray may still turn back (the photon sphere is at ≤ 3M) and rays wind.
-constexpr double innerFarFieldLimit = 4.0;
-/// Largest angle about the hole one merged far-field segment may sweep: the tracer's per-segment
-/// winding (the angle between the ends) is exact only below π.
-constexpr double maxMergedSweep = 1.5;
-/// A far-field segment ends this far (relative) beyond the sphere it lands on, so that the sphere's
-/// crossing lies inside the segment, next to its exact end.
-constexpr double landingMargin = 4e-12;
-}
-
 PlanarOrbitPropagator::PlanarOrbitPropagator(const Spacetime& st, double relativeTolerance,
                                              double absoluteTolerance)
   : M(st.mass())
@@ -85,6 +72,13 @@ void PlanarOrbitPropagator::start(const PhasePoint& z)
                    std::min(maxStepFraction, 0.5 * std::pow(this->RelTol, 1.0 / 8));
 }
 
+void PlanarOrbitPropagator::start(const PhasePoint& z, double firstStep)
+{
+  this->start(z);
+  if (firstStep > 0.0 && std::isfinite(firstStep))
+    this->NextStep = firstStep;
+}
+
 PlanarOrbitPropagator::Plane PlanarOrbitPropagator::slope(const Plane& s)
 {
   ++this->Evaluations;
@@ -130,15 +124,7 @@ PhasePoint PlanarOrbitPropagator::state() const
 
 double PlanarOrbitPropagator::nextStopRadius(double r) const
 {
-  if (this->Far)
-  {
-    for (const double sky : this->Far->skyRadii)
-    {
-      if (sky > r)
-        return sky;
-    }
-  }
-  return this->EscapeRadius;
+  return asrt::nextStopRadius(this->Far, r, this->EscapeRadius);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -364,25 +350,10 @@ bool PlanarOrbitPropagator::runOut(double target)
 
 void PlanarOrbitPropagator::finishSegment(Segment& seg, bool farField)
 {
-  // The segment runs from the end point kept since the last one to the current state; d²x/dτ² =
-  // h² d²x/dλ², with t's second derivative left out (the scene does not look at t, and its ends
-  // and slopes stay exact).
-  const EndPoint& a = this->Start;
+  // The segment runs from the end point kept since the last one to the current state, with t's
+  // second derivative left out (the scene does not look at t, and its ends and slopes stay exact).
   const EndPoint b = this->endPoint();
-  const double h = b.lambda - a.lambda;
-  seg.x0 = a.x;
-  seg.p0 = a.p;
-  seg.d0 = h * a.v;
-  seg.a0 = h * h * a.a;
-  seg.x1 = b.x;
-  seg.p1 = b.p;
-  seg.d1 = h * b.v;
-  seg.a1 = h * h * b.a;
-  seg.quintic = true;
-  seg.lambda0 = a.lambda;
-  seg.lambda1 = b.lambda;
-  seg.dl0 = seg.dl1 = h;
-  seg.farField = farField;
+  setAffineSegment(seg, this->Start, b, farField);
   this->Start = b;
 }
 

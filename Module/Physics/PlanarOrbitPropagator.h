@@ -36,6 +36,9 @@ public:
   /// velocity to (atol + rtol)·|v|.
   PlanarOrbitPropagator(const Spacetime& st, double relativeTolerance, double absoluteTolerance);
   void start(const PhasePoint& z) override;
+  /// Starts a ray whose first step is to try `firstStep` (affine), as one taking over a ray that
+  /// is already far out does: the default start is sized for rays from the camera.
+  void start(const PhasePoint& z, double firstStep);
   bool advance(Segment& seg) override;
   PhasePoint state() const override;
   double affineParameter() const override { return this->Lambda; }
@@ -52,6 +55,15 @@ public:
   /// Largest integration step, as a fraction of r/|v|; a step is cut into segments of at most
   /// maxStepFraction where an object may be near.
   static constexpr double maxIntegrationFraction = 0.5;
+  /// Inside this many M the far field is never used, whatever the scene says: there an outgoing
+  /// ray may still turn back (the photon sphere is at ≤ 3M) and rays wind.
+  static constexpr double innerFarFieldLimit = 4.0;
+  /// Largest angle about the hole one merged far-field segment may sweep: the tracer's per-segment
+  /// winding (the angle between the ends) is exact only below π.
+  static constexpr double maxMergedSweep = 1.5;
+  /// A far-field segment ends this far (relative) beyond the sphere it lands on, so that the
+  /// sphere's crossing lies inside the segment, next to its exact end.
+  static constexpr double landingMargin = 4e-12;
 
 private:
   /// The plane state: position (X, Y), velocity (U, V) = d/dλ, and Kerr–Schild t.
@@ -102,11 +114,8 @@ private:
   Vec4 position(const Plane& s) const;
   Vec4 momentum(const Plane& s) const;
   /// A state in the Kerr–Schild chart, as a segment's end needs it.
-  struct EndPoint
-  {
-    Vec4 x, p, v, a; ///< position, momentum, dx/dλ, d²x/dλ² (t's left at 0)
-    double lambda = 0;
-  };
+  /// A state in the Kerr–Schild chart, as a segment's end needs it (t's acceleration left at 0).
+  using EndPoint = AffineEnd;
   /// The current state and slope as an EndPoint.
   EndPoint endPoint() const;
   double f(double r) const { return (2.0 * this->M - this->Q2 / r) / r; }

@@ -48,6 +48,19 @@ struct Segment
   Vec4 tangent(double tau) const;
 };
 
+/// A step's end as a propagator stepping in the affine parameter knows it: position, momentum,
+/// dx/dλ and d²x/dλ² (its t component may be left at 0), and λ.
+struct AffineEnd
+{
+  Vec4 x = Vec4::Zero(), p = Vec4::Zero(), v = Vec4::Zero(), a = Vec4::Zero();
+  double lambda = 0;
+};
+
+/// The segment from `a` to `b` interpolated in λ: quintic Hermite in τ = (λ − λ_a)/h with
+/// dx/dτ = h dx/dλ and d²x/dτ² = h² d²x/dλ² at the ends, and λ linear in τ.
+ASRTPHYSICS_EXPORT void setAffineSegment(Segment& seg, const AffineEnd& a, const AffineEnd& b,
+                                         bool farField);
+
 /// Settings of a propagation method; `method` names a row of methodTable().
 struct IntegratorConfig
 {
@@ -71,6 +84,10 @@ struct FarField
   /// whose whole path stays nearer its start than that cannot hit one, and may be long.
   std::function<double(const Vec3&)> objectDistance;
 };
+
+/// Where a ray going out from radius r stops next: the smallest sky radius of `far` beyond r, or
+/// the escape radius (`far` may be null).
+ASRTPHYSICS_EXPORT double nextStopRadius(const FarField* far, double r, double escapeRadius);
 
 class ASRTPHYSICS_EXPORT Propagator
 {

@@ -198,6 +198,35 @@ bool SceneObject::intersect(const Segment& seg, SurfaceHit& hit) const
       break;
     }
   }
+  if (!converged && f(0.0) > 0.0 && f(1.0) > 0.0)
+  {
+    // A closed surface whose chord enters it while neither Newton nor a bracket about the chord's
+    // crossing finds the ray doing so: either the ray passes through both walls further off, or
+    // it grazes the surface outside, where the chord cuts the corner by its sagitta. Samples along
+    // the ray tell which; a ray that stays outside all along hits nothing here.
+    constexpr int samples = 32;
+    double lo = 0.0;
+    for (int k = 1; k <= samples && !converged; ++k)
+    {
+      double hi = static_cast<double>(k) / samples;
+      if (!(f(hi) <= 0.0))
+      {
+        lo = hi;
+        continue;
+      }
+      for (int m = 0; m < 200; ++m)
+      {
+        const double mid = 0.5 * (lo + hi);
+        if (!(mid > lo && mid < hi))
+          break;
+        (f(mid) > 0.0 ? lo : hi) = mid;
+      }
+      t = hi;
+      converged = std::isfinite(f(t));
+    }
+    if (!converged)
+      return false;
+  }
 
   Vec3 dir = b - a;
   Vec3 x = chord;

@@ -42,6 +42,7 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -229,6 +230,51 @@ TEST(DataFiles, FailuresThrowNameTheFileAndLeaveNothing)
   EXPECT_THROW(writePng(grey, dir + "/grey.png"), std::runtime_error);
   EXPECT_THROW(writeVti(nullptr, dir + "/none.vti"), std::runtime_error);
   EXPECT_TRUE(filesIn(dir).empty());
+}
+
+TEST(DataFiles, SideBySideWritesAreTheFilesWrittenAlone)
+{
+  // One image's PNG and VTI encoded at once read the same arrays: each file must come out byte
+  // for byte as written alone, and a failed write must throw after the others ended, the set then
+  // leaving nothing behind.
+  const std::string dir = scratch("side");
+  vtkSmartPointer<vtkImageData> image = gradient(320, 200);
+  writePng(image, dir + "/alone.png");
+  writeVti(image, dir + "/alone.vti");
+  {
+    AtomicFileSet files;
+    TemporaryFile& png = files.add(dir + "/both.png");
+    TemporaryFile& vti = files.add(dir + "/both.vti");
+    writeSideBySide({ [&] { writePng(image, png); }, [&] { writeVti(image, vti); } });
+    files.commit();
+  }
+  auto bytes = [](const std::string& path)
+  {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(bytes(dir + "/both.png"), bytes(dir + "/alone.png"));
+  EXPECT_EQ(bytes(dir + "/both.vti"), bytes(dir + "/alone.vti"));
+
+  const std::string failing = scratch("side-fail");
+  vtkNew<vtkImageData> grey; // no colours: its PNG cannot be written
+  grey->SetDimensions(2, 2, 1);
+  grey->AllocateScalars(VTK_DOUBLE, 1);
+  bool vtiWritten = false;
+  {
+    AtomicFileSet files;
+    TemporaryFile& png = files.add(failing + "/grey.png");
+    TemporaryFile& vti = files.add(failing + "/image.vti");
+    EXPECT_THROW(writeSideBySide({ [&] { writePng(grey, png); },
+                                   [&]
+                                   {
+                                     writeVti(image, vti);
+                                     vtiWritten = true;
+                                   } }),
+                 std::runtime_error);
+  }
+  EXPECT_TRUE(vtiWritten) << "the other write must run to its end";
+  EXPECT_TRUE(filesIn(failing).empty());
 }
 
 TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary)

@@ -3,6 +3,7 @@
 // reported. The Fig. 1 scene at 32 × 32 is traced once and shared: every other run is compared
 // with it, so that a disagreement shows up as a difference between two outputs of the filter.
 #include "FiltersTestUtilities.h"
+#include "Propagator.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -444,7 +445,9 @@ TEST(GeodesicSource, PresetReplacesTheIntegratorAndMethodStepRefineIt)
         s->SetIntegrationPreset(name);
       });
     ASSERT_TRUE(f.errors.empty()) << f.errors.front();
-    EXPECT_EQ(fieldString(f.hits, "IntegrationMethod"), "PlanarOrbit") << name;
+    EXPECT_EQ(fieldString(f.hits, "IntegrationMethod"),
+              asrt::defaultMethod(asrt::SchwarzschildSpacetime(1.0)))
+      << name;
     EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 0), rtol) << name;
     EXPECT_DOUBLE_EQ(fieldValue(f.hits, "Tolerances", 1), 1e-2 * rtol) << name;
   }
@@ -669,17 +672,20 @@ void checkPolylines(vtkPolyData* lines, const std::vector<Pixel>& chosen)
     lines->GetPoint(ids->GetId(0), first);
     lines->GetPoint(ids->GetId(ids->GetNumberOfIds() - 1), last);
     ref->GetPoint(k, hit);
+    // The polyline is traced without the far field and the record with it (FrameTracer), and a
+    // propagator may step the two differently (PlanarSeries hands the far field to PlanarOrbit):
+    // they agree to the balanced preset's accuracy, far below anything a picture shows.
     for (int d = 0; d < 3; ++d)
     {
       EXPECT_EQ(first[d], eye[d]) << "does not start at the eye";
-      EXPECT_NEAR(last[d], hit[d], 1e-9 * (1 + std::abs(hit[d])))
+      EXPECT_NEAR(last[d], hit[d], 1e-7 * (1 + std::abs(hit[d])))
         << "does not end at the record's hit point";
     }
     EXPECT_EQ(lineTerm->GetComponent(c, 0),
               ref->GetPointData()->GetArray("Termination")->GetComponent(k, 0));
     const double pathLength = ref->GetPointData()->GetArray("PathLength")->GetComponent(k, 0);
     EXPECT_NEAR(lambda->GetComponent(ids->GetId(ids->GetNumberOfIds() - 1), 0), pathLength,
-                1e-11 * pathLength)
+                1e-8 * pathLength)
       << "λ at the end is not the record's path length";
     EXPECT_EQ(lambda->GetComponent(ids->GetId(0), 0), 0.0);
     const double maxAbsH = ref->GetPointData()->GetArray("MaxAbsH")->GetComponent(k, 0);
@@ -1088,4 +1094,40 @@ TEST(GeodesicSourceErrors, PixelSubsetWithThreeComponents)
       s->SetPixelSubset(ijk);
     },
     [](vtkGeodesicSource* s) { s->SetPixelSubset(nullptr); }, { "component" });
+}
+
+TEST(GeodesicSource, WithoutHitPointsTheImageIsTheSame)
+{
+  // GenerateHitPoints off: the hits output keeps the frame's field data but no point, and the
+  // image's every array equals the one traced with the hit points, value for value.
+  auto configure = [](bool hits)
+  {
+    return [hits](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig1-cylinders.json").c_str());
+      s->SetResolution(40, 30);
+      s->SetGenerateHitPoints(hits);
+    };
+  };
+  const Frame with = traceFrame(configure(true));
+  const Frame without = traceFrame(configure(false));
+  ASSERT_TRUE(with.errors.empty() && without.errors.empty());
+  EXPECT_EQ(with.hits->GetNumberOfPoints(), 40 * 30);
+  EXPECT_EQ(without.hits->GetNumberOfPoints(), 0);
+  EXPECT_EQ(fieldValue(without.hits, "Resolution", 0), 40.0);
+  vtkPointData* a = with.image->GetPointData();
+  vtkPointData* b = without.image->GetPointData();
+  ASSERT_EQ(a->GetNumberOfArrays(), b->GetNumberOfArrays());
+  for (int k = 0; k < a->GetNumberOfArrays(); ++k)
+  {
+    vtkDataArray* x = a->GetArray(k);
+    vtkDataArray* y = b->GetArray(x->GetName());
+    ASSERT_NE(y, nullptr) << x->GetName();
+    ASSERT_EQ(x->GetNumberOfTuples(), y->GetNumberOfTuples()) << x->GetName();
+    ASSERT_EQ(x->GetNumberOfComponents(), y->GetNumberOfComponents()) << x->GetName();
+    for (vtkIdType t = 0; t < x->GetNumberOfTuples(); ++t)
+      for (int c = 0; c < x->GetNumberOfComponents(); ++c)
+        ASSERT_EQ(x->GetComponent(t, c), y->GetComponent(t, c)) << x->GetName() << " " << t;
+  }
+  EXPECT_STREQ(b->GetScalars()->GetName(), "Colors");
 }

@@ -64,10 +64,11 @@ TEST(Extremes, ManyWindingsWithin1e8OfCriticalImpactParameter)
     EXPECT_NEAR(alpha, truth, 1e-6 * truth) << method;
     EXPECT_EQ(r.imageOrder(), static_cast<int>(std::floor((truth + M_PI) / M_PI))) << method;
   }
+  for (const char* method : { "PlanarOrbit", "PlanarSeries" })
   {
-    // The adaptive planar orbit at a tolerance that survives the e^α ≈ 7·10⁷ amplification.
+    // The adaptive planar orbits at a tolerance that survives the e^α ≈ 7·10⁷ amplification.
     IntegratorConfig cfg;
-    cfg.method = "PlanarOrbit";
+    cfg.method = method;
     cfg.relativeTolerance = 1e-14;
     cfg.absoluteTolerance = 1e-16;
     auto prop = makePropagator(st, cfg);
@@ -75,9 +76,9 @@ TEST(Extremes, ManyWindingsWithin1e8OfCriticalImpactParameter)
     opts.escapeRadius = 1000.0;
     const PhasePoint z = equatorialRay(st, 1000.0, b);
     const TraceResult r = traceRay(st, *prop, z, opts);
-    ASSERT_EQ(r.termination, Termination::Escaped);
-    EXPECT_NEAR(measuredDeflection(r, z, b, 1.0), truth, 1e-6 * truth);
-    EXPECT_EQ(r.imageOrder(), static_cast<int>(std::floor((truth + M_PI) / M_PI)));
+    ASSERT_EQ(r.termination, Termination::Escaped) << method;
+    EXPECT_NEAR(measuredDeflection(r, z, b, 1.0), truth, 1e-6 * truth) << method;
+    EXPECT_EQ(r.imageOrder(), static_cast<int>(std::floor((truth + M_PI) / M_PI))) << method;
   }
   // Just inside b_c the same ray is captured after winding.
   const PhasePoint inside = equatorialRay(st, 1000.0, bc * (1.0 - 1e-8));
@@ -95,7 +96,8 @@ TEST(Extremes, ObserverAtAMillionM)
        std::vector<std::pair<std::string, double>>{ { "SchwarzschildSplit4", 0.005 },
                                                     { "GaussLegendre4", 0.005 },
                                                     { "RK4", 0.005 },
-                                                    { "PlanarOrbit", 0.05 } })
+                                                    { "PlanarOrbit", 0.05 },
+                                                    { "PlanarSeries", 0.05 } })
   {
     const PhasePoint z = equatorialRay(st, R, b);
     const TraceResult r = trace(st, method, h, z, R);
@@ -125,8 +127,8 @@ TEST(Extremes, RaysBornAt2001MHeadingOutwards)
                 { 5.0, Termination::Escaped },
                 { 5.4, Termination::Captured },
                 { 10.0, Termination::Captured } };
-  for (const char* method :
-       { "SchwarzschildSplit4", "GaussLegendre4", "RK4", "DormandPrince54", "PlanarOrbit" })
+  for (const char* method : { "SchwarzschildSplit4", "GaussLegendre4", "RK4", "DormandPrince54",
+                              "PlanarOrbit", "PlanarSeries" })
   {
     for (const auto& c : cases)
     {
@@ -144,7 +146,7 @@ TEST(Extremes, RaysGrazingTheHorizonAreCaptured)
 {
   const SchwarzschildSpacetime st(1.0);
   for (const char* method :
-       { "SchwarzschildSplit4", "GaussLegendre4", "RK4", "Tao4", "PlanarOrbit" })
+       { "SchwarzschildSplit4", "GaussLegendre4", "RK4", "Tao4", "PlanarOrbit", "PlanarSeries" })
   {
     // Tangential at 2.01 M (p_r = 0 in Schwarzschild's chart, inside the photon sphere) and
     // incoming at b = b_c(1 − 10⁻⁴): both fall in, neither produces NaN.
@@ -172,7 +174,8 @@ TEST(Extremes, StepsFrom1e4To10)
   for (const MethodInfo& m : methodTable())
   {
     if (m.family == MethodFamily::Analytic || m.name.rfind("Kerr", 0) == 0 ||
-        m.name == "DormandPrince54" || m.name == "PlanarOrbit") // adaptive: own steps
+        m.name == "DormandPrince54" || m.name == "PlanarOrbit" ||
+        m.name == "PlanarSeries") // adaptive: own steps
       continue;
     // A tiny step runs into the budget; a huge one must still end cleanly (escape, capture or a
     // reported numerical failure) rather than hang or return NaN.

@@ -1,8 +1,9 @@
-// The planar-orbit fast path on whole frames, against a tight trace by the general method
-// (Dormand–Prince 5(4) on the full Hamiltonian at rtol 1e-13) traced here: pixel by pixel, the same
-// object, ending and image order except at an object's edge, and hit points within the preset's
-// error. Also: the far field keeps that accuracy while saving segments, Reissner–Nordström's
-// critical impact parameter separates escape from capture, and a radial ray falls straight in.
+// The planar-orbit fast paths (PlanarOrbit, in λ, and PlanarSeries, in the orbit's angle) on whole
+// frames, against a tight trace by the general method (Dormand–Prince 5(4) on the full Hamiltonian
+// at rtol 1e-13) traced here: pixel by pixel, the same object, ending and image order except at an
+// object's edge, and hit points within the preset's error. Also: the far field keeps that accuracy
+// while saving segments, Reissner–Nordström's critical impact parameter separates escape from
+// capture, and a radial ray falls straight in.
 #include "CameraFixtures.h"
 #include "FrameTracer.h"
 
@@ -101,14 +102,29 @@ Comparison compare(const std::vector<RayRecord>& fast, const std::vector<RayReco
 }
 }
 
-TEST(PlanarOrbitFrames, MatchATightGeneralTracePixelByPixel)
+class PlanarOrbitFrames : public ::testing::TestWithParam<std::string>
+{
+protected:
+  IntegratorConfig preset(const char* name) const
+  {
+    IntegratorConfig c = integratorPreset(name);
+    c.method = GetParam();
+    return c;
+  }
+};
+
+TEST(PlanarOrbitDefault, AutoPicksAPlanarOrbitForSchwarzschild)
+{
+  const SceneDescription d = cylinderScene(0.0, 4, 4, integratorPreset("balanced"));
+  const std::string method = FrameTracer(d).description().integrator.method;
+  EXPECT_TRUE(method == "PlanarOrbit" || method == "PlanarSeries") << method;
+}
+
+TEST_P(PlanarOrbitFrames, MatchATightGeneralTracePixelByPixel)
 {
   const int W = 48, H = 48;
   const std::vector<RayRecord> reference = traceAll(cylinderScene(0.0, W, H, tightGeneral()));
-  IntegratorConfig balanced = integratorPreset("balanced");
-  const SceneDescription fastScene = cylinderScene(0.0, W, H, balanced);
-  ASSERT_EQ(FrameTracer(fastScene).description().integrator.method, "PlanarOrbit")
-    << "auto picks the planar orbit for Schwarzschild";
+  const SceneDescription fastScene = cylinderScene(0.0, W, H, this->preset("balanced"));
   const std::vector<RayRecord> fast = traceAll(fastScene);
   const Comparison c = compare(fast, reference, W, H);
   // The frame must exercise what the fast path changes: both objects, the sky, the shadow, and
@@ -137,27 +153,32 @@ TEST(PlanarOrbitFrames, MatchATightGeneralTracePixelByPixel)
   }
 }
 
-TEST(PlanarOrbitFrames, ErrorFallsWithTheTolerance)
+TEST_P(PlanarOrbitFrames, ErrorFallsWithTheTolerance)
 {
-  // An adaptive method of order 8: tightening rtol by 10⁴ must shrink the hit error by a wide
-  // margin (not necessarily 10⁴: the error sits near the reference's floor at the tight end).
+  // An adaptive method: tightening rtol by 10⁴ must shrink the hit error by a wide margin (not
+  // necessarily 10⁴: the error sits near the reference's floor at the tight end). From rtol 1e-5,
+  // where both methods' errors lie far above that floor (the series already reach it at the fast
+  // preset's 1e-8).
   const int W = 24, H = 24;
   const std::vector<RayRecord> reference = traceAll(cylinderScene(0.0, W, H, tightGeneral()));
-  IntegratorConfig loose = integratorPreset("fast"), tight = integratorPreset("accurate");
-  loose.method = tight.method = "PlanarOrbit";
+  IntegratorConfig loose = this->preset("fast"), tight = this->preset("fast");
+  loose.relativeTolerance = 1e-5;
+  loose.absoluteTolerance = 1e-7;
+  tight.relativeTolerance = 1e-9;
+  tight.absoluteTolerance = 1e-11;
   const Comparison a = compare(traceAll(cylinderScene(0.0, W, H, loose)), reference, W, H);
   const Comparison b = compare(traceAll(cylinderScene(0.0, W, H, tight)), reference, W, H);
   ASSERT_GT(a.p99(), 0.0);
-  EXPECT_LT(b.p99(), 0.01 * a.p99()) << "rtol 1e-8: " << a.p99() << ", 1e-12: " << b.p99();
+  EXPECT_LT(b.p99(), 0.01 * a.p99()) << "rtol 1e-5: " << a.p99() << ", 1e-9: " << b.p99();
 }
 
-TEST(PlanarOrbitFrames, FarFieldKeepsTheAccuracyAndSavesSegments)
+TEST_P(PlanarOrbitFrames, FarFieldKeepsTheAccuracyAndSavesSegments)
 {
   // With and without the far field, against the same tight general trace: the one-segment far
   // field (sky landing included) must be as good as stepping the whole way out.
   const int W = 32, H = 32;
   const std::vector<RayRecord> reference = traceAll(cylinderScene(0.0, W, H, tightGeneral()));
-  const SceneDescription d = cylinderScene(0.0, W, H, integratorPreset("balanced"));
+  const SceneDescription d = cylinderScene(0.0, W, H, this->preset("balanced"));
   const std::vector<RayRecord> on = traceAll(d, true), off = traceAll(d, false);
   const Comparison withFar = compare(on, reference, W, H);
   const Comparison without = compare(off, reference, W, H);
@@ -183,14 +204,13 @@ TEST(PlanarOrbitFrames, FarFieldKeepsTheAccuracyAndSavesSegments)
   EXPECT_LT(steps[0], 0.95 * steps[1]) << "the far field must save segments";
 }
 
-TEST(PlanarOrbitFrames, ReissnerNordstromCriticalImpactParameter)
+TEST_P(PlanarOrbitFrames, ReissnerNordstromCriticalImpactParameter)
 {
   // b_c of Reissner–Nordström (physics.md): rays from afar just above it escape after winding,
   // just below it are captured; the planar orbit carries the charge term −2Q²u³.
   const ReissnerNordstromSpacetime st(1.0, 0.8);
   const double bc = st.criticalImpactParameter();
-  IntegratorConfig cfg = integratorPreset("balanced");
-  cfg.method = "PlanarOrbit";
+  const IntegratorConfig cfg = this->preset("balanced");
   for (const double factor : { 1.0 + 1e-5, 1.0 - 1e-5 })
   {
     const double b = bc * factor, R = 1000.0;
@@ -225,11 +245,11 @@ TEST(PlanarOrbitFrames, ReissnerNordstromCriticalImpactParameter)
   }
 }
 
-TEST(PlanarOrbitFrames, RadialRayFallsStraightIn)
+TEST_P(PlanarOrbitFrames, RadialRayFallsStraightIn)
 {
   const SchwarzschildSpacetime st(1.0);
   IntegratorConfig cfg;
-  cfg.method = "PlanarOrbit";
+  cfg.method = GetParam();
   auto prop = makePropagator(st, cfg);
   PhasePoint z;
   z.x = Vec4(0.0, 3.0, 4.0, 12.0); // r = 13
@@ -246,3 +266,8 @@ TEST(PlanarOrbitFrames, RadialRayFallsStraightIn)
   // dr/dλ = −E on an ingoing radial ray: λ is the radial distance covered.
   EXPECT_NEAR(r.affineLength, 13.0 - end.norm(), 1e-9);
 }
+
+INSTANTIATE_TEST_SUITE_P(BothPlanarMethods, PlanarOrbitFrames,
+                         ::testing::Values("PlanarOrbit", "PlanarSeries"),
+                         [](const ::testing::TestParamInfo<std::string>& info)
+                         { return info.param; });

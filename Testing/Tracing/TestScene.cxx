@@ -692,3 +692,22 @@ TEST(SceneGeometry, SurfacePointInvertsSurfaceCoordinates)
   EXPECT_NEAR(sky.surfacePoint(0.3, 0.7).norm(), 500.0, 1e-10);
   EXPECT_NEAR((ball.surfacePoint(0.3, 0.7) - Vec3(3, -2, 1)).norm(), 2.0, 1e-12);
 }
+
+TEST(SceneRefine, AGrazingRayWhoseChordCutsIntoASphereMissesIt)
+{
+  // A step along the circle of radius 10 about the centre of a sphere of radius 9.9: the ray stays
+  // 0.1 outside it, while the step's chord dips to 10 cos 0.2 = 9.80, inside.
+  const Sphere ball(1, "b", solid(), Vec3::Zero(), 9.9);
+  const Segment seg = arc(10.0, 0.3, 0.4);
+  SurfaceHit hit;
+  ASSERT_TRUE(ball.intersect(straight(seg.x0.tail<3>(), seg.x1.tail<3>()), hit))
+    << "the chord itself enters the sphere";
+  for (double tau = 0.0; tau <= 1.0; tau += 1.0 / 64)
+    ASSERT_GT(seg.position(tau).tail<3>().norm(), 9.9) << "the ray must stay outside";
+  EXPECT_FALSE(ball.intersect(seg, hit));
+  // The same step through a sphere it does enter is hit on its surface.
+  const Vec3 centre(10.0 * std::cos(0.5), 10.0 * std::sin(0.5), 0);
+  const Sphere inner(2, "c", solid(), centre, 0.3);
+  ASSERT_TRUE(inner.intersect(seg, hit));
+  EXPECT_NEAR((hit.point - centre).norm(), 0.3, 1e-9);
+}
