@@ -341,6 +341,61 @@ std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
   }
   return remaining;
 }
+PathSurface surfaceOf(const RayRecord& r)
+{
+  return { r.objectId, r.termination, r.winding };
+}
+
+/// Whether two pixels show the same surface the same way: the same object, the same termination
+/// and a winding continuous between them.
+bool sameSurface(const PathSurface& a, const PathSurface& b)
+{
+  return a.objectId == b.objectId && a.termination == b.termination &&
+         std::abs(a.winding - b.winding) < kWindingJump;
+}
+
+/// The untraced predicted pixels p next to (8-neighbours of) the traced pixels q of `from` where
+/// q shows another surface than p's prediction and no inner key showed q's surface at q with
+/// p's at p, in increasing order: an edge runs between them at t that the keys did not see there.
+std::vector<std::int32_t> contradictedNeighbours(const PathFrame& frame,
+                                                 const std::vector<std::int32_t>& from,
+                                                 const std::vector<char>& traced,
+                                                 const std::vector<std::uint8_t>& methods)
+{
+  const int w = frame.width, h = frame.height;
+  std::vector<char> chosen(frame.records.size(), 0);
+  std::vector<std::int32_t> out;
+  for (std::int32_t q : from)
+  {
+    const std::size_t uq = static_cast<std::size_t>(q);
+    const PathSurface atQ = surfaceOf(frame.records[uq]);
+    const int i = q % w, j = q / w;
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di)
+      {
+        const int x = i + di, y = j + dj;
+        if (x < 0 || x >= w || y < 0 || y >= h)
+          continue;
+        const std::size_t p = static_cast<std::size_t>(y) * w + x;
+        if (traced[p] || chosen[p] || !isPrediction(methods[p]))
+          continue;
+        const PathSurface atP = surfaceOf(frame.records[p]);
+        if (sameSurface(atQ, atP))
+          continue;
+        bool seen = false;
+        for (const std::vector<PathSurface>& key : frame.innerKeys)
+          seen = seen || (!key.empty() && sameSurface(key[uq], atQ) && sameSurface(key[p], atP));
+        if (!seen)
+        {
+          chosen[p] = 1;
+          out.push_back(static_cast<std::int32_t>(p));
+        }
+      }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 /// The pixels left to be re-traced, predicted where the keys' moved scene points cover them and
 /// the ways of predicting them give a finite estimate (PathEdges.h).
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
@@ -508,6 +563,13 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   f.records.resize(n);
   f.estimate.resize(n);
   f.method.resize(n);
+  for (int k = 0; k < 2; ++k)
+  {
+    const std::vector<RayRecord>& key = k == 0 ? ka : kb;
+    f.innerKeys[k].resize(n);
+    for (std::size_t p = 0; p < n; ++p)
+      f.innerKeys[k][p] = surfaceOf(key[p]);
+  }
   // Per pixel near a disagreement that the inner keys agree on, its own prediction, which the
   // moved edge is held against (flag 1: there is one).
   std::vector<RayRecord> own;
@@ -627,6 +689,16 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
   first.insert(first.end(), probes.begin(), probes.end());
   trace(first);
   done.probes = probes.size();
+  // The traced pixels show where the edges lie at t. A predicted neighbour that shows another
+  // surface than a traced pixel has an edge beside it that its keys did not see there (an object
+  // that sweeps across pixels both keys show behind it, as the tip of a moving silhouette does):
+  // such pixels are traced too, and their neighbours judged in turn, until the traced edges close.
+  for (std::vector<std::int32_t> from = first; !from.empty();)
+  {
+    from = contradictedNeighbours(frame, from, traced, methods);
+    done.followed += from.size();
+    trace(from);
+  }
 
   // Each way of predicting has its own scale: the probes' true error over their estimate, at
   // least 1 (the estimate is the lower order's error, an over-estimate where the higher order is
