@@ -690,12 +690,13 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
   trace(first);
   done.probes = probes.size();
   // The traced pixels show where the edges lie at t. A predicted neighbour that shows another
-  // surface than a traced pixel has an edge beside it that its keys did not see there (an object
-  // that sweeps across pixels both keys show behind it, as the tip of a moving silhouette does):
-  // such pixels are traced too, and their neighbours judged in turn, until the traced edges close.
-  for (std::vector<std::int32_t> from = first; !from.empty();)
+  // surface than a traced pixel, where neither inner key showed those two surfaces on those two
+  // pixels, has an edge beside it that the keys did not see there (an object that sweeps across
+  // pixels both keys show behind it, as the tip of a moving silhouette does): such pixels are
+  // traced too, and their neighbours judged in turn, until the traced edges close.
+  for (std::vector<std::int32_t> from = contradictedNeighbours(frame, first, traced, methods);
+       !from.empty(); from = contradictedNeighbours(frame, from, traced, methods))
   {
-    from = contradictedNeighbours(frame, from, traced, methods);
     done.followed += from.size();
     trace(from);
   }
