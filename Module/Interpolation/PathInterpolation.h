@@ -164,12 +164,14 @@ struct PathCompletion
 /// out exact show only that errors are rare. The estimated PSNR is infinite only when nothing
 /// predicted is left. Re-traced records are the full frame's, bit for bit
 /// (FrameTracer::tracePixels). Where a pixel traced at t (a must-retrace pixel, a probe, or one
-/// traced for the reason that follows) shows another surface than the prediction of a neighbour
-/// (8-neighbours), and neither inner key showed that pair of surfaces on that pair of pixels,
-/// the edge between them is one the keys did not see there (the tip of a silhouette that sweeps
-/// across pixels both keys show behind it): the neighbour is traced too, and so on until the
-/// traced edges close. Throws InvalidParameter for a target outside (0,
-/// kMaxQualityTargetDb] or NaN, or a tracer of another size.
+/// traced for the reason that follows) shows another surface than its own prediction and than the
+/// prediction of a neighbour (8-neighbours), and neither inner key showed that pair of surfaces on
+/// that pair of pixels, the edge between them is one that neither the keys nor the prediction put
+/// there (the tip of a silhouette that sweeps across pixels both keys show behind it): the
+/// neighbour is traced too, with the pixels within two of it predicted to show what it shows, and
+/// so on until the traced edges close. Throws
+/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
+/// size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
