@@ -47,8 +47,10 @@ against the frame traced at its parameters), for as few traced rays as a plan ca
 frames are traced whole as key frames, the others are interpolated per pixel between the nearest
 key frames (asrt interpolate --method path) with just the pixels the target needs re-traced, or
 traced whole where the plan estimates that cheaper. The plan's estimate of the share an
-interpolated frame re-traces is proportional to its keys' spacing; it never plans more rays than
-tracing every frame. Writes, for frames 0 ... FRAMES - 1,
+interpolated frame re-traces is proportional to its keys' spacing; it learns as the key frames
+are made, coarse first: each is measured against its own interpolation (the share of pixels the
+target needed, and the rays they took), and the frames not made yet are planned again. It never
+plans more rays than tracing every frame. Writes, for frames 0 ... FRAMES - 1,
   PREFIX-000.png ...  the pictures
   PREFIX-000.vti ...  the frames as VTK image data
   PREFIX.pvd          a ParaView time series of the .vti files (time = frame number)
@@ -83,7 +85,8 @@ Options:
   -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/') gets the
                         scene's file name: -o out/ gives out/fig4-mass-start-000.png
   --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
-  --plan                print the plan and its estimated cost, trace and write nothing
+  --plan                print the plan and its estimated cost, trace and write nothing (the
+                        plan from the prior estimate: a run learns as it makes its keys)
   --store[=LABEL]       accumulate in PostgreSQL and reuse what is stored (label of new frames)
   -q, --quiet           no progress on stderr
 )";
@@ -234,10 +237,16 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   tools::ProgressBar bar("movie of " + std::to_string(n) + " frames",
                          settings.quiet ? tools::ProgressBar::Style::Silent
                                         : tools::ProgressBar::Style::Automatic);
-  const double steps =
-    static_cast<double>(maker.plan().keys().size() + static_cast<std::size_t>(n));
+  // The plan learns as its keys are made, so their count is known only at the end.
+  double steps = static_cast<double>(maker.plan().keys().size() + static_cast<std::size_t>(n));
   double done = 0;
-  maker.makeKeys([&] { bar.update(++done / steps); });
+  maker.makeKeys(
+    [&]
+    {
+      steps = std::max(steps, ++done + n);
+      bar.update(done / steps);
+    });
+  steps = done + n;
   tools::PvdCollection series;
   reports.assign(maker.frames().size(), MovieFrameReport());
   for (int k = 0; k < n; ++k)
@@ -284,12 +293,19 @@ void printReport(MovieMaker& maker, const std::vector<MovieFrameReport>& reports
               "(%.0f a frame, measured); ratio %.3f\n",
               maker.raysOfMovie(), direct, perFrame,
               direct > 0 ? maker.raysOfMovie() / direct : 0.0);
-  // The plan counts a frame as its pixels (its decisions depend only on ratios); in measured
-  // rays a frame, its estimate is:
-  const double scale = perFrame / (static_cast<double>(maker.width()) * maker.height());
+  // The plan counts a frame as the rays it estimated (its pixels, until keys were measured); in
+  // measured rays a frame, its estimate is:
+  const double scale = plan.frameRays > 0 ? perFrame / plan.frameRays : 0.0;
   std::printf("the plan estimated %.0f rays against %.0f for tracing every frame not stored (at "
               "the measured rays a frame)\n",
               plan.estimatedRays * scale, plan.directRays * scale);
+  const SpacingShareModel& share = maker.shareModel();
+  if (!share.measurements.empty())
+    std::printf("the plan learnt from %zu key frames: re-trace share %.3g + %.3g x key spacing / "
+                "path; %.0f rays a whole frame, %.2f a re-traced pixel\n",
+                share.measurements.size(), share.floor, share.slope, plan.frameRays,
+                (plan.retraceRays > 0 ? plan.retraceRays : plan.frameRays) /
+                  (static_cast<double>(maker.width()) * maker.height()));
 }
 }
 

@@ -176,9 +176,10 @@ std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const MoviePath& 
 
 namespace
 {
-/// The prior of the re-trace share (SpacingShareModel): a quarter of a frame re-traced, beyond the
-/// probes, between keys a quarter of the path apart. The paper's mass ramp re-traced 23 % in
-/// exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README, "Interpolated movies").
+/// The prior of the re-trace share (SpacingShareModel), until the first keys are measured: a
+/// quarter of a frame re-traced, beyond the probes, between keys a quarter of the path apart. The
+/// paper's mass ramp re-traced 23 % in exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README,
+/// "Interpolated movies").
 constexpr double kPriorSlope = 1.0;
 /// completePathFrame's default probe share, the floor of the estimate.
 constexpr double kMovieProbeFraction = 0.01;
@@ -214,6 +215,9 @@ struct MovieMaker::Internals
   /// plan interpolates them between the same keys, until frame() hands them out (the same records
   /// it would make again).
   std::map<int, std::pair<std::vector<RayRecord>, MovieFrameReport>> served;
+  /// The re-trace share estimate: the prior, then what the keys made measured.
+  SpacingShareModel share;
+  bool keysMade = false; ///< makeKeys() done: the plan is final
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -430,9 +434,10 @@ struct MovieMaking
     };
   }
 
-  /// Frame k interpolated between `keys` (the nearest of the plan's keys), completed to the target.
-  std::vector<RayRecord> interpolated(int k, const std::vector<int>& keys, MovieFrameReport& report,
-                                      bool storeOnly)
+  /// Frame k interpolated between `keys` (the nearest of them around it), completed to the target
+  /// with the pixels `retrace` gives.
+  PathCompletion interpolatedWith(int k, const std::vector<int>& keys, const PixelTracer& retrace,
+                                  std::vector<RayRecord>& records)
   {
     const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
     // Frame order is the order of direction · s: the keys go in as they are.
@@ -451,6 +456,17 @@ struct MovieMaking
     options.movedEdges = false;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene, options);
+    const PathCompletion done =
+      completePathFrame(frame, retrace, maker.Settings.quality, kMovieProbeFraction);
+    records = std::move(frame.records);
+    return done;
+  }
+
+  /// Frame k interpolated between `keys` (the nearest of the plan's keys), completed to the target.
+  std::vector<RayRecord> interpolated(int k, const std::vector<int>& keys, MovieFrameReport& report,
+                                      bool storeOnly)
+  {
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     // The tracer (the frame's scene, its textures loaded) only once a pixel must be traced: a
     // frame the store serves whole needs none.
     std::unique_ptr<FrameTracer> made;
@@ -464,16 +480,54 @@ struct MovieMaking
       }
       return *made;
     };
+    std::vector<RayRecord> records;
     const PathCompletion done =
-      completePathFrame(frame, this->retracedPixels(k, tracer, report, storeOnly),
-                        maker.Settings.quality, kMovieProbeFraction);
+      this->interpolatedWith(k, keys, this->retracedPixels(k, tracer, report, storeOnly), records);
     report.method = FrameMethod::Interpolated;
     report.estimatedPsnr = done.estimatedPsnr;
     report.shareRetraced = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
                            static_cast<double>(maker.Height);
-    return std::move(frame.records);
+    return records;
+  }
+
+  /// Whole frame k interpolated between the whole frames `wholeFrames` around it (k not among
+  /// them) and completed to the target from its own records: the share the target needed there,
+  /// and the rays those pixels took in frame k, nothing traced or stored.
+  ShareMeasurement measuredShare(int k, const std::vector<int>& wholeFrames)
+  {
+    const std::vector<RayRecord>& truth = this->whole(k);
+    double pixels = 0, rays = 0;
+    const int width = maker.Width;
+    const PixelTracer fromTruth =
+      [&truth, &pixels, &rays, width](const std::vector<std::pair<int, int>>& ij)
+    {
+      std::vector<RayRecord> records;
+      records.reserve(ij.size());
+      for (const auto& p : ij)
+      {
+        const RayRecord& r = truth[static_cast<std::size_t>(p.second) * width + p.first];
+        records.push_back(r);
+        // A pixel the adaptive grid filled counts only its anti-aliasing rays: re-traced, it
+        // takes its own centre ray too.
+        rays += std::max<double>(1, r.raysPerPixel);
+      }
+      pixels += static_cast<double>(ij.size());
+      return records;
+    };
+    std::vector<RayRecord> records;
+    const PathCompletion done = this->interpolatedWith(k, wholeFrames, fromTruth, records);
+    ShareMeasurement m;
+    m.share = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
+              static_cast<double>(maker.Height);
+    m.raysPerPixel = pixels > 0 ? rays / pixels : 0.0;
+    return m;
   }
 };
+
+const SpacingShareModel& MovieMaker::shareModel() const
+{
+  return this->Impl->share;
+}
 
 const MoviePlan& MovieMaker::plan()
 {
@@ -490,7 +544,7 @@ const MoviePlan& MovieMaker::plan()
       f.storedId = this->Store->findFrame(f.identity);
     stored[k] = f.storedId.has_value();
   }
-  SpacingShareModel share;
+  SpacingShareModel& share = this->Impl->share;
   share.pathLength = std::abs(s.back() - s.front());
   share.floor =
     std::min(1.0, std::max(kMovieProbeFraction, 64.0 / (static_cast<double>(this->Width) *
@@ -506,8 +560,7 @@ const MoviePlan& MovieMaker::plan()
       storedKeys.push_back(static_cast<int>(k));
   // The other candidate, the stored frames as the only keys, is worth a look only when the
   // bisection wants keys of its own and the store has both ends (planBetweenStored).
-  if (bisected.keys() != storedKeys && stored.front() && stored.back() &&
-      planBetweenStored(s, stored, {}, model))
+  if (bisected.keys() != storedKeys && stored.front() && stored.back())
   {
     MovieMaking making{ *this, *this->Impl };
     std::vector<bool> served(n, false);
@@ -545,21 +598,63 @@ const MoviePlan& MovieMaker::plan()
 
 void MovieMaker::makeKeys(const std::function<void()>& afterEach)
 {
+  if (this->Impl->keysMade)
+    return;
   MovieMaking making{ *this, *this->Impl };
+  const MoviePlan& first = this->plan();
+  const bool traces =
+    std::any_of(first.frames.begin(), first.frames.end(),
+                [](const FramePlan& f)
+                { return f.method == FrameMethod::Key || f.method == FrameMethod::Traced; });
+  if (traces)
+  {
+    // Keys to trace: made coarse first, each measured against an interpolation of itself, and
+    // the rest planned again with what was learnt (planProgressively).
+    std::vector<double> s;
+    std::vector<bool> stored;
+    for (const MovieFrame& f : this->Frames)
+    {
+      s.push_back(f.s);
+      stored.push_back(f.storedId.has_value());
+    }
+    std::vector<bool> whole = stored;
+    KeyMaking keyMaking;
+    keyMaking.makeWhole = [&](int k)
+    {
+      whole[static_cast<std::size_t>(k)] = true;
+      const double rays = raysOf(making.whole(k));
+      if (afterEach)
+        afterEach();
+      return rays;
+    };
+    keyMaking.measureShare = [&](int k, int, int)
+    {
+      std::vector<int> around;
+      for (std::size_t w = 0; w < whole.size(); ++w)
+        if (whole[w] && static_cast<int>(w) != k)
+          around.push_back(static_cast<int>(w));
+      return making.measuredShare(k, around);
+    };
+    this->Plan = planProgressively(s, stored, static_cast<double>(this->Width) * this->Height,
+                                   this->Impl->share, keyMaking);
+  }
   for (int k : this->plan().keys())
   {
+    const bool made = this->Impl->whole.count(k) > 0;
     making.whole(k);
-    if (afterEach)
+    if (!made && afterEach)
       afterEach();
   }
+  this->Impl->keysMade = true;
 }
 
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
 {
-  const MoviePlan& plan = this->plan();
   if (k < 0 || k >= static_cast<int>(this->Frames.size()))
     throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
                            std::to_string(this->Frames.size()) + " frames");
+  this->makeKeys(); // the plan is final once its keys are made
+  const MoviePlan& plan = this->plan();
   MovieMaking making{ *this, *this->Impl };
   report = MovieFrameReport();
   report.method = plan.frames[static_cast<std::size_t>(k)].method;

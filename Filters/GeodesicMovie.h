@@ -15,6 +15,14 @@
 // frames then served whole by the store: which of them are is found by making them from the store
 // alone before planning, and the frames so made are kept (within a memory bound) for frame() to
 // hand out rather than made again.
+//
+// Learning. The plan starts from a prior of the re-trace share (SpacingShareModel) and of the
+// rays a frame takes (its pixels). Keys to trace are made coarse first; each one is interpolated
+// between the whole frames around it and completed against its own records, which measures the
+// share its gap needed without tracing a ray, and the rest is planned again (planProgressively).
+// Running the same movie again plans from the prior with the keys stored: where that would add
+// keys, the stored frames as the only keys (the first run's plan) serve every frame for nothing,
+// and win.
 #ifndef asrt_GeodesicMovie_h
 #define asrt_GeodesicMovie_h
 
@@ -155,11 +163,17 @@ public:
   /// The plan: made at the first call (looking up the stored frames).
   const MoviePlan& plan();
   const std::vector<MovieFrame>& frames() const { return this->Frames; }
+  /// The re-trace share estimate: the prior, and what the keys made measured.
+  const SpacingShareModel& shareModel() const;
   const std::string& parameter() const { return this->Parameter; }
   int width() const { return this->Width; }
   int height() const { return this->Height; }
 
-  /// Makes (or reads) every key frame of the plan, calling `afterEach` after each.
+  /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
+  /// traces whole frames, they are made coarse first and the plan learns from each
+  /// (planProgressively): the rays it took, and the share that interpolating it between the whole
+  /// frames around it would have re-traced, measured against its own records. The plan is final
+  /// afterwards (frame() makes the keys first if this was not called).
   void makeKeys(const std::function<void()>& afterEach = {});
   /// Frame k's records, one per pixel in pixel order (record p is pixel (p mod width, p / width)).
   /// Key frames are traced or read once and kept; an interpolated frame's re-traced pixels are

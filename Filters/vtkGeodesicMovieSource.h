@@ -7,7 +7,9 @@
  * through OrbitDegrees, or through key cameras), NumberOfFrames frames and a QualityTarget in dB.
  * The plan (which frames are keys, traced whole; which are interpolated per pixel between them,
  * with the pixels the target needs re-traced; which are traced because that is cheaper) is made
- * once, in the information pass, and again only after a setting changed. Frames are made by
+ * once, in the information pass, from the prior cost estimate and the store, and again only after
+ * a setting changed; the first frame requested makes the key frames, coarse first, and the plan
+ * learns from each (asrt::planProgressively) and is then final. Frames are made by
  * asrt::MovieMaker (GeodesicMovie.h), the same code as `asrt movie`: the same settings give the
  * same frames.
  *
@@ -106,7 +108,8 @@ public:
   ///@}
 
   /// The plan's frame methods, one a frame (asrt::FrameMethod: 0 reused, 1 key, 2 traced,
-  /// 3 interpolated), after the information pass; empty before it or after an error.
+  /// 3 interpolated), after the information pass; empty before it or after an error. Until a
+  /// frame is requested this is the plan from the prior estimate, then the learnt one.
   int GetNumberOfPlannedKeys();
   int GetPlannedMethod(int frame);
 

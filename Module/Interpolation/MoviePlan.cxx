@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace asrt
@@ -22,6 +23,13 @@ const char* toString(FrameMethod m)
       return "interpolated";
   }
   return "?";
+}
+
+double MovieCostModel::interpolatedRays(double share) const
+{
+  if (!(share >= 0 && share < 1))
+    return std::numeric_limits<double>::quiet_NaN();
+  return share * (this->retraceRays > 0 ? this->retraceRays : this->frameRays);
 }
 
 std::vector<int> MoviePlan::keys() const
@@ -47,6 +55,12 @@ void checkInput(const std::vector<double>& s, const std::vector<bool>& stored,
   {
     std::ostringstream os;
     os << "movie plan: frameRays must be positive and finite, got " << model.frameRays;
+    throw InvalidParameter(os.str());
+  }
+  if (!(model.retraceRays >= 0 && std::isfinite(model.retraceRays)))
+  {
+    std::ostringstream os;
+    os << "movie plan: retraceRays must be finite and not negative, got " << model.retraceRays;
     throw InvalidParameter(os.str());
   }
   if (!model.retraceShare)
@@ -82,14 +96,15 @@ struct Planner
     for (int k = i + 1; k < j; ++k)
     {
       const double share = this->model.retraceShare(this->s[i], this->s[j], this->s[k]);
+      const double rays = this->model.interpolatedRays(share);
       FramePlan f;
-      if (share >= 0 && share < 1)
+      if (rays < this->model.frameRays) // false for NaN: the pair cannot make the frame
       {
         f.method = FrameMethod::Interpolated;
         f.keyBefore = i;
         f.keyAfter = j;
         f.share = share;
-        f.rays = share * this->model.frameRays;
+        f.rays = rays;
       }
       else
       {
@@ -199,6 +214,8 @@ MoviePlan planMovie(const std::vector<double>& s, const std::vector<bool>& store
   }
   MoviePlan plan;
   plan.frames = inner.frames;
+  plan.frameRays = model.frameRays;
+  plan.retraceRays = model.retraceRays;
   for (std::size_t k = 0; k < n; ++k)
   {
     const bool wasStored = !stored.empty() && stored[k];
@@ -231,6 +248,8 @@ std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
     return std::nullopt;
   MoviePlan plan;
   plan.frames.assign(n, FramePlan());
+  plan.frameRays = model.frameRays;
+  plan.retraceRays = model.retraceRays;
   std::size_t before = 0;
   for (std::size_t k = 0; k < n; ++k)
   {
@@ -247,13 +266,15 @@ std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
     while (!stored[after])
       ++after;
     const double share = model.retraceShare(s[before], s[after], s[k]);
-    if (!(share >= 0 && share < 1))
+    const bool isServed = !served.empty() && served[k];
+    const double rays = model.interpolatedRays(share);
+    if (!isServed && !(rays < model.frameRays))
       return std::nullopt;
     f.method = FrameMethod::Interpolated;
     f.keyBefore = static_cast<int>(before);
     f.keyAfter = static_cast<int>(after);
     f.share = share;
-    f.rays = !served.empty() && served[k] ? 0.0 : share * model.frameRays;
+    f.rays = isServed ? 0.0 : rays;
     plan.estimatedRays += f.rays;
   }
   return plan;
@@ -261,8 +282,23 @@ std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
 
 double SpacingShareModel::share(double keyA, double keyB) const
 {
-  const double spacing = std::abs(keyB - keyA) / (this->pathLength > 0 ? this->pathLength : 1.0);
-  return std::min(1.0, this->floor + this->slope * spacing);
+  const double length = this->pathLength > 0 ? this->pathLength : 1.0;
+  const double spacing = std::abs(keyB - keyA) / length;
+  // The narrowest measured pair around the keys stands for their stretch of the path.
+  const double lo = std::min(keyA, keyB), hi = std::max(keyA, keyB);
+  const double slack = 1e-9 * length;
+  double slope = this->slope, narrowest = std::numeric_limits<double>::infinity();
+  for (const Measurement& m : this->measurements)
+  {
+    const double mLo = std::min(m.keyA, m.keyB), mHi = std::max(m.keyA, m.keyB);
+    if (mLo <= lo + slack && hi <= mHi + slack && mHi - mLo < narrowest)
+    {
+      narrowest = mHi - mLo;
+      // A saturated measurement only bounds the slope from below.
+      slope = m.saturated ? std::max(m.slope, this->slope) : m.slope;
+    }
+  }
+  return std::min(1.0, this->floor + slope * spacing);
 }
 
 void SpacingShareModel::observe(double keyA, double keyB, double measuredShare)
@@ -270,14 +306,143 @@ void SpacingShareModel::observe(double keyA, double keyB, double measuredShare)
   const double spacing = std::abs(keyB - keyA) / (this->pathLength > 0 ? this->pathLength : 1.0);
   if (!(spacing > 0) || !std::isfinite(measuredShare))
     return;
-  this->measuredSlopeSum += std::max(0.0, measuredShare - this->floor) / spacing;
-  ++this->measured;
-  this->slope = this->measuredSlopeSum / this->measured;
+  const double measuredSlope = std::max(0.0, measuredShare - this->floor) / spacing;
+  // A pair that re-traced everything says only that the slope is at least this: it raises the
+  // prior while nothing else is measured, and the mean is of the other measurements.
+  const bool saturated = measuredShare >= 1;
+  if (saturated)
+  {
+    if (this->measured == 0)
+      this->slope = std::max(this->slope, measuredSlope);
+  }
+  else
+  {
+    this->measuredSlopeSum += measuredSlope;
+    ++this->measured;
+    this->slope = this->measuredSlopeSum / this->measured;
+  }
+  this->measurements.push_back({ keyA, keyB, measuredSlope, saturated });
 }
 
 RetraceShare SpacingShareModel::function() const
 {
   const SpacingShareModel copy = *this;
   return [copy](double keyA, double keyB, double) { return copy.share(keyA, keyB); };
+}
+
+namespace
+{
+/// The plan's next whole frame to make, coarse first: a missing end, else the frame nearest the
+/// middle of the widest gap between whole frames that holds one; -1 when every one is whole.
+int nextWhole(const MoviePlan& plan, const std::vector<double>& s, const std::vector<bool>& whole)
+{
+  const int n = static_cast<int>(s.size());
+  for (int end : { 0, n - 1 })
+    if (!whole[static_cast<std::size_t>(end)])
+      return end;
+  int best = -1;
+  double widest = -1, offCentre = 0;
+  int before = 0;
+  for (int k = 1; k < n; ++k)
+  {
+    if (whole[static_cast<std::size_t>(k)])
+    {
+      before = k;
+      continue;
+    }
+    if (plan.frames[static_cast<std::size_t>(k)].method == FrameMethod::Interpolated)
+      continue;
+    int after = k + 1;
+    while (!whole[static_cast<std::size_t>(after)])
+      ++after;
+    const double gap =
+      std::abs(s[static_cast<std::size_t>(after)] - s[static_cast<std::size_t>(before)]);
+    const double centre =
+      std::abs(s[static_cast<std::size_t>(k)] -
+               0.5 * (s[static_cast<std::size_t>(after)] + s[static_cast<std::size_t>(before)]));
+    if (gap > widest || (gap == widest && centre < offCentre))
+    {
+      best = k;
+      widest = gap;
+      offCentre = centre;
+    }
+  }
+  return best;
+}
+}
+
+MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool>& stored,
+                            double pixels, SpacingShareModel& share, const KeyMaking& making)
+{
+  if (!(pixels > 0 && std::isfinite(pixels)))
+    throw InvalidParameter("movie plan: pixels must be positive and finite");
+  if (!making.makeWhole || !making.measureShare)
+    throw InvalidParameter("movie plan: no way to make or measure frames");
+  const std::size_t n = s.size();
+  std::vector<bool> whole = stored.empty() ? std::vector<bool>(n, false) : stored;
+  std::vector<FrameMethod> madeAs(n, FrameMethod::Reused);
+  std::vector<double> madeRays(n, 0.0);
+  double keyRays = 0, keys = 0, retracedPixels = 0, retracedRays = 0;
+  MovieCostModel model;
+  auto updateModel = [&]()
+  {
+    model.frameRays = keys > 0 && keyRays > 0 ? keyRays / keys : pixels;
+    model.retraceRays = retracedPixels > 0 ? pixels * retracedRays / retracedPixels : 0.0;
+    model.retraceShare = share.function();
+  };
+  auto measure = [&](int k)
+  {
+    int before = k - 1, after = k + 1;
+    while (before >= 0 && !whole[static_cast<std::size_t>(before)])
+      --before;
+    while (after < static_cast<int>(n) && !whole[static_cast<std::size_t>(after)])
+      ++after;
+    if (before < 0 || after >= static_cast<int>(n))
+      return;
+    const ShareMeasurement m = making.measureShare(k, before, after);
+    share.observe(s[static_cast<std::size_t>(before)], s[static_cast<std::size_t>(after)], m.share);
+    if (m.share > 0 && m.raysPerPixel > 0 && std::isfinite(m.raysPerPixel))
+    {
+      retracedPixels += m.share * pixels;
+      retracedRays += m.share * pixels * m.raysPerPixel;
+    }
+  };
+  // What earlier runs stored is measured first, each stored frame between the stored frames
+  // around it, for no ray: the prior of this run.
+  for (std::size_t k = 0; k < n; ++k)
+    if (whole[k])
+      measure(static_cast<int>(k));
+  updateModel();
+  for (;;)
+  {
+    const MoviePlan plan = planMovie(s, whole, model);
+    const int k = nextWhole(plan, s, whole);
+    if (k < 0)
+      break;
+    const auto at = static_cast<std::size_t>(k);
+    madeAs[at] = plan.frames[at].method;
+    madeRays[at] = making.makeWhole(k);
+    whole[at] = true;
+    keyRays += madeRays[at];
+    ++keys;
+    measure(k);
+    updateModel();
+  }
+  MoviePlan plan = planMovie(s, whole, model);
+  plan.estimatedRays = plan.directRays = 0;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    FramePlan& f = plan.frames[k];
+    const bool wasStored = !stored.empty() && stored[k];
+    if (f.method == FrameMethod::Reused && !wasStored)
+    {
+      f.method = madeAs[k] == FrameMethod::Traced ? FrameMethod::Traced : FrameMethod::Key;
+      f.share = 1;
+      f.rays = madeRays[k];
+    }
+    plan.estimatedRays += f.rays;
+    plan.directRays += wasStored ? 0.0 : model.frameRays;
+  }
+  return plan;
 }
 }

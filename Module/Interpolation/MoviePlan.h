@@ -60,11 +60,20 @@ enum class FrameMethod : std::uint8_t
 };
 ASRTINTERPOLATION_EXPORT const char* toString(FrameMethod m);
 
-/// What making a movie costs: the rays of one traced frame, and the re-trace share estimate.
+/// What making a movie costs: the rays of one traced frame, the rays of re-tracing all of a
+/// frame's pixels one by one, and the re-trace share estimate. An interpolated frame costs
+/// share · retraceRays; it is traced whole instead when that is not below frameRays.
 struct MovieCostModel
 {
   double frameRays = 0; ///< rays a whole frame takes (pixels × rays per pixel, or a key's count)
+  /// Rays of re-tracing every pixel (pixels × the rays a re-traced pixel takes, which may differ
+  /// from a whole frame's: those are traced where edges are, where anti-aliasing adds rays, and
+  /// without the adaptive grid). 0: frameRays.
+  double retraceRays = 0;
   RetraceShare retraceShare;
+  /// The rays of interpolating a frame at this share, or NaN when it cannot (a share outside
+  /// [0, 1), infinite or NaN).
+  double interpolatedRays(double share) const;
 };
 
 struct FramePlan
@@ -81,6 +90,8 @@ struct MoviePlan
   double estimatedRays = 0; ///< the plan's estimated cost, in rays
   double directRays = 0;    ///< tracing every frame not stored
   double tracedAllRays = 0; ///< tracing every frame, stored or not
+  double frameRays = 0;     ///< the rays of a whole frame the estimates counted
+  double retraceRays = 0;   ///< the rays of re-tracing every pixel they counted (0: frameRays)
   /// The keys in order: every frame not interpolated.
   std::vector<int> keys() const;
 };
@@ -109,7 +120,11 @@ ASRTINTERPOLATION_EXPORT std::optional<MoviePlan> planBetweenStored(const std::v
 /// interpolation cannot vouch for are those whose rays change how they end (an edge of an object,
 /// of the shadow, of an image) between the keys, and their neighbours: a band along each edge as
 /// wide as the edge moves between the keys, so proportional to their spacing while it is small.
-/// The slope is a prior until frames are measured; observe() makes it the mean measured slope.
+/// The slope is a prior until frames are measured; observe() makes it the mean measured slope
+/// (a pair that re-traced the whole frame bounds the slope from below only).
+/// How fast edges move changes along a path (a ramp of mass barely moves them while the hole is
+/// small), so a measurement also stands for its own stretch: keys inside a measured pair take the
+/// slope of the narrowest measured pair around them, the mean slope only elsewhere.
 struct SpacingShareModel
 {
   double pathLength = 1;
@@ -117,12 +132,52 @@ struct SpacingShareModel
   double slope = 1; ///< the share re-traced with keys a whole path apart, beyond the floor
   double measuredSlopeSum = 0;
   int measured = 0;
+  struct Measurement
+  {
+    double keyA = 0, keyB = 0, slope = 0;
+    bool saturated = false; ///< it re-traced everything: the slope is a lower bound
+  };
+  std::vector<Measurement> measurements;
 
   double share(double keyA, double keyB) const;
   /// A frame interpolated between keys at keyA and keyB re-traced this share.
   void observe(double keyA, double keyB, double share);
   RetraceShare function() const;
 };
+
+/// What planning a movie progressively asks of the movie. makeWhole traces (or reads) frame k
+/// whole and returns the rays it took. measureShare interpolates whole frame k between the whole
+/// frames `before` and `after` (and those beyond them, as a movie's frame would be) and completes
+/// it to the target against frame k's own records, which it already has: the share of pixels the
+/// target needed re-traced, and the rays those pixels took in frame k (a re-traced pixel's cost),
+/// measured without tracing a ray.
+struct ShareMeasurement
+{
+  double share = 0;
+  double raysPerPixel = 1; ///< of the pixels it re-traced; 0 when none
+};
+struct KeyMaking
+{
+  std::function<double(int k)> makeWhole;
+  std::function<ShareMeasurement(int k, int before, int after)> measureShare;
+};
+
+/// Plans the movie and makes its whole frames, learning the costs as it goes. The keys are made
+/// coarse first: of the plan's whole frames not yet made, the one nearest the middle of the
+/// widest gap between frames already whole. Each key made is measured (measureShare between the
+/// whole frames around it), which gives the share the gap around it needed for its key spacing;
+/// with the rays the whole frames took (their mean is frameRays) and the rays a re-traced pixel
+/// takes (retraceRays = pixels · their weighted mean), the rest of the movie is planned again
+/// with the frames made as stored ones. Frames made stay made. `share` starts as the prior and
+/// ends holding every measurement; `pixels` is a frame's pixel count (the priors: a whole frame
+/// pixels rays, a re-traced pixel one). Returns the final plan, whose whole frames are all made:
+/// stored ones Reused, the others Key or Traced. Frames stored already (an earlier run's keys) are
+/// measured first, each between the stored frames around it: the prior of a movie over a path
+/// stored before. Throws as planMovie does.
+ASRTINTERPOLATION_EXPORT MoviePlan planProgressively(const std::vector<double>& s,
+                                                     const std::vector<bool>& stored, double pixels,
+                                                     SpacingShareModel& share,
+                                                     const KeyMaking& making);
 }
 
 #endif

@@ -77,6 +77,14 @@ enum class PathMethod : std::uint8_t
 constexpr int kPathMethodCount = 8;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
 
+/// What a key frame shows at a pixel: the surface, and how its ray ended there.
+struct PathSurface
+{
+  std::int32_t objectId = -1;
+  Termination termination = Termination::Running;
+  double winding = 0;
+};
+
 /// A frame at parameter t of a path.
 struct PathFrame
 {
@@ -87,6 +95,9 @@ struct PathFrame
   /// infinite where the pixel must be re-traced, 0 for keys and re-traced pixels.
   std::vector<float> estimate;
   std::vector<std::uint8_t> method; ///< PathMethod per pixel
+  /// Per pixel, what the inner pair of keys around t show (empty for a key): the edges the keys
+  /// saw, which completePathFrame holds the edges traced at t against.
+  std::vector<PathSurface> innerKeys[2];
   /// Pixels per PathMethod.
   std::vector<std::size_t> counts() const;
 };
@@ -134,9 +145,11 @@ ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKe
 struct PathCompletion
 {
   std::size_t mustRetrace = 0; ///< pixels the keys could not vouch for
-  std::size_t retraced = 0;    ///< pixels traced at t in all (the above, chosen ones and probes)
-  std::size_t probes = 0;      ///< pixels traced to measure the estimate's scale
-  double estimatedPsnr = 0;    ///< of the completed frame against the frame traced at t
+  /// Pixels traced because a traced neighbour showed another surface than their prediction.
+  std::size_t followed = 0;
+  std::size_t retraced = 0; ///< pixels traced at t in all (the above, chosen ones and probes)
+  std::size_t probes = 0;   ///< pixels traced to measure the estimate's scale
+  double estimatedPsnr = 0; ///< of the completed frame against the frame traced at t
 };
 
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
@@ -150,8 +163,15 @@ struct PathCompletion
 /// errors, with one more probe of the way's typical error counted in, since probes that all came
 /// out exact show only that errors are rare. The estimated PSNR is infinite only when nothing
 /// predicted is left. Re-traced records are the full frame's, bit for bit
-/// (FrameTracer::tracePixels). Throws InvalidParameter for a target outside (0,
-/// kMaxQualityTargetDb] or NaN, or a tracer of another size.
+/// (FrameTracer::tracePixels). Where a pixel traced at t (a must-retrace pixel, a probe, or one
+/// traced for the reason that follows) shows another surface than its own prediction and than the
+/// prediction of a neighbour (8-neighbours), and neither inner key showed that pair of surfaces on
+/// that pair of pixels, the edge between them is one that neither the keys nor the prediction put
+/// there (the tip of a silhouette that sweeps across pixels both keys show behind it): the
+/// neighbour is traced too, with the pixels within two of it predicted to show what it shows, and
+/// so on until the traced edges close. Throws
+/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
+/// size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
@@ -162,9 +182,10 @@ ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
 using PixelTracer =
   std::function<std::vector<RayRecord>(const std::vector<std::pair<int, int>>& pixels)>;
 
-/// As above, the pixels got from `trace` (called twice: the must-retrace pixels with the probes,
-/// then the chosen ones; each list is a function of the frame as predicted and of the records
-/// traced before, so the same keys and the same records choose the same lists). A caller may
+/// As above, the pixels got from `trace` (called with the must-retrace pixels and the probes,
+/// then once per round of neighbours that contradict traced pixels, then with the chosen ones;
+/// each list is a function of the frame as predicted and of the records traced before, so the
+/// same keys and the same records choose the same lists). A caller may
 /// serve them from a store of pixels traced before, provided they are the traced records.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const PixelTracer& trace, double targetDb,

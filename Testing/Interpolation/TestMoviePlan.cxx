@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -54,7 +57,7 @@ double recomputedCost(const asrt::MoviePlan& plan, const std::vector<double>& s,
         const double share = model.retraceShare(s[static_cast<std::size_t>(f.keyBefore)],
                                                 s[static_cast<std::size_t>(f.keyAfter)], s[k]);
         EXPECT_LT(share, 1.0) << "frame " << k << " interpolated where the pair cannot";
-        total += share * model.frameRays;
+        total += share * (model.retraceRays > 0 ? model.retraceRays : model.frameRays);
         break;
       }
     }
@@ -332,4 +335,211 @@ TEST(MoviePlan, SpacingModelLearnsTheMeasuredSlope)
   EXPECT_NEAR(m.function()(0, 2, 1), 0.41, 1e-12);
   EXPECT_EQ(m.share(0, 100), 1.0);
 }
+}
+
+namespace
+{
+/// A movie whose true re-trace share is known: floor + slope(pair) · spacing, and whose whole
+/// frames take `keyRays` rays; planned progressively from a prior slope of 1, every frame made and
+/// measured recorded.
+struct SyntheticMovie
+{
+  std::vector<double> s = evenPath(31);
+  double pixels = 1000, keyRays = 1000, floor = 0.01;
+  std::function<double(double a, double b)> slope;
+  std::vector<int> made;
+  int measured = 0;
+
+  double trueShare(double a, double b) const
+  {
+    return std::min(1.0, this->floor + this->slope(a, b) * std::abs(b - a));
+  }
+  asrt::MovieCostModel trueModel() const
+  {
+    asrt::MovieCostModel model;
+    model.frameRays = this->keyRays;
+    model.retraceRays = this->pixels;
+    model.retraceShare = [this](double a, double b, double) { return this->trueShare(a, b); };
+    return model;
+  }
+  asrt::MoviePlan plan(asrt::SpacingShareModel& share)
+  {
+    share.pathLength = 1;
+    share.floor = this->floor;
+    share.slope = 1;
+    asrt::KeyMaking making;
+    making.makeWhole = [this](int k)
+    {
+      this->made.push_back(k);
+      return this->keyRays;
+    };
+    making.measureShare = [this](int k, int before, int after)
+    {
+      EXPECT_LT(before, k);
+      EXPECT_GT(after, k);
+      for (int between = before + 1; between < after; ++between)
+        EXPECT_EQ(std::count(this->made.begin(), this->made.end(), between), between == k ? 1 : 0)
+          << "frame " << k << " measured between " << before << " and " << after;
+      ++this->measured;
+      asrt::ShareMeasurement m;
+      m.share = this->trueShare(this->s[static_cast<std::size_t>(before)],
+                                this->s[static_cast<std::size_t>(after)]);
+      m.raysPerPixel = 1;
+      return m;
+    };
+    return asrt::planProgressively(this->s, {}, this->pixels, share, making);
+  }
+};
+
+/// The prior's plan: what a movie planned without measuring would use.
+asrt::MoviePlan priorPlan(const SyntheticMovie& movie)
+{
+  asrt::SpacingShareModel prior;
+  prior.floor = movie.floor;
+  asrt::MovieCostModel model;
+  model.frameRays = movie.pixels;
+  model.retraceShare = prior.function();
+  return asrt::planMovie(movie.s, {}, model);
+}
+
+/// A plan by the true costs: an interpolated frame re-traces its true share (all of it where the
+/// pair cannot make it: a share learnt as a lower bound, or the prior, may send one there).
+double trueCost(const SyntheticMovie& movie, const asrt::MoviePlan& plan)
+{
+  const asrt::MovieCostModel truth = movie.trueModel();
+  double total = 0;
+  for (std::size_t k = 0; k < plan.frames.size(); ++k)
+  {
+    const asrt::FramePlan& f = plan.frames[k];
+    if (f.method == FrameMethod::Interpolated)
+    {
+      EXPECT_LT(f.keyBefore, static_cast<int>(k));
+      EXPECT_GT(f.keyAfter, static_cast<int>(k));
+      total +=
+        truth.retraceRays * truth.retraceShare(movie.s[static_cast<std::size_t>(f.keyBefore)],
+                                               movie.s[static_cast<std::size_t>(f.keyAfter)], 0);
+    }
+    else
+      total += truth.frameRays;
+  }
+  return total;
+}
+
+/// Checks what holds for every progressive plan: each whole frame made once, and exactly the
+/// plan's keys; every frame but the ends measured; its cost, by the true model, near the plan made
+/// knowing the true model, and no more than tracing every frame.
+void checkProgressive(const SyntheticMovie& movie, const asrt::MoviePlan& plan)
+{
+  std::vector<int> made = movie.made;
+  std::sort(made.begin(), made.end());
+  EXPECT_TRUE(std::adjacent_find(made.begin(), made.end()) == made.end()) << "a frame made twice";
+  EXPECT_EQ(made, plan.keys());
+  const asrt::MovieCostModel truth = movie.trueModel();
+  // Near what the same bisection makes knowing the true costs from the start (only the keys made
+  // before the first measurements are the prior's), and no dearer than tracing every frame.
+  const double cost = trueCost(movie, plan),
+               oracle = trueCost(movie, asrt::planMovie(movie.s, {}, truth));
+  EXPECT_LE(cost, 1.05 * oracle);
+  EXPECT_LE(cost, truth.frameRays * static_cast<double>(movie.s.size()));
+  EXPECT_EQ(movie.measured, static_cast<int>(plan.keys().size()) - 2); // all but the ends
+}
+}
+
+TEST(MoviePlanProgressive, FewerKeysWhenTheMeasuredShareIsLowMoreWhenHigh)
+{
+  const std::size_t priorKeys = priorPlan(SyntheticMovie()).keys().size();
+  SyntheticMovie low, high;
+  low.slope = [](double, double) { return 0.3; };
+  high.slope = [](double, double) { return 6.0; };
+  asrt::SpacingShareModel lowShare, highShare;
+  const asrt::MoviePlan lowPlan = low.plan(lowShare), highPlan = high.plan(highShare);
+  checkProgressive(low, lowPlan);
+  checkProgressive(high, highPlan);
+  EXPECT_LT(lowPlan.keys().size(), priorKeys);
+  EXPECT_GT(highPlan.keys().size(), priorKeys);
+  // And so each costs less, by the true costs, than the prior's plan.
+  EXPECT_LT(trueCost(low, lowPlan), trueCost(low, priorPlan(low)));
+  EXPECT_LT(trueCost(high, highPlan), trueCost(high, priorPlan(high)));
+  // A linear share is measured exactly: the model ends with the true slope.
+  EXPECT_NEAR(lowShare.slope, 0.3, 1e-9);
+  EXPECT_NEAR(highShare.slope, 6.0, 1e-9);
+  // Made coarse first: the ends, then the middle.
+  ASSERT_GE(high.made.size(), 3u);
+  EXPECT_EQ((std::vector<int>(high.made.begin(), high.made.begin() + 3)),
+            (std::vector<int>{ 0, 30, 15 }));
+}
+
+TEST(MoviePlanProgressive, CostlierKeysMeanFewerKeys)
+{
+  // The same shares, whole frames taking twice the rays of re-tracing every pixel once: never
+  // more keys, and fewer for some slopes (the bisection's key counts are coarse).
+  bool fewer = false;
+  for (double slope : { 0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0 })
+  {
+    SyntheticMovie cheap, costly;
+    cheap.slope = costly.slope = [slope](double, double) { return slope; };
+    costly.keyRays = 2 * costly.pixels;
+    asrt::SpacingShareModel a, b;
+    const asrt::MoviePlan cheapPlan = cheap.plan(a), costlyPlan = costly.plan(b);
+    checkProgressive(cheap, cheapPlan);
+    checkProgressive(costly, costlyPlan);
+    EXPECT_LE(costlyPlan.keys().size(), cheapPlan.keys().size()) << "slope " << slope;
+    fewer = fewer || costlyPlan.keys().size() < cheapPlan.keys().size();
+    EXPECT_DOUBLE_EQ(costlyPlan.frameRays, 2 * costly.pixels);
+  }
+  EXPECT_TRUE(fewer);
+}
+
+TEST(MoviePlanProgressive, AMeasuredStretchKeepsItsOwnSlope)
+{
+  // Edges barely move on the first half of the path and fast on the second.
+  SyntheticMovie movie;
+  movie.slope = [](double a, double b) { return std::max(a, b) <= 0.5 ? 0.2 : 6.0; };
+  asrt::SpacingShareModel share;
+  const asrt::MoviePlan plan = movie.plan(share);
+  checkProgressive(movie, plan);
+  const std::vector<int> keys = plan.keys();
+  const auto firstHalf = std::count_if(keys.begin(), keys.end(), [](int k) { return k < 15; });
+  const auto secondHalf = std::count_if(keys.begin(), keys.end(), [](int k) { return k > 15; });
+  EXPECT_LT(firstHalf + 2, secondHalf);
+}
+
+TEST(MoviePlanProgressive, StoredFramesAreKeysForFree)
+{
+  SyntheticMovie movie;
+  movie.slope = [](double, double) { return 2.0; };
+  std::vector<bool> stored(movie.s.size(), false);
+  stored[0] = stored[10] = stored[30] = true;
+  asrt::SpacingShareModel share;
+  asrt::KeyMaking making;
+  making.makeWhole = [&movie](int k)
+  {
+    movie.made.push_back(k);
+    return movie.keyRays;
+  };
+  std::vector<std::array<int, 3>> measured;
+  making.measureShare = [&movie, &measured](int k, int before, int after)
+  {
+    measured.push_back({ k, before, after });
+    asrt::ShareMeasurement m;
+    m.share = movie.trueShare(movie.s[static_cast<std::size_t>(before)],
+                              movie.s[static_cast<std::size_t>(after)]);
+    return m;
+  };
+  const asrt::MoviePlan plan =
+    asrt::planProgressively(movie.s, stored, movie.pixels, share, making);
+  for (int k : { 0, 10, 30 })
+  {
+    EXPECT_EQ(plan.frames[static_cast<std::size_t>(k)].method, FrameMethod::Reused);
+    EXPECT_EQ(std::count(movie.made.begin(), movie.made.end(), k), 0);
+  }
+  EXPECT_DOUBLE_EQ(plan.directRays, 28 * movie.keyRays);
+  // The stored frame between stored ones is measured first: the prior of this run, exact here.
+  ASSERT_FALSE(measured.empty());
+  EXPECT_EQ(measured.front(), (std::array<int, 3>{ 10, 0, 30 }));
+  EXPECT_NEAR(share.slope, 2.0, 1e-9);
+  asrt::KeyMaking none;
+  EXPECT_THROW(asrt::planProgressively(movie.s, stored, movie.pixels, share, none),
+               asrt::InvalidParameter);
+  EXPECT_THROW(asrt::planProgressively(movie.s, stored, 0, share, making), asrt::InvalidParameter);
 }
