@@ -514,7 +514,7 @@ std::vector<RayRecord> FrameTracer::traceGrid(const std::vector<std::pair<int, i
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, n / 200);
   SharedBorderRays shared;
-#pragma omp parallel
+#pragma omp parallel if (n * kRaysPerItem >= kParallelRays)
   {
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
     GridWork work;

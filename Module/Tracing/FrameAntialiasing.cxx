@@ -211,8 +211,9 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   // of `edges`).
   constexpr unsigned char kHard = 1, kBends = 2;
   std::vector<unsigned char> hard(records.size(), 0), edges(records.size(), 0);
-#pragma omp parallel for schedule(static)
-  for (long k = 0; k < static_cast<long>(records.size()); ++k)
+  const long recordCount = static_cast<long>(records.size());
+#pragma omp parallel for schedule(static) if (recordCount > kParallelRecords)
+  for (long k = 0; k < recordCount; ++k)
   {
     const RayRecord& r = records[static_cast<std::size_t>(k)];
     const JacobianSample self = jacobianSample(r);
@@ -256,7 +257,7 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<JacobianSample> midpoints(keys.size());
-#pragma omp parallel
+#pragma omp parallel if (static_cast <long>(keys.size()) >= kParallelRays)
   {
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
 #pragma omp for schedule(dynamic, 16)
@@ -271,8 +272,8 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   // 3. A straight edge crosses the segment between two centres once: where the midpoint ends as
   // the pixel's centre does, the crossing lies in the neighbour's half, and the pixel need not be
   // sampled for it. A midpoint unlike both (a third surface, a thin image) samples both.
-#pragma omp parallel for schedule(static)
-  for (long q = 0; q < static_cast<long>(records.size()); ++q)
+#pragma omp parallel for schedule(static) if (recordCount > kParallelRecords)
+  for (long q = 0; q < recordCount; ++q)
   {
     const std::size_t k = static_cast<std::size_t>(q);
     bool sample = hard[k] == kHard;
@@ -310,8 +311,9 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
     this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays, bendOnly);
 
-#pragma omp parallel for schedule(static)
-  for (long q = 0; q < static_cast<long>(records.size()); ++q)
+  const long recordCount = static_cast<long>(records.size());
+#pragma omp parallel for schedule(static) if (recordCount > kParallelRecords)
+  for (long q = 0; q < recordCount; ++q)
   {
     // Filtered centre colours (the colour of a pixel left at one ray).
     const std::size_t k = static_cast<std::size_t>(q);
@@ -342,7 +344,7 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   // A supersample is a reference: its samples are traced as tightly as the frame's centre rays.
   const IntegratorConfig sampling =
     opts.supersample > 1 ? this->Desc.integrator : sampleIntegrator(this->Desc.integrator);
-#pragma omp parallel
+#pragma omp parallel if (count * kRaysPerItem >= kParallelRays)
   {
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, sampling);
     long lastReported = 0;

@@ -211,7 +211,7 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, n / 200);
-#pragma omp parallel
+#pragma omp parallel if (n >= kParallelRays)
   {
     // One propagator per thread: it carries the state of the ray being traced.
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
@@ -275,7 +275,7 @@ void FrameTracer::computeJacobians(std::vector<RayRecord>& records,
   // Each record reads only the lookup and writes only itself: the records are shared among the
   // threads in any way, with the same result.
   const long n = static_cast<long>(records.size());
-#pragma omp parallel for schedule(static) if (n > 16384)
+#pragma omp parallel for schedule(static) if (n > kParallelRecords)
   for (long k = 0; k < n; ++k)
   {
     RayRecord& r = records[static_cast<std::size_t>(k)];

@@ -15,6 +15,15 @@
 
 namespace asrt
 {
+/// Fewer rays than this are traced on the calling thread alone: each costs about as much as waking
+/// the other threads, and on a busy machine that wake-up costs far more (OpenMP's waiting threads
+/// spin). A list of pixels that each take several rays (lattice blocks, anti-aliased pixels) counts
+/// them at kRaysPerItem.
+constexpr long kParallelRays = 16;
+constexpr long kRaysPerItem = 8;
+/// Passes over records that trace nothing run in parallel above this many records.
+constexpr long kParallelRecords = 16384;
+
 /// Traces pixels of one scene. Thread-safe: every traced pixel uses its own propagator.
 class ASRTTRACING_EXPORT FrameTracer
 {
