@@ -33,32 +33,32 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
   const int bandRows = static_cast<int>(std::clamp<std::size_t>(bandPixels / width, 1, H));
   const double total = static_cast<double>(last - first) * W;
 
-  // Rows [from, to) of `records`, whose first row is `firstRow`, anti-aliased and handed to the
-  // sink; those outside [rowBegin, rowEnd) are dropped. The rows either side of [from, to) are in
-  // `records` or in `around`.
+  // Rows [from, to) of `records`, whose first row is `firstRow`, anti-aliased in place and handed
+  // to the sink; those outside [rowBegin, rowEnd) are dropped, and `records` is left with [from,
+  // to) alone. The rows either side of [from, to) are in `records` or in `around`.
   double done = 0;
-  std::vector<RayRecord> out;
   std::vector<JacobianSample> bordering;
-  auto handOn = [&](const std::vector<RayRecord>& records, int firstRow, int from, int to,
+  auto handOn = [&](std::vector<RayRecord>& records, int firstRow, int from, int to,
                     const std::vector<JacobianSample>& around)
   {
     from = std::max(from, rowBegin);
     to = std::min(to, rowEnd);
     if (from >= to)
       return true;
-    const auto begin = records.begin() + static_cast<std::ptrdiff_t>(from - firstRow) * W;
-    out.assign(begin, begin + static_cast<std::ptrdiff_t>(to - from) * W);
     bordering = around;
     const int lastRow = firstRow + static_cast<int>(records.size() / width);
     for (int j : { from - 1, to })
       if (j >= firstRow && j < lastRow)
         appendSamples(records, static_cast<std::size_t>(j - firstRow) * width, width, bordering);
+    records.resize(static_cast<std::size_t>(to - firstRow) * width);
+    records.erase(records.begin(),
+                  records.begin() + static_cast<std::ptrdiff_t>(from - firstRow) * W);
     std::function<bool(double)> keepGoing;
     if (progress)
       keepGoing = [&](double) { return progress(done / total); };
-    if (!tracer.antialias(out, bordering, keepGoing))
+    if (!tracer.antialias(records, bordering, keepGoing))
       return false;
-    sink(out.data(), out.size());
+    sink(records.data(), records.size());
     return true;
   };
 
@@ -108,15 +108,19 @@ bool traceRowsInBands(const FrameTracer& tracer, int rowBegin, int rowEnd,
       if (!handOn(held, b - 1, b - 1, b, below))
         return false;
     }
-    // Rows b .. e − 2 have both neighbours; row e − 1 waits for row e.
+    // Rows b .. e − 2 have both neighbours; row e − 1 waits for row e. The band is anti-aliased
+    // in place: what the next band needs of it is taken first.
+    std::vector<JacobianSample> nextBelow;
+    if (e - b >= 2)
+      appendSamples(band, static_cast<std::size_t>(e - 2 - b) * width, width, nextBelow);
+    std::vector<RayRecord> nextHeld(band.end() - static_cast<std::ptrdiff_t>(width), band.end());
     if (!handOn(band, b, b, e - 1, edge))
       return false;
-    below.clear();
     if (e - b >= 2)
-      appendSamples(band, static_cast<std::size_t>(e - 2 - b) * width, width, below);
+      below.swap(nextBelow);
     else
       below.swap(edge); // row e − 2 is the row held before (none before the first band)
-    held.assign(band.end() - static_cast<std::ptrdiff_t>(width), band.end());
+    held.swap(nextHeld);
     b = e;
   }
   FrameTracer::computeJacobians(held, below);
