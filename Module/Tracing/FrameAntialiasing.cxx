@@ -257,11 +257,12 @@ void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<JacobianSample> midpoints(keys.size());
-#pragma omp parallel if (static_cast <long>(keys.size()) >= kParallelRays)
+  const long keyCount = static_cast<long>(keys.size());
+#pragma omp parallel if (keyCount >= kParallelRays)
   {
     std::unique_ptr<Propagator> prop = makePropagator(*this->St, this->Desc.integrator);
 #pragma omp for schedule(dynamic, 16)
-    for (long q = 0; q < static_cast<long>(keys.size()); ++q)
+    for (long q = 0; q < keyCount; ++q)
     {
       const auto [x2, y2] = keys[static_cast<std::size_t>(q)];
       midpoints[static_cast<std::size_t>(q)] =
@@ -340,7 +341,8 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, count / 200);
   // The centre rays around each pixel, for the local quadratic maps of bending footprints.
-  const PixelLookup lookup(records, neighbours);
+  const bool bends = std::find(bendOnly.begin(), bendOnly.end(), 1) != bendOnly.end();
+  const PixelLookup lookup = bends ? PixelLookup(records, neighbours) : PixelLookup({}, {});
   // A supersample is a reference: its samples are traced as tightly as the frame's centre rays.
   const IntegratorConfig sampling =
     opts.supersample > 1 ? this->Desc.integrator : sampleIntegrator(this->Desc.integrator);
