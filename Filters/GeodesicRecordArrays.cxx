@@ -1,5 +1,6 @@
 #include "GeodesicRecordArrays.h"
 
+#include "FrameTracer.h" // kParallelRecords
 #include "SceneFile.h"
 
 #include "vtkCellArray.h"
@@ -289,7 +290,7 @@ void RowsBuilder::add(const RayRecord* records, std::size_t count)
   // Each record fills its own tuples of the preallocated arrays.
   const vtkIdType first = p.next;
   const long n = static_cast<long>(count);
-#pragma omp parallel for schedule(static) if (n > 16384)
+#pragma omp parallel for schedule(static) if (n > kParallelRecords)
   for (long k = 0; k < n; ++k)
   {
     if (p.hitArrays)

@@ -341,6 +341,7 @@ std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
   }
   return remaining;
 }
+
 PathSurface surfaceOf(const RayRecord& r)
 {
   return { r.objectId, r.termination, r.winding };
@@ -511,8 +512,7 @@ bool endAlike(const RayRecord& a, const RayRecord& b)
   auto clean = [](Termination e) {
     return e == Termination::Escaped || e == Termination::Captured || e == Termination::HitObject;
   };
-  return a.objectId == b.objectId && a.termination == b.termination && clean(a.termination) &&
-         std::abs(a.winding - b.winding) < kWindingJump;
+  return clean(a.termination) && sameSurface(surfaceOf(a), surfaceOf(b));
 }
 
 RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, double t)

@@ -190,13 +190,12 @@ private:
 constexpr double kQuadraticMisfit = 0.05;
 }
 
-void FrameTracer::judgePixels(const std::vector<RayRecord>& records,
-                              const std::vector<JacobianSample>& neighbours, int adaptiveSide,
-                              std::vector<int>& side, std::vector<int>& midpointRays,
+void FrameTracer::judgePixels(const std::vector<RayRecord>& records, const PixelLookup& lookup,
+                              int adaptiveSide, std::vector<int>& side,
+                              std::vector<int>& midpointRays,
                               std::vector<unsigned char>& bendOnly) const
 {
   const AntialiasOptions& opts = this->Desc.rendering;
-  const PixelLookup lookup(records, neighbours);
   // Colours lie in [0, 1]: at a threshold of 1 or more colour never decides, and the texture
   // lookups of the pixel and its neighbours are skipped.
   const bool byColor = opts.colorThreshold < 1.0;
@@ -307,10 +306,15 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   std::vector<int> side(records.size(), 1);
   std::vector<int> midpointRays(records.size(), 0);
   std::vector<unsigned char> bendOnly(records.size(), 0);
+  // The centre rays and their bordering samples by pixel: for the judgement, and for the local
+  // quadratic maps of the footprints it finds bending.
+  const bool judged =
+    opts.supersample <= 1 && opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2;
+  const PixelLookup lookup = judged ? PixelLookup(records, neighbours) : PixelLookup({}, {});
   if (opts.supersample > 1)
     std::fill(side.begin(), side.end(), opts.supersample);
-  else if (opts.mode == AntialiasMode::Adaptive && adaptiveSide >= 2)
-    this->judgePixels(records, neighbours, adaptiveSide, side, midpointRays, bendOnly);
+  else if (judged)
+    this->judgePixels(records, lookup, adaptiveSide, side, midpointRays, bendOnly);
 
   const long recordCount = static_cast<long>(records.size());
 #pragma omp parallel for schedule(static) if (recordCount > kParallelRecords)
@@ -340,9 +344,6 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, count / 200);
-  // The centre rays around each pixel, for the local quadratic maps of bending footprints.
-  const bool bends = std::find(bendOnly.begin(), bendOnly.end(), 1) != bendOnly.end();
-  const PixelLookup lookup = bends ? PixelLookup(records, neighbours) : PixelLookup({}, {});
   // A supersample is a reference: its samples are traced as tightly as the frame's centre rays.
   const IntegratorConfig sampling =
     opts.supersample > 1 ? this->Desc.integrator : sampleIntegrator(this->Desc.integrator);

@@ -15,6 +15,8 @@
 
 namespace asrt
 {
+class PixelLookup;
+
 /// Fewer rays than this are traced on the calling thread alone: each costs about as much as waking
 /// the other threads, and on a busy machine that wake-up costs far more (OpenMP's waiting threads
 /// spin). A list of pixels that each take several rays (lattice blocks, anti-aliased pixels) counts
@@ -100,10 +102,10 @@ private:
                                       const std::function<bool(double)>& progress) const;
   /// The adaptive judgement of antialias(): sets side[k] to `adaptiveSide` for the records to
   /// sample, bendOnly[k] where a footprint that bends is the only reason, and counts in
-  /// midpointRays[k] the edge-midpoint rays it traced on their behalf.
-  void judgePixels(const std::vector<RayRecord>& records,
-                   const std::vector<JacobianSample>& neighbours, int adaptiveSide,
-                   std::vector<int>& side, std::vector<int>& midpointRays,
+  /// midpointRays[k] the edge-midpoint rays it traced on their behalf. `lookup` holds the records
+  /// and their bordering samples.
+  void judgePixels(const std::vector<RayRecord>& records, const PixelLookup& lookup,
+                   int adaptiveSide, std::vector<int>& side, std::vector<int>& midpointRays,
                    std::vector<unsigned char>& bendOnly) const;
   /// The centre records of traceCentres on the adaptive grid (AdaptiveGrid.h): the whole lattice
   /// blocks holding the pixels are processed, in parallel, and the pixels' records handed out.

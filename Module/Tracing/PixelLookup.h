@@ -4,6 +4,7 @@
 #ifndef asrt_PixelLookup_h
 #define asrt_PixelLookup_h
 
+#include "FrameTracer.h" // kParallelRecords
 #include "RayRecord.h"
 
 #include <algorithm>
@@ -22,7 +23,7 @@ public:
   {
     this->Samples.resize(records.size());
     const long n = static_cast<long>(records.size());
-#pragma omp parallel for schedule(static) if (n > 16384)
+#pragma omp parallel for schedule(static) if (n > kParallelRecords)
     for (long k = 0; k < n; ++k)
       this->Samples[static_cast<std::size_t>(k)] =
         jacobianSample(records[static_cast<std::size_t>(k)]);
