@@ -392,10 +392,13 @@ struct FrameTracer::GridWork
     return this->Traced[k] ? this->Rays[k] : this->Fills[k];
   }
 
-  /// Whether the pixel lies on the lattice block's border, shared with its neighbours.
-  bool onBorder(int i, int j) const
+  /// Whether the pixel's ray is one other lattice blocks may need too: on the lattice block's
+  /// border, shared with its neighbours, or its centre, which its neighbours may look at
+  /// (capturedBesideOtherEndings).
+  bool shared(int i, int j) const
   {
-    return i == this->Block.x0 || i == this->Block.x1 || j == this->Block.y0 || j == this->Block.y1;
+    return i == this->Block.x0 || i == this->Block.x1 || j == this->Block.y0 ||
+           j == this->Block.y1 || (i == this->Block.xm() && j == this->Block.ym());
   }
 
   GridBlock Block;
@@ -411,14 +414,50 @@ const RayRecord& FrameTracer::gridRay(Propagator& prop, int i, int j, GridWork& 
   const std::size_t s = work.slot(i, j);
   if (!work.Traced[s])
   {
-    if (work.Shared && work.onBorder(i, j))
-      work.Rays[s] = work.Shared->get(static_cast<long>(j) * work.FrameWidth + i,
-                                      [&] { return this->traceThrough(prop, i, j); });
+    if (work.Shared && work.shared(i, j))
+      work.Rays[s] = this->sharedGridRay(prop, i, j, work);
     else
       work.Rays[s] = this->traceThrough(prop, i, j);
     work.Traced[s] = 1;
   }
   return work.Rays[s];
+}
+
+const RayRecord& FrameTracer::sharedGridRay(Propagator& prop, int i, int j, GridWork& work) const
+{
+  return work.Shared->get(static_cast<long>(j) * work.FrameWidth + i,
+                          [&] { return this->traceThrough(prop, i, j); });
+}
+
+bool FrameTracer::capturedBesideOtherEndings(Propagator& prop, const GridBlock& b,
+                                             GridWork& work) const
+{
+  const int W = this->Desc.camera.width, H = this->Desc.camera.height;
+  const int lattice = this->Desc.rendering.gridLattice;
+  // Each edge neighbour's line of points nearest to the block: its middle row (column).
+  std::vector<std::pair<int, int>> points;
+  auto row = [&](const GridBlock& n)
+  {
+    for (int x : { n.x0, n.xm(), n.x1 })
+      points.emplace_back(x, n.ym());
+  };
+  auto column = [&](const GridBlock& n)
+  {
+    for (int y : { n.y0, n.ym(), n.y1 })
+      points.emplace_back(n.xm(), y);
+  };
+  if (b.y0 > 0)
+    row(latticeBlock(b.x0, b.y0 - 1, lattice, W, H));
+  if (b.y1 < H - 1)
+    row(latticeBlock(b.x0, b.y1, lattice, W, H));
+  if (b.x0 > 0)
+    column(latticeBlock(b.x0 - 1, b.y0, lattice, W, H));
+  if (b.x1 < W - 1)
+    column(latticeBlock(b.x1, b.y0, lattice, W, H));
+  for (const auto& [i, j] : points)
+    if (this->sharedGridRay(prop, i, j, work).termination != Termination::Captured)
+      return true;
+  return false;
 }
 
 void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const
@@ -449,7 +488,14 @@ void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& wo
       }
   };
   const double tolerance = this->Desc.rendering.gridTolerance;
-  if (blockIsSmooth(b, p, tolerance))
+  // The lens compresses images most inside the shadow: an object's image running into a block
+  // whose points all fell into the hole can thin there below their spacing (the tip of the image
+  // of a rod that passes near the horizon). Such a lattice block is split once, its quarters
+  // refining as any block, when a neighbouring lattice block's nearest points do not all fall in.
+  const bool splitOnce = b == work.Block && p[0]->termination == Termination::Captured &&
+                         blockEndsAlike(p) && work.Shared &&
+                         this->capturedBesideOtherEndings(prop, b, work);
+  if (!splitOnce && blockIsSmooth(b, p, tolerance))
   {
     fill([&](int i, int j) { return interpolateRecord(b, p, i, j); });
     return;

@@ -12,13 +12,17 @@
 // (which its quarters would trace first): if the biquadratic through the 9 points predicts them
 // to within the tolerance, it fills the block. A block that is neither splits at its midpoints
 // into 4, down to blocks of at most 2 pixels a side, whose pixels are all among their 9 points.
+// A lattice block whose 9 points all fell into the hole splits once, however alike they end,
+// when a point of an edge neighbour's middle row (column) did not: inside the shadow the lens
+// thins the images of objects near the horizon below the points' spacing.
 //
 // A pixel belongs to the block whose half-open range [x0, x1) × [y0, y1) holds it (the frame's
 // last column and row belong to the blocks that end there). Its record is the traced ray if the
 // processing of its lattice block traced it, else its smooth sub-block's interpolation: a
-// function of the rays of its own lattice block alone, each ray a function of its pixel. So a
-// frame is the same bit for bit at any thread count and in any split into bands, subsets or
-// ranks: a split processes the whole lattice blocks holding its pixels.
+// function of the rays of its own lattice block and of its edge neighbours' middle rows
+// (columns), each ray a function of its pixel. So a frame is the same bit for bit at any thread
+// count and in any split into bands, subsets or ranks: a split processes the whole lattice blocks
+// holding its pixels, with the rays of their neighbours they look at.
 //
 // Like any sampling of the picture, features smaller than the spacing of a block's points (an
 // object whose image falls between them) can be missed by the block that holds them.

@@ -117,6 +117,11 @@ private:
   void refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const;
   /// The ray of pixel (i, j) of the block `work` holds, traced on first use.
   const RayRecord& gridRay(Propagator& prop, int i, int j, GridWork& work) const;
+  /// The ray of pixel (i, j) from the rays lattice blocks share, traced on first use.
+  const RayRecord& sharedGridRay(Propagator& prop, int i, int j, GridWork& work) const;
+  /// Whether a point of an edge neighbour's line of points nearest to lattice block `b` (its
+  /// middle row or column) ends otherwise than in the hole.
+  bool capturedBesideOtherEndings(Propagator& prop, const GridBlock& b, GridWork& work) const;
   /// The ray through screen position (x, y) with the given propagator (one per thread).
   RayRecord traceThrough(Propagator& prop, double x, double y) const;
   /// The colour a centre ray's sample shows without filtering (the texture at its hit, the horizon,

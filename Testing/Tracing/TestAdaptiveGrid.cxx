@@ -354,6 +354,45 @@ TEST(AdaptiveGrid, ThinObjectsBesideTheHoleKeepEveryPixel)
   EXPECT_LT(tracedShare(grid), 0.6);
 }
 
+TEST(AdaptiveGrid, AnImageThinningIntoTheShadowKeepsItsPixels)
+{
+  // Fig. 5 at 960x540, at the left rim of the shadow: an image of the x cylinder (object 1) runs
+  // into the shadow and tapers to a tip a pixel or two wide. Around the tip, a lattice block's 9
+  // points all fall into the hole; only its neighbours' points see the cylinder. The window's
+  // pixels, traced as a subset on the grid, against each pixel traced.
+  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig5-mass-end.json",
+                                     [](const std::string& path) { return readPngTexture(path); });
+  d.camera.width = 960;
+  d.camera.height = 540;
+  d.rendering = singleRayRendering();
+  std::vector<std::pair<int, int>> window;
+  for (int j = 296; j < 312; ++j)
+    for (int i = 280; i < 296; ++i)
+      window.emplace_back(i, j);
+  d.rendering.gridLattice = 1;
+  const std::vector<RayRecord> full = FrameTracer(d).tracePixels(window);
+  d.rendering.gridLattice = 8;
+  const std::vector<RayRecord> grid = FrameTracer(d).tracePixels(window);
+  long cylinder = 0, captured = 0, wrong = 0;
+  for (std::size_t k = 0; k < full.size(); ++k)
+  {
+    const RayRecord &r = full[k], &g = grid[k];
+    cylinder += r.objectId == 1;
+    captured += r.termination == Termination::Captured;
+    if (g.objectId != r.objectId || g.imageOrder != r.imageOrder || g.termination != r.termination)
+    {
+      ++wrong;
+      ADD_FAILURE() << "pixel " << r.i << ", " << r.j << " shows " << g.objectId << " for "
+                    << r.objectId << " (order " << r.imageOrder << "), traced " << g.traced;
+    }
+  }
+  // The window is much of it the shadow's inside, crossed by the cylinder's thin image.
+  EXPECT_GT(captured, static_cast<long>(full.size()) / 3);
+  EXPECT_GT(cylinder, 8);
+  EXPECT_LT(cylinder, static_cast<long>(full.size()) / 4);
+  EXPECT_EQ(wrong, 0);
+}
+
 TEST(AdaptiveGrid, Fig1FrameMatchesTheFullTrace)
 {
   SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
