@@ -44,7 +44,9 @@ double footprintMisfit(const RayRecord& r, const JacobianSample& s, int di, int 
   const double du = shortUDifference(s.u, r.u) - (a * di + b * dj);
   const double dv = (s.v - r.v) - (c * di + d * dj);
   const double x = (d * du - b * dv) / det, y = (-c * du + a * dv) / det;
-  return std::hypot(x, y);
+  // Not std::hypot: this runs for every pixel's 4 neighbours, and its guard against overflow
+  // costs several times the square root (an overflow gives infinity, a misfit all the same).
+  return std::sqrt(x * x + y * y);
 }
 
 /// Where sample (a, b) of a pixel's n × n pattern lies, from the pixel's centre: the square grid
