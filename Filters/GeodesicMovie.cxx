@@ -207,6 +207,8 @@ struct NotServed
 struct MovieMaker::Internals
 {
   std::map<int, std::vector<RayRecord>> whole; ///< whole frames made, in pixel order
+  /// The rays each whole frame made took: integrated if traced, its records' if read.
+  std::map<int, double> wholeRays;
   /// Re-traced pixels kept in memory (MovieSettings::cacheRetraced): frame, subset's count and
   /// digest.
   std::map<std::pair<int, std::string>, std::vector<RayRecord>> retraced;
@@ -311,6 +313,7 @@ struct MovieMaking
       return kept->second;
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     std::vector<RayRecord> records;
+    double rays = 0;
     if (f.storedId && maker.Store)
     {
       records = maker.Store->readFrame(*f.storedId);
@@ -321,6 +324,7 @@ struct MovieMaking
         throw StoreError("stored frame " + std::to_string(*f.storedId) + " has " +
                          std::to_string(records.size()) + " rays, the movie's frames " +
                          std::to_string(maker.Width * maker.Height) + " pixels");
+      rays = raysOf(records);
     }
     else
     {
@@ -334,13 +338,17 @@ struct MovieMaking
       // A frame with too many failed rays is no picture of its scene: neither used nor stored.
       if (maker.Settings.checkTraced)
         maker.Settings.checkTraced(records, k);
-      maker.RaysTraced += raysOf(records);
+      // The tracer's count: on the adaptive grid the records leave out border rays a block traced
+      // for a pixel that the block owning it filled (FrameTracer::raysIntegrated).
+      rays = static_cast<double>(tracer.raysIntegrated());
+      maker.RaysTraced += rays;
       if (maker.Store)
         storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
     }
-    maker.RaysOfMovie += raysOf(records);
-    maker.RaysOfKeys += raysOf(records);
+    maker.RaysOfMovie += rays;
+    maker.RaysOfKeys += rays;
     ++maker.WholeCount;
+    in.wholeRays[k] = rays;
     return in.whole.emplace(k, std::move(records)).first->second;
   }
 
@@ -396,9 +404,9 @@ struct MovieMaking
   {
     return [this, k, &tracer, &report, storeOnly](const std::vector<std::pair<int, int>>& pixels)
     {
-      std::vector<RayRecord> records;
+      TracedPixels out;
       if (pixels.empty())
-        return records;
+        return out;
       SceneDescription subset = maker.Frames[static_cast<std::size_t>(k)].identity;
       subset.subset = pixelSubsetId(pixels);
       subset.rendering = scatteredPixelRendering(subset.rendering); // as the tracer traces them
@@ -413,24 +421,30 @@ struct MovieMaking
           if (maker.Settings.cacheRetraced)
             in.retraced.emplace(cacheKey, *found);
         }
-        return std::move(*found);
+        out.records = std::move(*found);
+        return out;
       }
       if (storeOnly)
         throw NotServed();
       const auto t0 = std::chrono::steady_clock::now();
-      records = tracer().tracePixels(pixels, this->progress());
+      // The tracer's count, not the records': these leave out the edge neighbours it traces and
+      // drops (FrameTracer::raysIntegrated). The tracer is this frame's alone.
+      const FrameTracer& frameTracer = tracer();
+      const std::int64_t before = frameTracer.raysIntegrated();
+      out.records = frameTracer.tracePixels(pixels, this->progress());
+      out.rays = static_cast<double>(frameTracer.raysIntegrated() - before);
       if (this->cancelled())
         throw MovieCancelled();
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      report.raysTraced += raysOf(records);
-      maker.RaysTraced += raysOf(records);
-      maker.RaysOfMovie += raysOf(records);
+      report.raysTraced += out.rays;
+      maker.RaysTraced += out.rays;
+      maker.RaysOfMovie += out.rays;
       if (maker.Store)
-        storeFrame(*maker.Store, maker.Settings, subset, records, seconds);
+        storeFrame(*maker.Store, maker.Settings, subset, out.records, seconds);
       if (maker.Settings.cacheRetraced)
-        in.retraced.emplace(cacheKey, records);
-      return records;
+        in.retraced.emplace(cacheKey, out.records);
+      return out;
     };
   }
 
@@ -492,34 +506,37 @@ struct MovieMaking
 
   /// Whole frame k interpolated between the whole frames `wholeFrames` around it (k not among
   /// them) and completed to the target from its own records: the share the target needed there,
-  /// and the rays those pixels took in frame k, nothing traced or stored.
+  /// and the rays re-tracing those pixels would have taken, nothing traced or stored.
   ShareMeasurement measuredShare(int k, const std::vector<int>& wholeFrames)
   {
     const std::vector<RayRecord>& truth = this->whole(k);
-    double pixels = 0, rays = 0;
-    const int width = maker.Width;
+    double pixels = 0;
+    const int width = maker.Width, height = maker.Height;
     const PixelTracer fromTruth =
-      [&truth, &pixels, &rays, width](const std::vector<std::pair<int, int>>& ij)
+      [&truth, &pixels, width, height](const std::vector<std::pair<int, int>>& ij)
     {
-      std::vector<RayRecord> records;
-      records.reserve(ij.size());
+      TracedPixels out;
+      out.records.reserve(ij.size());
       for (const auto& p : ij)
       {
         const RayRecord& r = truth[static_cast<std::size_t>(p.second) * width + p.first];
-        records.push_back(r);
+        out.records.push_back(r);
         // A pixel the adaptive grid filled counts only its anti-aliasing rays: re-traced, it
         // takes its own centre ray too.
-        rays += std::max<double>(1, r.raysPerPixel);
+        out.rays += std::max<double>(1, r.raysPerPixel);
       }
+      // Traced, the list takes its edge neighbours' centre rays too (FrameTracer::tracePixels);
+      // the midpoint rays the frame charges to those neighbours are not counted here.
+      out.rays += static_cast<double>(edgeNeighbours(ij, width, height).size());
       pixels += static_cast<double>(ij.size());
-      return records;
+      return out;
     };
     std::vector<RayRecord> records;
     const PathCompletion done = this->interpolatedWith(k, wholeFrames, fromTruth, records);
     ShareMeasurement m;
     m.share = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
               static_cast<double>(maker.Height);
-    m.raysPerPixel = pixels > 0 ? rays / pixels : 0.0;
+    m.raysPerPixel = pixels > 0 ? done.raysTraced / pixels : 0.0;
     return m;
   }
 };
@@ -622,7 +639,8 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
     keyMaking.makeWhole = [&](int k)
     {
       whole[static_cast<std::size_t>(k)] = true;
-      const double rays = raysOf(making.whole(k));
+      making.whole(k);
+      const double rays = this->Impl->wholeRays.at(k);
       if (afterEach)
         afterEach();
       return rays;
@@ -672,11 +690,12 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
   if (report.method == FrameMethod::Interpolated)
     return making.interpolated(k, plan.keys(), report, false);
   const std::vector<RayRecord>& records = making.whole(k);
+  const double rays = this->Impl->wholeRays.at(k);
   if (this->Frames[static_cast<std::size_t>(k)].storedId)
-    report.raysReused = raysOf(records);
+    report.raysReused = rays;
   else
   {
-    report.raysTraced = raysOf(records);
+    report.raysTraced = rays;
     report.shareRetraced = 1;
   }
   return records;

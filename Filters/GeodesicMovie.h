@@ -124,8 +124,11 @@ struct MovieFrameReport
   FrameMethod method = FrameMethod::Key;
   double estimatedPsnr = std::numeric_limits<double>::infinity();
   double shareRetraced = 0; ///< of its pixels traced for it (1 for a frame traced whole)
-  double raysTraced = 0;    ///< traced for this frame, this time
-  double raysReused = 0;    ///< read from the store or the cache for it
+  /// Integrated for this frame, this time: a re-traced subset counts the edge neighbours that
+  /// FrameTracer::tracePixels traces and drops (FrameTracer::raysIntegrated).
+  double raysTraced = 0;
+  /// Read from the store or the cache for it: the rays its records hold (their raysPerPixel).
+  double raysReused = 0;
 };
 
 struct MovieSettings
@@ -180,7 +183,8 @@ public:
   /// read from the store (or the memory cache) when they were traced before.
   std::vector<RayRecord> frame(int k, MovieFrameReport& report);
 
-  /// Rays traced so far (anti-aliasing's extra rays counted), by this maker.
+  /// Rays integrated so far by this maker (anti-aliasing's extra rays, and the edge neighbours a
+  /// re-traced subset traces and drops, counted).
   double raysTraced() const { return this->RaysTraced; }
   /// Rays of the frames made, traced or read: what the movie cost in all.
   double raysOfMovie() const { return this->RaysOfMovie; }

@@ -663,8 +663,18 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
     invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
             std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
             std::to_string(frame.height));
+  // The tracer's count, read around each call: its records' raysPerPixel leave out the edge
+  // neighbours it traces and drops.
   return completePathFrame(
-    frame, [&tracer](const std::vector<std::pair<int, int>>& ij) { return tracer.tracePixels(ij); },
+    frame,
+    [&tracer](const std::vector<std::pair<int, int>>& ij)
+    {
+      const std::int64_t before = tracer.raysIntegrated();
+      TracedPixels out;
+      out.records = tracer.tracePixels(ij);
+      out.rays = static_cast<double>(tracer.raysIntegrated() - before);
+      return out;
+    },
     targetDb, probeFraction);
 }
 
@@ -697,7 +707,9 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
         which.push_back(p);
         ij.emplace_back(p % frame.width, p / frame.width);
       }
-    const std::vector<RayRecord> records = tracePixels(ij);
+    const TracedPixels got = tracePixels(ij);
+    const std::vector<RayRecord>& records = got.records;
+    done.raysTraced += got.rays;
     if (records.size() != ij.size())
       invalid("the pixel tracer returned " + std::to_string(records.size()) + " records for " +
               std::to_string(ij.size()) + " pixels");

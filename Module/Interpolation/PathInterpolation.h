@@ -150,6 +150,10 @@ struct PathCompletion
   std::size_t retraced = 0; ///< pixels traced at t in all (the above, chosen ones and probes)
   std::size_t probes = 0;   ///< pixels traced to measure the estimate's scale
   double estimatedPsnr = 0; ///< of the completed frame against the frame traced at t
+  /// Rays integrated to trace them, as the pixel tracer counted them: with a FrameTracer, every
+  /// ray it integrated (FrameTracer::raysIntegrated), the edge neighbours traced and dropped
+  /// included, and a pixel traced again where a later list borders it.
+  double raysTraced = 0;
 };
 
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
@@ -177,10 +181,17 @@ ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           double targetDb,
                                                           double probeFraction = 0.01);
 
-/// Traces the given pixels (i, j) at the frame's parameters and returns their records in the
-/// order given, each the whole frame's record of that pixel (FrameTracer::tracePixels's).
-using PixelTracer =
-  std::function<std::vector<RayRecord>(const std::vector<std::pair<int, int>>& pixels)>;
+/// What a PixelTracer returns: the records of the pixels asked for, in the order given, and the
+/// rays integrated to make them (0 for records served from a store).
+struct TracedPixels
+{
+  std::vector<RayRecord> records;
+  double rays = 0;
+};
+
+/// Traces the given pixels (i, j) at the frame's parameters and returns their records, each the
+/// whole frame's record of that pixel (FrameTracer::tracePixels's), and the rays it integrated.
+using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, int>>& pixels)>;
 
 /// As above, the pixels got from `trace` (called with the must-retrace pixels and the probes,
 /// then once per round of neighbours that contradict traced pixels, then with the chosen ones;

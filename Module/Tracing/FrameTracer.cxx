@@ -122,12 +122,14 @@ RayRecord traceWith(const FrameTracer& tracer, Propagator& prop, const TraceOpti
 
 RayRecord FrameTracer::tracePixel(int i, int j, std::vector<PathPoint>* path) const
 {
+  ++this->RaysIntegrated;
   auto prop = makePropagator(*this->St, this->Desc.integrator);
   return traceWith(*this, *prop, this->Tracing, i, j, path);
 }
 
 RayRecord FrameTracer::traceAt(double x, double y) const
 {
+  ++this->RaysIntegrated;
   auto prop = makePropagator(*this->St, this->Desc.integrator);
   RayRecord r = traceWith(*this, *prop, this->Tracing, x, y, nullptr);
   r.dudi = r.dudj = r.dvdi = r.dvdj = std::numeric_limits<double>::quiet_NaN();
@@ -136,6 +138,7 @@ RayRecord FrameTracer::traceAt(double x, double y) const
 
 RayRecord FrameTracer::traceThrough(Propagator& prop, double x, double y) const
 {
+  ++this->RaysIntegrated;
   return traceWith(*this, prop, this->Tracing, x, y, nullptr);
 }
 
@@ -145,31 +148,36 @@ Color FrameTracer::pointColor(const JacobianSample& s) const
   return s.objectId >= 0 ? scene.shade(s.objectId, s.u, s.v) : scene.endColor(s.termination);
 }
 
+std::vector<std::pair<int, int>> edgeNeighbours(const std::vector<std::pair<int, int>>& pixels,
+                                                int width, int height)
+{
+  std::vector<std::pair<int, int>> sorted = pixels;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::pair<int, int>> halo;
+  for (const auto& [i, j] : pixels)
+    for (const auto& [di, dj] :
+         { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
+    {
+      const std::pair<int, int> n(i + di, j + dj);
+      if (n.first >= 0 && n.first < width && n.second >= 0 && n.second < height &&
+          !std::binary_search(sorted.begin(), sorted.end(), n))
+        halo.push_back(n);
+    }
+  std::sort(halo.begin(), halo.end());
+  halo.erase(std::unique(halo.begin(), halo.end()), halo.end());
+  return halo;
+}
+
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
 {
   // The pixels' edge neighbours that are not among them are traced too, as the halo rows of a
   // band are: a pixel's Jacobian and its anti-aliasing read its neighbours, so that with them a
   // subset's records are the whole frame's records of those pixels, bit for bit.
-  const int W = this->Desc.camera.width, H = this->Desc.camera.height;
   std::vector<std::pair<int, int>> all = pixels;
-  {
-    std::vector<std::pair<int, int>> sorted = pixels;
-    std::sort(sorted.begin(), sorted.end());
-    std::vector<std::pair<int, int>> halo;
-    for (const auto& [i, j] : pixels)
-      for (const auto& [di, dj] :
-           { std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1) })
-      {
-        const std::pair<int, int> n(i + di, j + dj);
-        if (n.first >= 0 && n.first < W && n.second >= 0 && n.second < H &&
-            !std::binary_search(sorted.begin(), sorted.end(), n))
-          halo.push_back(n);
-      }
-    std::sort(halo.begin(), halo.end());
-    halo.erase(std::unique(halo.begin(), halo.end()), halo.end());
-    all.insert(all.end(), halo.begin(), halo.end());
-  }
+  const std::vector<std::pair<int, int>> halo =
+    edgeNeighbours(pixels, this->Desc.camera.width, this->Desc.camera.height);
+  all.insert(all.end(), halo.begin(), halo.end());
   return this->traceKeeping(all, pixels.size(), progress);
 }
 
@@ -221,7 +229,7 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
     {
       if (stop.load(std::memory_order_relaxed))
         continue;
-      out[k] = traceWith(*this, *prop, this->Tracing, pixels[k].first, pixels[k].second, nullptr);
+      out[k] = this->traceThrough(*prop, pixels[k].first, pixels[k].second);
       const long d = ++done;
       // Only the master thread reports: VTK's progress events are not thread-safe.
       if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace asrt
@@ -25,6 +26,12 @@ constexpr long kParallelRays = 16;
 constexpr long kRaysPerItem = 8;
 /// Passes over records that trace nothing run in parallel above this many records.
 constexpr long kParallelRecords = 16384;
+
+/// The edge neighbours of `pixels` inside a width × height frame that are not among them, sorted,
+/// each once: the pixels whose centre rays FrameTracer::tracePixels traces besides those asked for
+/// (with a grid lattice above 1, traceCentres processes the lattice blocks holding them whole).
+ASRTTRACING_EXPORT std::vector<std::pair<int, int>> edgeNeighbours(
+  const std::vector<std::pair<int, int>>& pixels, int width, int height);
 
 /// Traces pixels of one scene. Thread-safe: every traced pixel uses its own propagator.
 class ASRTTRACING_EXPORT FrameTracer
@@ -44,6 +51,16 @@ public:
   /// FarField). Off, every segment follows the ray: for comparisons.
   void setFarField(bool enabled);
 
+  /// Every ray this tracer has integrated since it was made, whatever it was for: the centre rays
+  /// of the pixels asked for and of the neighbours tracePixels and traceRows trace and drop, the
+  /// adaptive grid's points, anti-aliasing samples and edge midpoints, single rays (tracePixel,
+  /// traceAt). A record's raysPerPixel counts only the rays charged to its own pixel. Over a whole
+  /// frame traced a ray a pixel (grid lattice 1) they add up to this count; they leave out the
+  /// dropped neighbours' centre rays and the midpoint rays charged to them, and on the adaptive
+  /// grid the rays a lattice block traced on its border where the block owning that pixel filled
+  /// it. Calls on one tracer at the same time add to the one count.
+  std::int64_t raysIntegrated() const { return this->RaysIntegrated.load(); }
+
   /// Traces one pixel; appends its polyline to `path` if given.
   RayRecord tracePixel(int i, int j, std::vector<PathPoint>* path = nullptr) const;
 
@@ -54,8 +71,9 @@ public:
 
   /// Traces the given pixels (i, j) with OpenMP, dynamically scheduled (rays near the photon
   /// sphere cost far more than the rest), and anti-aliases them as the description's rendering
-  /// says (antialias()). Their edge neighbours in the frame are traced too (and dropped), so that
-  /// each record, Jacobian and colour included, is the whole frame's record of that pixel. The
+  /// says (antialias()). Their edge neighbours in the frame (edgeNeighbours()) are traced too (and
+  /// dropped), so that each record, Jacobian and colour included, is the whole frame's record of
+  /// that pixel: raysIntegrated() counts their rays, the records' raysPerPixel do not. The
   /// result is in the order given and identical for any number of threads. `progress` is called
   /// now and then with the fraction done; if it returns false the work stops early and the
   /// returned records of untraced pixels keep termination Running.
@@ -132,6 +150,7 @@ private:
   std::unique_ptr<Spacetime> St;
   std::unique_ptr<Camera> Cam;
   TraceOptions Tracing;
+  mutable std::atomic<std::int64_t> RaysIntegrated{ 0 };
 };
 }
 

@@ -333,10 +333,21 @@ TEST_F(PathInterpolationRamp, AQualityTargetIsMetByReTracingTheWorstPixels)
   {
     PathFrame f = interpolated();
     const std::size_t must = f.counts()[static_cast<int>(PathMethod::Retrace)];
+    const std::int64_t before = tracer.raysIntegrated();
     const PathCompletion done = completePathFrame(f, tracer, target);
     const double psnr = psnrOf(f.records, truth());
-    std::printf("[ path ] target %.0f dB: %.1f dB, %zu re-traced (%zu must, %zu probes) of %zu\n",
-                target, psnr, done.retraced, done.mustRetrace, done.probes, f.records.size());
+    // The rays counted are all the tracer integrated (TestFrameTracer holds its count to the
+    // rays of whole frames), more than the re-traced records hold: their edge neighbours too.
+    double charged = 0;
+    for (std::size_t p = 0; p < f.records.size(); ++p)
+      if (f.method[p] == static_cast<std::uint8_t>(PathMethod::Retraced))
+        charged += f.records[p].raysPerPixel;
+    std::printf("[ path ] target %.0f dB: %.1f dB, %zu re-traced (%zu must, %zu probes) of %zu, "
+                "%.0f rays (%.0f in their records)\n",
+                target, psnr, done.retraced, done.mustRetrace, done.probes, f.records.size(),
+                done.raysTraced, charged);
+    EXPECT_EQ(done.raysTraced, static_cast<double>(tracer.raysIntegrated() - before));
+    EXPECT_GT(done.raysTraced, charged);
     EXPECT_EQ(done.mustRetrace, must);
     EXPECT_GE(psnr, target - 1.0);
     EXPECT_LT(done.retraced, f.records.size());

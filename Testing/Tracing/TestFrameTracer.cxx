@@ -848,6 +848,104 @@ TEST(FrameTracerRecords, SubsetsMatchWholeRows)
   }
 }
 
+// ---- 8b. rays integrated ------------------------------------------------------------------------
+namespace
+{
+long long raysCharged(const std::vector<RayRecord>& records)
+{
+  long long rays = 0;
+  for (const RayRecord& r : records)
+    rays += r.raysPerPixel;
+  return rays;
+}
+}
+
+// Over a whole frame traced a ray a pixel every ray is charged to one of its pixels (a centre ray,
+// an anti-aliasing sample, an edge midpoint to its lower or left pixel, Antialiasing.h): the
+// records' raysPerPixel add up to what the tracer integrated, traced by rows or as a list of all
+// its pixels. On the adaptive grid a block may trace a ray on its border that the block owning
+// the pixel does not use: the records then hold fewer.
+TEST(FrameTracerRays, AWholeFrameIntegratesTheRaysItsRecordsCount)
+{
+  const int W = 32, H = 24;
+  for (int lattice : { 1, 4 })
+  {
+    SceneDescription d = photonSphereScene(W, H);
+    d.rendering.gridLattice = lattice;
+    const FrameTracer tracer(d);
+    ASSERT_EQ(tracer.raysIntegrated(), 0);
+    const std::vector<RayRecord> rows = tracer.traceRows(0, H);
+    const long long charged = raysCharged(rows);
+    // Edges between the disk, the ball, the sky and the hole: the adaptive rendering added rays.
+    EXPECT_GT(charged, static_cast<long long>(W) * H / (lattice * lattice)) << lattice;
+    if (lattice > 1)
+    {
+      EXPECT_GE(tracer.raysIntegrated(), charged);
+      continue;
+    }
+    EXPECT_EQ(tracer.raysIntegrated(), charged);
+    std::vector<std::pair<int, int>> pixels;
+    for (int j = H - 1; j >= 0; --j) // another order than the rows'
+      for (int i = 0; i < W; ++i)
+        pixels.emplace_back(i, j);
+    const long long before = tracer.raysIntegrated();
+    const std::vector<RayRecord> listed = tracer.tracePixels(pixels);
+    EXPECT_EQ(raysCharged(listed), charged);
+    EXPECT_EQ(tracer.raysIntegrated() - before, charged);
+  }
+}
+
+// A subset's records leave out the rays of the edge neighbours traced for them (and dropped); the
+// tracer counts those too. The neighbours are found here by scanning the frame.
+TEST(FrameTracerRays, ASubsetCountsTheNeighboursItTracesAndDrops)
+{
+  const int W = 32, H = 24;
+  std::vector<std::pair<int, int>> subset;
+  for (int j = 1; j < H; j += 5) // scattered pixels
+    for (int i = 2; i < W; i += 7)
+      subset.emplace_back(i, j);
+  for (int j = 10; j < 14; ++j) // a block
+    for (int i = 19; i < 23; ++i)
+      subset.emplace_back(i, j);
+  subset.emplace_back(0, 0); // a corner
+  std::vector<char> in(static_cast<std::size_t>(W) * H, 0), below(in.size(), 0);
+  for (const auto& [i, j] : subset)
+    in[static_cast<std::size_t>(j) * W + i] = 1;
+  long long neighbours = 0, belowOrLeft = 0;
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i)
+    {
+      if (in[static_cast<std::size_t>(j) * W + i])
+        continue;
+      auto asked = [&](int a, int b)
+      { return a >= 0 && a < W && b >= 0 && b < H && in[static_cast<std::size_t>(b) * W + a]; };
+      neighbours += asked(i - 1, j) || asked(i + 1, j) || asked(i, j - 1) || asked(i, j + 1);
+      // Edges whose midpoint ray the frame charges to this pixel, not to the one asked for.
+      belowOrLeft += asked(i + 1, j) + asked(i, j + 1);
+    }
+  ASSERT_GT(neighbours, 0);
+
+  // One ray a pixel (textures filtered, no extra rays): each asked-for entry and each neighbour.
+  SceneDescription filtered = photonSphereScene(W, H);
+  filtered.rendering.mode = AntialiasMode::Filter;
+  const FrameTracer plain(filtered);
+  const std::vector<RayRecord> one = plain.tracePixels(subset);
+  EXPECT_EQ(raysCharged(one), static_cast<long long>(subset.size()));
+  EXPECT_EQ(plain.raysIntegrated(), static_cast<long long>(subset.size()) + neighbours);
+
+  // Adaptive: the records' own rays, every neighbour's centre ray, and at most one midpoint ray
+  // for each edge whose midpoint the frame charges to the neighbour.
+  const FrameTracer adaptive(photonSphereScene(W, H));
+  const std::vector<RayRecord> some = adaptive.tracePixels(subset);
+  const long long own = raysCharged(some);
+  EXPECT_GT(own, static_cast<long long>(subset.size())); // the rendering added rays
+  EXPECT_GE(adaptive.raysIntegrated(), own + neighbours);
+  EXPECT_LE(adaptive.raysIntegrated(), own + neighbours + belowOrLeft);
+  std::printf("[ measured ] a subset of %zu entries: %lld rays in its records, %lld integrated "
+              "(%lld edge neighbours)\n",
+              subset.size(), own, static_cast<long long>(adaptive.raysIntegrated()), neighbours);
+}
+
 // ---- 9. Jacobians -------------------------------------------------------------------------------
 TEST(FrameTracerRecords, JacobiansMatchThePinholeProjection)
 {
