@@ -150,7 +150,9 @@ private:
   std::unique_ptr<Spacetime> St;
   std::unique_ptr<Camera> Cam;
   TraceOptions Tracing;
-  mutable std::atomic<std::int64_t> RaysIntegrated{ 0 };
+  // On a cache line of its own: every ray of every thread adds to it, and the members above are
+  // read by every ray.
+  alignas(64) mutable std::atomic<std::int64_t> RaysIntegrated{ 0 };
 };
 }
 
