@@ -391,6 +391,26 @@ TEST(AdaptiveGrid, AnImageThinningIntoTheShadowKeepsItsPixels)
   EXPECT_GT(cylinder, 8);
   EXPECT_LT(cylinder, static_cast<long>(full.size()) / 4);
   EXPECT_EQ(wrong, 0);
+
+  // The split blocks look at their neighbours' rays: the window's pixels in two pieces, split on
+  // the lattice between the blocks holding the tip, are the same records bit for bit.
+  FrameTracer tracer(d);
+  for (int cut : { 288, 292 })
+  {
+    std::vector<std::pair<int, int>> left, right;
+    for (const auto& [i, j] : window)
+      (i < cut ? left : right).emplace_back(i, j);
+    std::vector<RayRecord> pieces = tracer.tracePixels(left);
+    const std::vector<RayRecord> rest = tracer.tracePixels(right);
+    pieces.insert(pieces.end(), rest.begin(), rest.end());
+    std::size_t l = 0, r = left.size();
+    for (std::size_t k = 0; k < window.size(); ++k)
+    {
+      const RayRecord& piece = window[k].first < cut ? pieces[l++] : pieces[r++];
+      EXPECT_EQ(firstDifference(grid[k], piece), "")
+        << "cut " << cut << " pixel " << window[k].first << ", " << window[k].second;
+    }
+  }
 }
 
 TEST(AdaptiveGrid, Fig1FrameMatchesTheFullTrace)
