@@ -339,7 +339,8 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
                                               double t, int width, int height, const Scene& scene,
                                               const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
-                                              const std::vector<const RayRecord*>& perPixel)
+                                              const std::vector<const RayRecord*>& perPixel,
+                                              bool hedged)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
@@ -362,14 +363,21 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
     e.record.color = color;
     // The other ways of predicting the pixel: the disagreement of each with this one.
-    Color other;
+    Color other, sum = color;
+    int ways = 1;
     if (subsampled(mover, scene, i, j, true, 3, other))
       e.estimate = std::max(e.estimate, colorError2(color, other));
     else
       e.estimate = std::numeric_limits<float>::infinity();
     for (int side : { 1, 2 })
       if (subsampled(mover, scene, i, j, false, side, other))
+      {
         e.estimate = std::max(e.estimate, colorError2(color, other));
+        sum += other;
+        ++ways;
+      }
+    if (hedged)
+      e.record.color = sum / static_cast<double>(ways);
     // An edge within a pixel of it that every prediction moves alike may still lie a fraction of
     // a pixel off, which changes the pixel by that fraction of the contrast across the edge.
     for (const auto& o : kNeighbours)

@@ -14,6 +14,11 @@
 //  - Shading. The front point's (u, v), moved within its pixel by the surface Jacobian mapped to
 //    t, is shaded with the footprint filter at 3×3 sub-positions of the pixel, whose mean is the
 //    pixel's colour: an edge crossing the pixel then blends as a supersampled trace does.
+//  - Hedging. The points of both inner keys, and each inner key's alone, move the edge three
+//    ways; where the keys lie far apart these disagree on where it is now. The pixel's colour is
+//    then the mean of the ways that cover it: a softened edge, whose expected squared error is
+//    below that of any one way placed wrong (on the mass ramp, keys 0.11 M apart, the plain
+//    frames gain 0.4–1.2 dB against converged ones).
 //  - Estimate. The same pixel predicted other ways: with linear motion (the inner pair alone),
 //    from each inner key's points alone, and, where the inner pair agree on the pixel itself,
 //    per pixel. The largest squared colour difference to the prediction, levels² of 255 summed
@@ -44,12 +49,14 @@ struct MovedEdgePixel
 /// Predicts the listed pixels (indices into the frame) of the frame at t from the keys, the
 /// inner pair (a, a + 1) bracketing t, the keys' scene points matched with the searches `index`
 /// makes. `perPixel[k]` is the per-pixel prediction of pixel `pixels[k]`, or null where the inner
-/// pair disagree on it.
+/// pair disagree on it. `hedged`: the colour is the mean of the ways of moving (Hedging above),
+/// else that of both inner keys' points.
 std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
                                               double t, int width, int height, const Scene& scene,
                                               const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
-                                              const std::vector<const RayRecord*>& perPixel);
+                                              const std::vector<const RayRecord*>& perPixel,
+                                              bool hedged);
 }
 
 #endif

@@ -436,7 +436,7 @@ std::vector<std::int32_t> contradictedNeighbours(const PathFrame& frame,
 /// the ways of predicting them give a finite estimate (PathEdges.h).
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
                   const PointIndexFactory& index, const std::vector<RayRecord>& own,
-                  const std::vector<std::uint8_t>& hasOwn, PathFrame& f)
+                  const std::vector<std::uint8_t>& hasOwn, bool hedged, PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -447,7 +447,7 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
     }
   const std::vector<MovedEdgePixel> moved =
-    predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel);
+    predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -651,7 +651,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       f.method[p] = static_cast<std::uint8_t>(m);
     }
   if (options.movedEdges)
-    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, f);
+    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges, f);
   return f;
 }
 

@@ -132,6 +132,9 @@ struct PathOptions
   /// edges: the caller's, as for matchFrames (the filters pass asrt::vtkPointIndexFactory()).
   /// Required when movedEdges is set.
   PointIndexFactory pointIndex;
+  /// A moved edge's colour is the mean of the ways of moving the keys' points that cover the
+  /// pixel, not that of both inner keys' points alone (PathEdges.h, Hedging).
+  bool hedgeMovedEdges = true;
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within

@@ -362,6 +362,47 @@ TEST_F(PathInterpolationRamp, AQualityTargetIsMetByReTracingTheWorstPixels)
   }
 }
 
+// The mass ramp with keys 0.11 M apart, where the lensed edges move far and not evenly between
+// keys: the ways of moving the keys' scene points disagree on where an edge now lies, and the
+// mean of the ways (hedged, the default) comes closer to the frame the test traces there than
+// the points of both keys alone.
+TEST(PathInterpolationMovedEdges, HedgingTheWaysOfMovingComesCloserToTheTracedFrame)
+{
+  constexpr int side = 96;
+  constexpr double t = 0.76;
+  std::vector<std::vector<RayRecord>> records;
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    records.push_back(traceFrame(rampScene(0.595 + 0.11 * k, side)));
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.595 + 0.11 * k, &records[static_cast<std::size_t>(k)] });
+  const SceneDescription atT = rampScene(t, side);
+  const std::vector<RayRecord> truth = traceFrame(atT);
+  PathOptions hedged = withMovedEdges(), single = withMovedEdges();
+  single.hedgeMovedEdges = false;
+  const PathFrame a = interpolateAlongPath(path, t, side, side, *atT.scene, hedged);
+  const PathFrame b = interpolateAlongPath(path, t, side, side, *atT.scene, single);
+  double errorHedged = 0, errorSingle = 0;
+  std::size_t moved = 0, changed = 0;
+  for (std::size_t p = 0; p < truth.size(); ++p)
+  {
+    // Both frames choose their ways of predicting alike: hedging changes colours alone.
+    ASSERT_EQ(a.method[p], b.method[p]) << p;
+    if (a.method[p] != static_cast<std::uint8_t>(PathMethod::MovedEdge))
+      continue;
+    ++moved;
+    changed += a.records[p].color != b.records[p].color;
+    errorHedged += error2(a.records[p], truth[p]);
+    errorSingle += error2(b.records[p], truth[p]);
+  }
+  std::printf("[ path ] moved edges at M = %.2f, keys 0.11 apart: %zu pixels, %zu hedged; mean "
+              "squared error %.0f hedged, %.0f from both keys' points alone\n",
+              t, moved, changed, errorHedged / moved, errorSingle / moved);
+  EXPECT_GT(moved, side * side / 20u);
+  EXPECT_GT(changed, moved / 10);
+  EXPECT_LT(errorHedged, 0.9 * errorSingle);
+}
+
 // The whole mass ramp with key frames a quarter of it apart, where the orders of prediction
 // disagree little while the texture under a pixel changes a lot between keys: every frame between
 // them, completed to a target, meets it within 1 dB against the frame the test traces there, and
