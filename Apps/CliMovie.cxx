@@ -302,10 +302,9 @@ void printReport(MovieMaker& maker, const std::vector<MovieFrameReport>& reports
   const SpacingShareModel& share = maker.shareModel();
   if (!share.measurements.empty())
     std::printf("the plan learnt from %zu key frames: re-trace share %.3g + %.3g x key spacing / "
-                "path; %.0f rays a whole frame, %.2f a re-traced pixel\n",
+                "path; %.0f rays a whole frame (on average), interpolating one counted as %.0f\n",
                 share.measurements.size(), share.floor, share.slope, plan.frameRays,
-                (plan.retraceRays > 0 ? plan.retraceRays : plan.frameRays) /
-                  (static_cast<double>(maker.width()) * maker.height()));
+                plan.interpolationRays);
 }
 }
 

@@ -6,6 +6,7 @@
 #include "PathInterpolation.h"
 #include "RayStore.h"
 #include "RecordAllocation.h"
+#include "RetraceRays.h"
 #include "SceneFile.h"
 #include "vtkGeodesicSource.h"
 
@@ -181,6 +182,27 @@ namespace
 /// paper's mass ramp re-traced 23 % in exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README,
 /// "Interpolated movies").
 constexpr double kPriorSlope = 1.0;
+/// A movie's costs before any is measured, for frames of `pixels` pixels, in rays: a whole frame
+/// traces the adaptive grid's centre rays, in proportion to its area, and anti-aliasing samples
+/// and edge midpoints along its edges, in proportion to its side (√pixels); a re-trace, beyond
+/// its pixels' own centre rays, its edge neighbours, edge midpoints and samples (RetraceRays.h),
+/// along the edges too; interpolating a frame (without its re-trace) takes CPU in proportion to
+/// its pixels. Fitted to the mass ramp of Figs. 4–5 at 35 dB: whole frames 40 289 rays on average
+/// at 200 × 200 (31 frames; 47 364 on the 90° orbit of Fig. 1) and 6 650 at 48 × 48 (7 frames);
+/// a re-trace's edges 17 000 to 29 000 rays at 200 × 200 with keys two frames apart (about
+/// 22 000 on the orbit) and about 5 000 at 48 × 48; interpolating a frame took the CPU time of
+/// 0.125 (ramp) and 0.15 (orbit) rays a pixel at 200 × 200. The last is never measured while
+/// planning (a time would make the plan differ from run to run): where rays cost more (Kerr), it
+/// overstates interpolating.
+MovieCostPrior movieCostPrior(double pixels)
+{
+  const double side = std::sqrt(pixels);
+  MovieCostPrior prior;
+  prior.wholeRaysPerPixel = 0.41 + 118 / side;
+  prior.edgeRaysPerPixel = 110 / side;
+  prior.interpolationRaysPerPixel = 0.15;
+  return prior;
+}
 /// completePathFrame's default probe share, the floor of the estimate.
 constexpr double kMovieProbeFraction = 0.01;
 /// The most bytes of records kept of the frames made from the store alone while planning (a
@@ -510,25 +532,19 @@ struct MovieMaking
   ShareMeasurement measuredShare(int k, const std::vector<int>& wholeFrames)
   {
     const std::vector<RayRecord>& truth = this->whole(k);
-    double pixels = 0;
     const int width = maker.Width, height = maker.Height;
+    RetraceRays rays;
     const PixelTracer fromTruth =
-      [&truth, &pixels, width, height](const std::vector<std::pair<int, int>>& ij)
+      [&truth, &rays, width, height](const std::vector<std::pair<int, int>>& ij)
     {
       TracedPixels out;
       out.records.reserve(ij.size());
       for (const auto& p : ij)
-      {
-        const RayRecord& r = truth[static_cast<std::size_t>(p.second) * width + p.first];
-        out.records.push_back(r);
-        // A pixel the adaptive grid filled counts only its anti-aliasing rays: re-traced, it
-        // takes its own centre ray too.
-        out.rays += std::max<double>(1, r.raysPerPixel);
-      }
-      // Traced, the list takes its edge neighbours' centre rays too (FrameTracer::tracePixels);
-      // the midpoint rays the frame charges to those neighbours are not counted here.
-      out.rays += static_cast<double>(edgeNeighbours(ij, width, height).size());
-      pixels += static_cast<double>(ij.size());
+        out.records.push_back(truth[static_cast<std::size_t>(p.second) * width + p.first]);
+      // What tracing the list at k would integrate (RetraceRays.h).
+      const RetraceRays list = predictRetraceRays(truth, width, height, ij);
+      rays += list;
+      out.rays = list.total();
       return out;
     };
     std::vector<RayRecord> records;
@@ -536,7 +552,9 @@ struct MovieMaking
     ShareMeasurement m;
     m.share = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
               static_cast<double>(maker.Height);
-    m.raysPerPixel = pixels > 0 ? done.raysTraced / pixels : 0.0;
+    m.raysPerPixel = rays.centres > 0 ? rays.centres / static_cast<double>(done.retraced) : 0.0;
+    m.neighbourRays = rays.neighbours;
+    m.edgeRays = rays.midpoints + rays.samples;
     return m;
   }
 };
@@ -567,9 +585,8 @@ const MoviePlan& MovieMaker::plan()
     std::min(1.0, std::max(kMovieProbeFraction, 64.0 / (static_cast<double>(this->Width) *
                                                         static_cast<double>(this->Height))));
   share.slope = kPriorSlope;
-  MovieCostModel model;
-  model.frameRays = static_cast<double>(this->Width) * this->Height;
-  model.retraceShare = share.function();
+  const double pixels = static_cast<double>(this->Width) * this->Height;
+  const MovieCostModel model = movieCostPrior(pixels).model(pixels, share.function());
   MoviePlan bisected = planMovie(s, stored, model);
   std::vector<int> storedKeys;
   for (std::size_t k = 0; k < n; ++k)
@@ -653,8 +670,9 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
           around.push_back(static_cast<int>(w));
       return making.measuredShare(k, around);
     };
-    this->Plan = planProgressively(s, stored, static_cast<double>(this->Width) * this->Height,
-                                   this->Impl->share, keyMaking);
+    const double pixels = static_cast<double>(this->Width) * this->Height;
+    this->Plan =
+      planProgressively(s, stored, pixels, this->Impl->share, keyMaking, movieCostPrior(pixels));
   }
   for (int k : this->plan().keys())
   {

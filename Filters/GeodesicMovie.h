@@ -17,9 +17,12 @@
 // hand out rather than made again.
 //
 // Learning. The plan starts from a prior of the re-trace share (SpacingShareModel) and of the
-// rays a frame takes (its pixels). Keys to trace are made coarse first; each one is interpolated
-// between the whole frames around it and completed against its own records, which measures the
-// share its gap needed without tracing a ray, and the rest is planned again (planProgressively).
+// costs, in rays integrated: a whole frame's, a re-trace's (one ray a re-traced pixel, and the
+// rays of its edges: neighbours, midpoints, anti-aliasing samples) and interpolating a frame's
+// (MovieCostPrior, measured on the bench's movies). Keys to trace are made coarse first; each one
+// is interpolated between the whole frames around it and completed against its own records,
+// which measures the share its gap needed and the rays re-tracing those pixels would integrate
+// (RetraceRays.h) without tracing a ray, and the rest is planned again (planProgressively).
 // Running the same movie again plans from the prior with the keys stored: where that would add
 // keys, the stored frames as the only keys (the first run's plan) serve every frame for nothing,
 // and win.

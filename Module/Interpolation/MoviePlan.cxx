@@ -25,11 +25,37 @@ const char* toString(FrameMethod m)
   return "?";
 }
 
-double MovieCostModel::interpolatedRays(double share) const
+double MovieCostModel::wholeRays(double s) const
+{
+  if (this->wholeRaysAt)
+  {
+    const double rays = this->wholeRaysAt(s);
+    if (rays > 0 && std::isfinite(rays))
+      return rays;
+  }
+  return this->frameRays;
+}
+
+double MovieCostModel::interpolatedRays(double s, double share) const
 {
   if (!(share >= 0 && share < 1))
     return std::numeric_limits<double>::quiet_NaN();
-  return share * (this->retraceRays > 0 ? this->retraceRays : this->frameRays);
+  double retrace = this->retraceRaysAt ? this->retraceRaysAt(s, share) : -1.0;
+  if (!(retrace >= 0 && std::isfinite(retrace)))
+    retrace = share * (this->retraceRays > 0 ? this->retraceRays : this->frameRays);
+  return retrace + this->interpolationRays;
+}
+
+MovieCostModel MovieCostPrior::model(double pixels, const RetraceShare& share) const
+{
+  MovieCostModel m;
+  m.frameRays = pixels * this->wholeRaysPerPixel;
+  m.retraceRays = pixels;
+  const double edge = pixels * this->edgeRaysPerPixel;
+  m.retraceRaysAt = [pixels, edge](double, double share) { return share * pixels + edge; };
+  m.interpolationRays = pixels * this->interpolationRaysPerPixel;
+  m.retraceShare = share;
+  return m;
 }
 
 std::vector<int> MoviePlan::keys() const
@@ -63,6 +89,13 @@ void checkInput(const std::vector<double>& s, const std::vector<bool>& stored,
     os << "movie plan: retraceRays must be finite and not negative, got " << model.retraceRays;
     throw InvalidParameter(os.str());
   }
+  if (!(model.interpolationRays >= 0 && std::isfinite(model.interpolationRays)))
+  {
+    std::ostringstream os;
+    os << "movie plan: interpolationRays must be finite and not negative, got "
+       << model.interpolationRays;
+    throw InvalidParameter(os.str());
+  }
   if (!model.retraceShare)
     throw InvalidParameter("movie plan: no retraceShare estimate");
   for (std::size_t k = 0; k < s.size(); ++k)
@@ -86,7 +119,10 @@ struct Planner
   std::vector<FramePlan>& frames;
 
   bool isStored(int k) const { return !this->stored.empty() && this->stored[k]; }
-  double keyRays(int k) const { return this->isStored(k) ? 0.0 : this->model.frameRays; }
+  double keyRays(int k) const
+  {
+    return this->isStored(k) ? 0.0 : this->model.wholeRays(this->s[static_cast<std::size_t>(k)]);
+  }
 
   /// The frames strictly between keys i and j, each the cheaper of interpolating and tracing;
   /// returns their cost and writes them.
@@ -96,9 +132,10 @@ struct Planner
     for (int k = i + 1; k < j; ++k)
     {
       const double share = this->model.retraceShare(this->s[i], this->s[j], this->s[k]);
-      const double rays = this->model.interpolatedRays(share);
+      const double rays = this->model.interpolatedRays(this->s[k], share);
+      const double whole = this->model.wholeRays(this->s[k]);
       FramePlan f;
-      if (rays < this->model.frameRays) // false for NaN: the pair cannot make the frame
+      if (rays < whole) // false for NaN: the pair cannot make the frame
       {
         f.method = FrameMethod::Interpolated;
         f.keyBefore = i;
@@ -110,7 +147,7 @@ struct Planner
       {
         f.method = FrameMethod::Traced;
         f.share = 1;
-        f.rays = this->model.frameRays;
+        f.rays = whole;
       }
       this->frames[static_cast<std::size_t>(k)] = f;
       total += f.rays;
@@ -158,6 +195,16 @@ struct Planner
 
 namespace
 {
+/// A plan with no frames yet, holding the model's costs it counts.
+MoviePlan describedPlan(const MovieCostModel& model)
+{
+  MoviePlan plan;
+  plan.frameRays = model.frameRays;
+  plan.retraceRays = model.retraceRays;
+  plan.interpolationRays = model.interpolationRays;
+  return plan;
+}
+
 /// One bisection plan: keys at the ends, at the stored frames and where splitting pays.
 MoviePlan planOnce(const std::vector<double>& s, const std::vector<bool>& stored,
                    const MovieCostModel& model)
@@ -175,7 +222,7 @@ MoviePlan planOnce(const std::vector<double>& s, const std::vector<bool>& stored
     {
       f.method = FrameMethod::Key;
       f.share = 1;
-      f.rays = model.frameRays;
+      f.rays = model.wholeRays(s[static_cast<std::size_t>(k)]);
     }
   }
   planner.segment(0, n - 1);
@@ -212,24 +259,23 @@ MoviePlan planMovie(const std::vector<double>& s, const std::vector<bool>& store
     if (!grew)
       break;
   }
-  MoviePlan plan;
+  MoviePlan plan = describedPlan(model);
   plan.frames = inner.frames;
-  plan.frameRays = model.frameRays;
-  plan.retraceRays = model.retraceRays;
   for (std::size_t k = 0; k < n; ++k)
   {
     const bool wasStored = !stored.empty() && stored[k];
     FramePlan& f = plan.frames[k];
+    const double wholeRays = model.wholeRays(s[k]);
     if (whole[k] && !wasStored)
     {
       f = FramePlan();
       f.method = joined[k];
       f.share = 1;
-      f.rays = model.frameRays;
+      f.rays = wholeRays;
     }
     plan.estimatedRays += f.rays;
-    plan.tracedAllRays += model.frameRays;
-    plan.directRays += wasStored ? 0.0 : model.frameRays;
+    plan.tracedAllRays += wholeRays;
+    plan.directRays += wasStored ? 0.0 : wholeRays;
   }
   return plan;
 }
@@ -246,29 +292,28 @@ std::optional<MoviePlan> planBetweenStored(const std::vector<double>& s,
   const std::size_t n = s.size();
   if (stored.empty() || !stored.front() || !stored.back())
     return std::nullopt;
-  MoviePlan plan;
+  MoviePlan plan = describedPlan(model);
   plan.frames.assign(n, FramePlan());
-  plan.frameRays = model.frameRays;
-  plan.retraceRays = model.retraceRays;
   std::size_t before = 0;
   for (std::size_t k = 0; k < n; ++k)
   {
     FramePlan& f = plan.frames[k];
-    plan.tracedAllRays += model.frameRays;
+    const double wholeRays = model.wholeRays(s[k]);
+    plan.tracedAllRays += wholeRays;
     if (stored[k])
     {
       f.method = FrameMethod::Reused;
       before = k;
       continue;
     }
-    plan.directRays += model.frameRays;
+    plan.directRays += wholeRays;
     std::size_t after = k + 1;
     while (!stored[after])
       ++after;
     const double share = model.retraceShare(s[before], s[after], s[k]);
     const bool isServed = !served.empty() && served[k];
-    const double rays = model.interpolatedRays(share);
-    if (!isServed && !(rays < model.frameRays))
+    const double rays = model.interpolatedRays(s[k], share);
+    if (!isServed && !(rays < wholeRays))
       return std::nullopt;
     f.method = FrameMethod::Interpolated;
     f.keyBefore = static_cast<int>(before);
@@ -371,8 +416,91 @@ int nextWhole(const MoviePlan& plan, const std::vector<double>& s, const std::ve
 }
 }
 
+namespace
+{
+/// Where s lies among points sorted by s: the points before and after it and the weight of the
+/// one after (linear in s), the nearest one's alone beyond them. Points must not be empty.
+template<typename Point>
+void bracket(const std::vector<Point>& points, double s, std::size_t& before, std::size_t& after,
+             double& w)
+{
+  const auto next = std::upper_bound(points.begin(), points.end(), s,
+                                     [](double v, const Point& p) { return v < p.s; });
+  after = static_cast<std::size_t>(std::min(next, points.end() - 1) - points.begin());
+  before = next == points.begin() ? 0 : static_cast<std::size_t>(next - points.begin()) - 1;
+  w = after == before ? 0.0 : (s - points[before].s) / (points[after].s - points[before].s);
+}
+
+/// The rays of the whole frames made, along the path.
+struct WholeAlongPath
+{
+  struct Point
+  {
+    double s = 0, rays = 0;
+  };
+  std::vector<Point> points; ///< sorted by s
+  double fallback = 0;
+
+  void add(const Point& p)
+  {
+    this->points.insert(std::upper_bound(this->points.begin(), this->points.end(), p.s,
+                                         [](double v, const Point& q) { return v < q.s; }),
+                        p);
+  }
+  double at(double s) const
+  {
+    if (this->points.empty())
+      return this->fallback;
+    std::size_t a = 0, b = 0;
+    double w = 0;
+    bracket(this->points, s, a, b, w);
+    return (1 - w) * this->points[a].rays + w * this->points[b].rays;
+  }
+};
+
+/// The re-traces measured, along the path: each scaled to the share asked for, then linear in s
+/// between the measured frames around s.
+struct RetraceAlongPath
+{
+  struct Point
+  {
+    double s = 0;
+    ShareMeasurement m;
+  };
+  std::vector<Point> points; ///< sorted by s
+  double pixels = 0;
+  double fallbackEdgeRays = 0;
+
+  void add(const Point& p)
+  {
+    this->points.insert(std::upper_bound(this->points.begin(), this->points.end(), p.s,
+                                         [](double v, const Point& q) { return v < q.s; }),
+                        p);
+  }
+  /// The measured re-trace at another share: its pixels' own rays in proportion, their edge
+  /// neighbours as the perimeter of patches that grow (√ of the share), the edges' midpoints and
+  /// samples as they are.
+  double scaled(const ShareMeasurement& m, double share) const
+  {
+    const double neighbours = m.share > 0 ? m.neighbourRays * std::sqrt(share / m.share) : 0.0;
+    return share * this->pixels * m.raysPerPixel + neighbours + m.edgeRays;
+  }
+  double at(double s, double share) const
+  {
+    if (this->points.empty())
+      return share * this->pixels + this->fallbackEdgeRays;
+    std::size_t a = 0, b = 0;
+    double w = 0;
+    bracket(this->points, s, a, b, w);
+    return (1 - w) * this->scaled(this->points[a].m, share) +
+           w * this->scaled(this->points[b].m, share);
+  }
+};
+}
+
 MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool>& stored,
-                            double pixels, SpacingShareModel& share, const KeyMaking& making)
+                            double pixels, SpacingShareModel& share, const KeyMaking& making,
+                            const MovieCostPrior& prior)
 {
   if (!(pixels > 0 && std::isfinite(pixels)))
     throw InvalidParameter("movie plan: pixels must be positive and finite");
@@ -383,11 +511,19 @@ MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool
   std::vector<FrameMethod> madeAs(n, FrameMethod::Reused);
   std::vector<double> madeRays(n, 0.0);
   double keyRays = 0, keys = 0, retracedPixels = 0, retracedRays = 0;
-  MovieCostModel model;
+  MovieCostModel model = prior.model(pixels, share.function());
+  WholeAlongPath wholeAlong;
+  wholeAlong.fallback = model.frameRays;
+  RetraceAlongPath retraceAlong;
+  retraceAlong.pixels = pixels;
+  retraceAlong.fallbackEdgeRays = pixels * prior.edgeRaysPerPixel;
   auto updateModel = [&]()
   {
-    model.frameRays = keys > 0 && keyRays > 0 ? keyRays / keys : pixels;
-    model.retraceRays = retracedPixels > 0 ? pixels * retracedRays / retracedPixels : 0.0;
+    model.frameRays = keys > 0 && keyRays > 0 ? keyRays / keys : pixels * prior.wholeRaysPerPixel;
+    model.wholeRaysAt = [wholeAlong](double at) { return wholeAlong.at(at); };
+    model.retraceRays = retracedPixels > 0 ? pixels * retracedRays / retracedPixels : pixels;
+    model.retraceRaysAt = [retraceAlong](double at, double part)
+    { return retraceAlong.at(at, part); };
     model.retraceShare = share.function();
   };
   auto measure = [&](int k)
@@ -406,6 +542,10 @@ MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool
       retracedPixels += m.share * pixels;
       retracedRays += m.share * pixels * m.raysPerPixel;
     }
+    if (m.share >= 0 && m.share <= 1 && m.raysPerPixel >= 0 && std::isfinite(m.raysPerPixel) &&
+        m.neighbourRays >= 0 && std::isfinite(m.neighbourRays) && m.edgeRays >= 0 &&
+        std::isfinite(m.edgeRays))
+      retraceAlong.add({ s[static_cast<std::size_t>(k)], m });
   };
   // What earlier runs stored is measured first, each stored frame between the stored frames
   // around it, for no ray: the prior of this run.
@@ -425,7 +565,12 @@ MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool
     whole[at] = true;
     keyRays += madeRays[at];
     ++keys;
-    measure(k);
+    if (madeRays[at] > 0 && std::isfinite(madeRays[at]))
+      wholeAlong.add({ s[at], madeRays[at] });
+    // A frame traced because interpolating it costs more is not measured: measuring interpolates
+    // it, which would cost what tracing it saved.
+    if (madeAs[at] != FrameMethod::Traced)
+      measure(k);
     updateModel();
   }
   MoviePlan plan = planMovie(s, whole, model);
@@ -441,7 +586,7 @@ MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool
       f.rays = madeRays[k];
     }
     plan.estimatedRays += f.rays;
-    plan.directRays += wasStored ? 0.0 : model.frameRays;
+    plan.directRays += wasStored ? 0.0 : model.wholeRays(s[k]);
   }
   return plan;
 }

@@ -1,7 +1,7 @@
 // Planning a movie along a path: which frames to trace as key frames, and for every other frame
 // the cheaper of interpolating it between its keys (with the pixels it must re-trace to meet the
-// quality target) and tracing it whole. Costs are in rays traced; a frame already stored costs
-// nothing and is a key for free.
+// quality target) and tracing it whole. Costs are in rays integrated, whole frames and re-traces
+// alike (MovieCostModel); a frame already stored costs nothing and is a key for free.
 //
 // The planner knows nothing of how the re-trace share is estimated: it is handed a function of
 // the two keys' parameters and the frame's (RetraceShare). SpacingShareModel is one such estimate,
@@ -9,9 +9,10 @@
 //
 // Keys. The first and last frames are keys (nothing extrapolates), and so is every stored frame.
 // Between two neighbouring keys i < j the segment costs the smaller of
-//   - no further key: every frame between costs min(share · rays, rays), share the estimate for
-//     that frame between i and j (a share ≥ 1, infinite or NaN: the pair cannot meet the target
-//     there, so the frame is traced);
+//   - no further key: every frame between costs the smaller of interpolating it (its re-trace at
+//     the share estimated for that frame between i and j, and the interpolation) and tracing it
+//     whole (a share ≥ 1, infinite or NaN: the pair cannot meet the target there, so the frame is
+//     traced);
 //   - a key at the middle frame m (its rays, nothing if stored) plus the best of (i, m) and (m, j).
 // Each sub-segment of the bisection is evaluated once: O(n log n) estimates for n frames. Since
 // every frame's cost is at most its rays and every key is a frame traced, the plan never costs
@@ -60,20 +61,32 @@ enum class FrameMethod : std::uint8_t
 };
 ASRTINTERPOLATION_EXPORT const char* toString(FrameMethod m);
 
-/// What making a movie costs: the rays of one traced frame, the rays of re-tracing all of a
-/// frame's pixels one by one, and the re-trace share estimate. An interpolated frame costs
-/// share · retraceRays; it is traced whole instead when that is not below frameRays.
+/// What making a movie costs, in rays integrated (FrameTracer::raysIntegrated), the unit of a
+/// whole frame and of a re-trace alike. A whole frame at s costs wholeRays(s). An interpolated
+/// frame at s costs interpolatedRays(s, share): re-tracing that share of its pixels (their own
+/// rays, and their edge neighbours, edge midpoints and anti-aliasing samples: RetraceRays.h) and
+/// interpolating it. It is traced whole instead when that is not below wholeRays(s).
 struct MovieCostModel
 {
   double frameRays = 0; ///< rays a whole frame takes (pixels × rays per pixel, or a key's count)
-  /// Rays of re-tracing every pixel (pixels × the rays a re-traced pixel takes, which may differ
-  /// from a whole frame's: those are traced where edges are, where anti-aliasing adds rays, and
-  /// without the adaptive grid). 0: frameRays.
+  /// The rays a whole frame at path parameter s takes (those measured around s); empty, or not
+  /// positive and finite there: frameRays.
+  std::function<double(double s)> wholeRaysAt;
+  /// Rays of re-tracing every pixel one by one, as a share's cost where retraceRaysAt is empty:
+  /// share · retraceRays. 0: frameRays.
   double retraceRays = 0;
+  /// The rays of re-tracing this share of the pixels of the frame at s; empty, or not finite and
+  /// non-negative there: share · retraceRays.
+  std::function<double(double s, double share)> retraceRaysAt;
+  /// Interpolating a frame (predicting, estimating and completing its pixels), as the rays its
+  /// CPU time would trace.
+  double interpolationRays = 0;
   RetraceShare retraceShare;
-  /// The rays of interpolating a frame at this share, or NaN when it cannot (a share outside
-  /// [0, 1), infinite or NaN).
-  double interpolatedRays(double share) const;
+  /// The rays of a whole frame at s.
+  double wholeRays(double s) const;
+  /// The rays of interpolating a frame at s with this share re-traced, or NaN when it cannot (a
+  /// share outside [0, 1), infinite or NaN).
+  double interpolatedRays(double s, double share) const;
 };
 
 struct FramePlan
@@ -87,11 +100,12 @@ struct FramePlan
 struct MoviePlan
 {
   std::vector<FramePlan> frames;
-  double estimatedRays = 0; ///< the plan's estimated cost, in rays
-  double directRays = 0;    ///< tracing every frame not stored
-  double tracedAllRays = 0; ///< tracing every frame, stored or not
-  double frameRays = 0;     ///< the rays of a whole frame the estimates counted
-  double retraceRays = 0;   ///< the rays of re-tracing every pixel they counted (0: frameRays)
+  double estimatedRays = 0;     ///< the plan's estimated cost, in rays
+  double directRays = 0;        ///< tracing every frame not stored
+  double tracedAllRays = 0;     ///< tracing every frame, stored or not
+  double frameRays = 0;         ///< the rays of a whole frame the estimates counted
+  double retraceRays = 0;       ///< the rays of re-tracing every pixel they counted (0: frameRays)
+  double interpolationRays = 0; ///< interpolating a frame, in rays
   /// The keys in order: every frame not interpolated.
   std::vector<int> keys() const;
 };
@@ -149,12 +163,25 @@ struct SpacingShareModel
 /// whole and returns the rays it took. measureShare interpolates whole frame k between the whole
 /// frames `before` and `after` (and those beyond them, as a movie's frame would be) and completes
 /// it to the target against frame k's own records, which it already has: the share of pixels the
-/// target needed re-traced, and the rays those pixels took in frame k (a re-traced pixel's cost),
+/// target needed re-traced, and the rays re-tracing them at k would take (RetraceRays.h),
 /// measured without tracing a ray.
 struct ShareMeasurement
 {
   double share = 0;
-  double raysPerPixel = 1; ///< of the pixels it re-traced; 0 when none
+  double raysPerPixel = 1;  ///< the re-traced pixels' own rays, per pixel; 0 when none
+  double neighbourRays = 0; ///< their edge neighbours' centre rays
+  double edgeRays = 0;      ///< edge midpoints and the pixels' anti-aliasing samples
+};
+/// What a movie's costs are taken to be before they are measured, in rays per pixel of a frame.
+struct MovieCostPrior
+{
+  double wholeRaysPerPixel = 1; ///< a whole frame
+  /// An interpolated frame's re-trace beyond its pixels' own rays (one each).
+  double edgeRaysPerPixel = 0;
+  /// Interpolating a frame, as rays: not measured (a time), the same all along the movie.
+  double interpolationRaysPerPixel = 0;
+  /// The model of a movie of frames of `pixels` pixels.
+  MovieCostModel model(double pixels, const RetraceShare& share) const;
 };
 struct KeyMaking
 {
@@ -165,19 +192,24 @@ struct KeyMaking
 /// Plans the movie and makes its whole frames, learning the costs as it goes. The keys are made
 /// coarse first: of the plan's whole frames not yet made, the one nearest the middle of the
 /// widest gap between frames already whole. Each key made is measured (measureShare between the
-/// whole frames around it), which gives the share the gap around it needed for its key spacing;
-/// with the rays the whole frames took (their mean is frameRays) and the rays a re-traced pixel
-/// takes (retraceRays = pixels · their weighted mean), the rest of the movie is planned again
-/// with the frames made as stored ones. Frames made stay made. `share` starts as the prior and
-/// ends holding every measurement; `pixels` is a frame's pixel count (the priors: a whole frame
-/// pixels rays, a re-traced pixel one). Returns the final plan, whose whole frames are all made:
-/// stored ones Reused, the others Key or Traced. Frames stored already (an earlier run's keys) are
-/// measured first, each between the stored frames around it: the prior of a movie over a path
-/// stored before. Throws as planMovie does.
+/// whole frames around it), which gives the share the gap around it needed for its key spacing
+/// and what its re-trace would cost; frames made because interpolating them costs more are not
+/// (their measurement, an interpolation, would cost as much as what it saved). With the rays the
+/// whole frames took, the rest of the movie is planned again with the frames made as stored
+/// ones. The costs are local, linear in s between the measured frames around s: a whole frame
+/// costs what those took, and re-tracing a share σ their re-traces scaled to σ (the pixels' own
+/// rays in proportion; their edge neighbours as √σ, the perimeter of patches that grow; the
+/// edge midpoints and samples as they are, the edges' own). frameRays is the mean of the frames
+/// made. Frames made stay made. `share` starts as the prior and ends holding every measurement;
+/// `pixels` is a frame's pixel count, and `prior` the costs before any is measured. Returns the
+/// final plan, whose whole frames are all made: stored ones Reused, the others Key or Traced.
+/// Frames stored already (an earlier run's keys) are measured first, each between the stored
+/// frames around it: the prior of a movie over a path stored before. Throws as planMovie does.
 ASRTINTERPOLATION_EXPORT MoviePlan planProgressively(const std::vector<double>& s,
                                                      const std::vector<bool>& stored, double pixels,
                                                      SpacingShareModel& share,
-                                                     const KeyMaking& making);
+                                                     const KeyMaking& making,
+                                                     const MovieCostPrior& prior = {});
 }
 
 #endif

@@ -14,7 +14,7 @@ scene="$scenes/fig4-mass-start.json"
 movie=(--ramp mass=0.65:0.8 -n 7 -r 48x48 --quality 35 -q)
 
 step "--plan: the plan and its cost, nothing traced or written"
-"$expect" 0 "plan: 3 key frames .* estimated [0-9]+ rays against 16128 " -- \
+"$expect" 0 "plan: [0-9]+ key frames .* estimated [0-9]+ rays against [0-9]+ tracing every" -- \
   "$asrt" movie "$scene" "${movie[@]}" --plan --store -o plan/
 "$check" '!plan/fig4-mass-start-000.png' '!plan/fig4-mass-start.pvd'
 test "$("$asrt" list | tail -n +2 | wc -l)" -eq 0
@@ -23,8 +23,11 @@ step "the first run traces its key frames and the pixels the target needs, and s
 out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" "${movie[@]}" --store=movie \
   -o first/)"
 echo "$out"
-grep -Eq "^ +1 +0\.675 +interpolated " <<< "$out"
+grep -Eq "^ +[0-9]+ +[0-9.]+ +interpolated " <<< "$out" ||
+  { echo "the movie interpolates no frame: what follows checks nothing of it" >&2; exit 1; }
 grep -Eq "^ +3 +0\.725 +key " <<< "$out"
+# The frames traced whole (keys, or traced because interpolating them costs more).
+whole="$(awk '$1 ~ /^[0-9]+$/ && ($3 == "key" || $3 == "traced") { print $1 }' <<< "$out")"
 "$check" first/fig4-mass-start-006.png=48x48 first/fig4-mass-start-003.vti=48x48 \
   first/fig4-mass-start.pvd=7 first/fig4-mass-start.ogv=7 '!first/fig4-mass-start-007.png'
 
@@ -34,7 +37,7 @@ for k in 0 1 2 3 4 5 6; do
   "$check" "first/fig4-mass-start-00$k.png:truth-00$k.png>=34"
 done
 step "key frames are the traced frames themselves"
-for k in 0 3 6; do cmp "first/fig4-mass-start-00$k.png" "truth-00$k.png"; done
+for k in $whole; do cmp "first/fig4-mass-start-00$k.png" "truth-00$k.png"; done
 
 step "the same movie again traces no ray, reuses every frame, and writes the same bytes"
 out="$("$expect" 0 "rays traced: 0$" -- "$asrt" movie "$scene" "${movie[@]}" --store -o second/)"

@@ -13,6 +13,7 @@
 #include <functional>
 #include <limits>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 namespace
@@ -42,7 +43,7 @@ double recomputedCost(const asrt::MoviePlan& plan, const std::vector<double>& s,
         break;
       case FrameMethod::Key:
       case FrameMethod::Traced:
-        total += model.frameRays;
+        total += model.wholeRays(s[k]);
         break;
       case FrameMethod::Interpolated:
       {
@@ -57,7 +58,7 @@ double recomputedCost(const asrt::MoviePlan& plan, const std::vector<double>& s,
         const double share = model.retraceShare(s[static_cast<std::size_t>(f.keyBefore)],
                                                 s[static_cast<std::size_t>(f.keyAfter)], s[k]);
         EXPECT_LT(share, 1.0) << "frame " << k << " interpolated where the pair cannot";
-        total += share * (model.retraceRays > 0 ? model.retraceRays : model.frameRays);
+        total += model.interpolatedRays(s[k], share);
         break;
       }
     }
@@ -85,7 +86,7 @@ double bruteForceOptimum(const std::vector<double>& s, const std::vector<bool>& 
     {
       if (key[static_cast<std::size_t>(k)])
       {
-        cost += stored[static_cast<std::size_t>(k)] ? 0.0 : model.frameRays;
+        cost += stored[static_cast<std::size_t>(k)] ? 0.0 : model.wholeRays(s[k]);
         before = k;
         continue;
       }
@@ -95,7 +96,10 @@ double bruteForceOptimum(const std::vector<double>& s, const std::vector<bool>& 
       const double share =
         model.retraceShare(s[static_cast<std::size_t>(before)], s[static_cast<std::size_t>(after)],
                            s[static_cast<std::size_t>(k)]);
-      cost += share >= 0 && share < 1 ? share * model.frameRays : model.frameRays;
+      const double whole = model.wholeRays(s[static_cast<std::size_t>(k)]);
+      cost += share >= 0 && share < 1
+                ? std::min(whole, model.interpolatedRays(s[static_cast<std::size_t>(k)], share))
+                : whole;
     }
     best = std::min(best, cost);
   }
@@ -300,6 +304,94 @@ TEST(MoviePlan, NeverCostsMoreThanTracingEveryFrameAndComesNearTheOptimum)
   }
 }
 
+TEST(MoviePlan, TracesWhereTheReTraceCostsMoreRaysThanTheFrame)
+{
+  // Each frame re-traces 30 % of its pixels, one ray each, on top of the rays its edges take
+  // whatever the share (RetraceRays.h): below a whole frame's rays it is interpolated, above them
+  // traced, interpolating it counted in.
+  const std::vector<double> s = evenPath(9);
+  auto modelOf = [](double edgeRays, double interpolationRays)
+  {
+    asrt::MovieCostModel model;
+    model.frameRays = 1000;
+    model.retraceRays = 1000;
+    model.retraceRaysAt = [edgeRays](double, double share) { return 1000 * share + edgeRays; };
+    model.interpolationRays = interpolationRays;
+    model.retraceShare = [](double, double, double) { return 0.3; };
+    return model;
+  };
+  for (const auto& [edge, interpolation, traced] :
+       { std::tuple(500.0, 0.0, false), std::tuple(750.0, 0.0, true),
+         std::tuple(500.0, 150.0, false), std::tuple(600.0, 150.0, true) })
+  {
+    const asrt::MovieCostModel model = modelOf(edge, interpolation);
+    const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+    const double interpolated = 300 + edge + interpolation;
+    for (std::size_t k = 1; k + 1 < s.size(); ++k)
+      EXPECT_EQ(plan.frames[k].method, traced ? FrameMethod::Traced : FrameMethod::Interpolated)
+        << "frame " << k << ", edges " << edge << ", interpolating " << interpolation;
+    EXPECT_NEAR(plan.estimatedRays, 2000 + 7 * std::min(1000.0, interpolated), 1e-9);
+    EXPECT_NEAR(plan.estimatedRays, recomputedCost(plan, s, model), 1e-9);
+    EXPECT_LE(plan.estimatedRays, plan.directRays);
+  }
+  asrt::MovieCostModel bad = modelOf(0, -1);
+  EXPECT_THROW(asrt::planMovie(s, {}, bad), asrt::InvalidParameter);
+}
+
+TEST(MoviePlan, EachFrameIsWeighedAgainstItsOwnWholeRays)
+{
+  // Whole frames take 400 rays at the start of the path and 1600 at its end; interpolating any
+  // frame takes 1000. Frames are traced where that is cheaper, interpolated elsewhere, and tracing
+  // every frame costs the sum of their own rays.
+  const std::vector<double> s = evenPath(13);
+  asrt::MovieCostModel model;
+  model.frameRays = 1000;
+  model.wholeRaysAt = [](double at) { return 400 + 1200 * at; };
+  model.retraceRaysAt = [](double, double) { return 1000.0; };
+  model.retraceShare = [](double, double, double) { return 0.1; };
+  const asrt::MoviePlan plan = asrt::planMovie(s, {}, model);
+  double direct = 0;
+  for (std::size_t k = 0; k < s.size(); ++k)
+  {
+    direct += model.wholeRays(s[k]);
+    if (plan.frames[k].method == FrameMethod::Interpolated)
+    {
+      EXPECT_GT(model.wholeRays(s[k]), 1000.0) << "frame " << k;
+    }
+    else
+    {
+      if (k > 0 && k + 1 < s.size()) // the ends are keys whatever they cost
+      {
+        EXPECT_LE(model.wholeRays(s[k]), 1000.0 + 1e-9) << "frame " << k;
+      }
+      EXPECT_DOUBLE_EQ(plan.frames[k].rays, model.wholeRays(s[k])) << "frame " << k;
+    }
+  }
+  EXPECT_EQ(plan.frames[2].method, FrameMethod::Traced);
+  EXPECT_EQ(plan.frames[10].method, FrameMethod::Interpolated);
+  EXPECT_DOUBLE_EQ(plan.directRays, direct);
+  EXPECT_NEAR(plan.estimatedRays, recomputedCost(plan, s, model), 1e-9);
+  EXPECT_NEAR(plan.estimatedRays, bruteForceOptimum(s, std::vector<bool>(s.size()), model), 1e-9);
+}
+
+TEST(MoviePlan, ThePriorCountsTheEdgesAndTheInterpolation)
+{
+  asrt::MovieCostPrior prior;
+  prior.wholeRaysPerPixel = 1.1;
+  prior.edgeRaysPerPixel = 0.6;
+  prior.interpolationRaysPerPixel = 0.15;
+  const asrt::MovieCostModel model = prior.model(1000, [](double, double, double) { return 0.2; });
+  EXPECT_DOUBLE_EQ(model.wholeRays(0.3), 1100);
+  EXPECT_DOUBLE_EQ(model.interpolatedRays(0.3, 0.2), 200 + 600 + 150);
+  EXPECT_TRUE(std::isnan(model.interpolatedRays(0.3, 1.0)));
+  // So with these priors a frame is interpolated only below a share of 0.35.
+  const asrt::MoviePlan plan = asrt::planMovie(evenPath(5), {}, model);
+  EXPECT_EQ(plan.frames[2].method, FrameMethod::Interpolated);
+  asrt::MovieCostModel dear = model;
+  dear.retraceShare = [](double, double, double) { return 0.36; };
+  EXPECT_EQ(asrt::planMovie(evenPath(5), {}, dear).frames[2].method, FrameMethod::Traced);
+}
+
 TEST(MoviePlan, RefusesBadInputNamingIt)
 {
   asrt::MovieCostModel model;
@@ -346,6 +438,7 @@ struct SyntheticMovie
 {
   std::vector<double> s = evenPath(31);
   double pixels = 1000, keyRays = 1000, floor = 0.01;
+  double edgeRays = 0; ///< what every re-trace takes beyond its pixels' rays
   std::function<double(double a, double b)> slope;
   std::vector<int> made;
   int measured = 0;
@@ -385,6 +478,7 @@ struct SyntheticMovie
       m.share = this->trueShare(this->s[static_cast<std::size_t>(before)],
                                 this->s[static_cast<std::size_t>(after)]);
       m.raysPerPixel = 1;
+      m.edgeRays = this->edgeRays;
       return m;
     };
     return asrt::planProgressively(this->s, {}, this->pixels, share, making);
@@ -441,7 +535,11 @@ void checkProgressive(const SyntheticMovie& movie, const asrt::MoviePlan& plan)
                oracle = trueCost(movie, asrt::planMovie(movie.s, {}, truth));
   EXPECT_LE(cost, 1.05 * oracle);
   EXPECT_LE(cost, truth.frameRays * static_cast<double>(movie.s.size()));
-  EXPECT_EQ(movie.measured, static_cast<int>(plan.keys().size()) - 2); // all but the ends
+  // Every key but the ends measured; frames traced because interpolating costs more are not.
+  const auto keys =
+    std::count_if(plan.frames.begin(), plan.frames.end(),
+                  [](const asrt::FramePlan& f) { return f.method == FrameMethod::Key; });
+  EXPECT_EQ(movie.measured, static_cast<int>(keys) - 2);
 }
 }
 
@@ -542,4 +640,35 @@ TEST(MoviePlanProgressive, StoredFramesAreKeysForFree)
   EXPECT_THROW(asrt::planProgressively(movie.s, stored, movie.pixels, share, none),
                asrt::InvalidParameter);
   EXPECT_THROW(asrt::planProgressively(movie.s, stored, 0, share, making), asrt::InvalidParameter);
+}
+
+TEST(MoviePlanProgressive, ARetraceDearerThanAFrameIsLearntAndEveryFrameTraced)
+{
+  // Every re-trace takes a whole frame's rays for its edges alone (anti-aliasing samples, edge
+  // midpoints), whatever its share: once a key has measured it, nothing is interpolated, and the
+  // frames traced for it are not measured (that would interpolate them).
+  SyntheticMovie movie;
+  movie.slope = [](double, double) { return 1.0; };
+  movie.edgeRays = movie.keyRays;
+  asrt::SpacingShareModel share;
+  const asrt::MoviePlan plan = movie.plan(share);
+  for (std::size_t k = 0; k < plan.frames.size(); ++k)
+    EXPECT_NE(plan.frames[k].method, FrameMethod::Interpolated) << "frame " << k;
+  EXPECT_EQ(movie.measured, 1); // the middle key, made first on the prior
+  EXPECT_DOUBLE_EQ(plan.estimatedRays, 31 * movie.keyRays);
+  // With edges that cost little, the same movie interpolates, by the same measured costs.
+  SyntheticMovie cheap;
+  cheap.slope = movie.slope;
+  cheap.edgeRays = 0.2 * cheap.keyRays;
+  asrt::SpacingShareModel cheapShare;
+  const asrt::MoviePlan cheapPlan = cheap.plan(cheapShare);
+  EXPECT_GT(cheapPlan.keys().size(), 2u);
+  EXPECT_LT(cheapPlan.keys().size(), cheapPlan.frames.size());
+  EXPECT_LT(cheapPlan.estimatedRays, 0.8 * cheapPlan.directRays);
+  for (const asrt::FramePlan& f : cheapPlan.frames)
+    if (f.method == FrameMethod::Interpolated)
+    {
+      EXPECT_GE(f.rays, cheap.edgeRays);
+      EXPECT_LT(f.rays, cheap.keyRays);
+    }
 }
