@@ -5,6 +5,7 @@
 #include "GeodesicFrameMatching.h"
 #include "GeodesicMovie.h"
 #include "PathInterpolation.h"
+#include "RampScene.h"
 #include "SceneFile.h"
 #include "TextureFiles.h"
 
@@ -19,6 +20,7 @@
 #include <vector>
 
 using namespace asrt;
+using asrt::testing::rampScene;
 
 namespace
 {
@@ -67,16 +69,6 @@ RayRecord syntheticRecord(double s, const std::vector<double>& u, const std::vec
   r.dvdj = polynomial(u, s);
   r.hitPoint = Vec3(polynomial(u, s), polynomial(v, s), 2.0);
   return r;
-}
-
-SceneDescription rampScene(double mass, int side)
-{
-  const std::string path = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/fig4-mass-start.json";
-  SceneDescription d =
-    loadSceneFile(path, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
-  d.spacetime.mass = mass;
-  d.camera.width = d.camera.height = side;
-  return d;
 }
 
 std::vector<RayRecord> traceFrame(const SceneDescription& d)

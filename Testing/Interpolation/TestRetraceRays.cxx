@@ -3,6 +3,7 @@
 // Figs. 4–5.
 #include "FrameTracer.h"
 #include "PathInterpolation.h"
+#include "RampScene.h"
 #include "RetraceRays.h"
 #include "SceneFile.h"
 #include "TextureFiles.h"
@@ -15,19 +16,10 @@
 #include <vector>
 
 using namespace asrt;
+using asrt::testing::rampScene;
 
 namespace
 {
-SceneDescription rampScene(double mass, int side)
-{
-  const std::string path = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/fig4-mass-start.json";
-  SceneDescription d =
-    loadSceneFile(path, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
-  d.spacetime.mass = mass;
-  d.camera.width = d.camera.height = side;
-  return d;
-}
-
 /// As asrt movie re-traces an interpolated frame's pixels: each its own centre ray.
 SceneDescription scattered(SceneDescription d)
 {
