@@ -57,8 +57,9 @@ public:
   /// traceAt). A record's raysPerPixel counts only the rays charged to its own pixel. Over a whole
   /// frame traced a ray a pixel (grid lattice 1) they add up to this count; they leave out the
   /// dropped neighbours' centre rays and the midpoint rays charged to them, and on the adaptive
-  /// grid the rays a lattice block traced on its border where the block owning that pixel filled
-  /// it. Calls on one tracer at the same time add to the one count.
+  /// grid the rays a lattice block traced on its border, or in a neighbour's middle row or column
+  /// (AdaptiveGrid.h), where the block owning that pixel filled it. Calls on one tracer at the
+  /// same time add to the one count.
   std::int64_t raysIntegrated() const { return this->RaysIntegrated.load(); }
 
   /// Traces one pixel; appends its polyline to `path` if given.
