@@ -431,6 +431,15 @@ void bracket(const std::vector<Point>& points, double s, std::size_t& before, st
   w = after == before ? 0.0 : (s - points[before].s) / (points[after].s - points[before].s);
 }
 
+/// Inserts p among points sorted by s, after those at the same s.
+template<typename Point>
+void insertByS(std::vector<Point>& points, const Point& p)
+{
+  points.insert(std::upper_bound(points.begin(), points.end(), p.s,
+                                 [](double v, const Point& q) { return v < q.s; }),
+                p);
+}
+
 /// The rays of the whole frames made, along the path.
 struct WholeAlongPath
 {
@@ -441,12 +450,7 @@ struct WholeAlongPath
   std::vector<Point> points; ///< sorted by s
   double fallback = 0;
 
-  void add(const Point& p)
-  {
-    this->points.insert(std::upper_bound(this->points.begin(), this->points.end(), p.s,
-                                         [](double v, const Point& q) { return v < q.s; }),
-                        p);
-  }
+  void add(const Point& p) { insertByS(this->points, p); }
   double at(double s) const
   {
     if (this->points.empty())
@@ -471,12 +475,7 @@ struct RetraceAlongPath
   double pixels = 0;
   double fallbackEdgeRays = 0;
 
-  void add(const Point& p)
-  {
-    this->points.insert(std::upper_bound(this->points.begin(), this->points.end(), p.s,
-                                         [](double v, const Point& q) { return v < q.s; }),
-                        p);
-  }
+  void add(const Point& p) { insertByS(this->points, p); }
   /// The measured re-trace at another share: its pixels' own rays in proportion, their edge
   /// neighbours as the perimeter of patches that grow (√ of the share), the edges' midpoints and
   /// samples as they are.

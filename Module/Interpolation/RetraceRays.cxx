@@ -16,16 +16,6 @@ RetraceRays& RetraceRays::operator+=(const RetraceRays& o)
   return *this;
 }
 
-namespace
-{
-/// FrameTracer::antialias's rule: two centre rays end alike on the same object in the same image
-/// order, or the same way.
-bool endAlikeForSampling(const RayRecord& a, const RayRecord& b)
-{
-  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
-}
-}
-
 RetraceRays predictRetraceRays(const std::vector<RayRecord>& frame, int width, int height,
                                const std::vector<std::pair<int, int>>& pixels)
 {
@@ -53,7 +43,7 @@ RetraceRays predictRetraceRays(const std::vector<RayRecord>& frame, int width, i
       if (ni < 0 || ni >= width || nj < 0 || nj >= height)
         continue;
       const RayRecord& n = at(ni, nj);
-      if (n.termination == Termination::Running || endAlikeForSampling(r, n))
+      if (n.termination == Termination::Running || endsAlike(r, n))
         continue;
       edges.emplace_back(2 * i + d[0], 2 * j + d[1]);
       charged += d[0] + d[1] > 0;

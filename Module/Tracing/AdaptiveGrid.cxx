@@ -19,11 +19,6 @@ namespace asrt
 {
 namespace
 {
-bool endsAlike(const RayRecord& a, const RayRecord& b)
-{
-  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
-}
-
 /// The block's corner column (row) a sub-quad starts at for a pixel coordinate: the first where
 /// the pixel lies before the midpoint, else the second (a degenerate first half has no pixels).
 int half(int x, int xm)
@@ -434,30 +429,17 @@ bool FrameTracer::capturedBesideOtherEndings(Propagator& prop, const GridBlock& 
 {
   const int W = this->Desc.camera.width, H = this->Desc.camera.height;
   const int lattice = this->Desc.rendering.gridLattice;
+  auto fallsIn = [&](int i, int j)
+  { return this->sharedGridRay(prop, i, j, work).termination == Termination::Captured; };
   // Each edge neighbour's line of points nearest to the block: its middle row (column).
-  std::vector<std::pair<int, int>> points;
   auto row = [&](const GridBlock& n)
-  {
-    for (int x : { n.x0, n.xm(), n.x1 })
-      points.emplace_back(x, n.ym());
-  };
+  { return fallsIn(n.x0, n.ym()) && fallsIn(n.xm(), n.ym()) && fallsIn(n.x1, n.ym()); };
   auto column = [&](const GridBlock& n)
-  {
-    for (int y : { n.y0, n.ym(), n.y1 })
-      points.emplace_back(n.xm(), y);
-  };
-  if (b.y0 > 0)
-    row(latticeBlock(b.x0, b.y0 - 1, lattice, W, H));
-  if (b.y1 < H - 1)
-    row(latticeBlock(b.x0, b.y1, lattice, W, H));
-  if (b.x0 > 0)
-    column(latticeBlock(b.x0 - 1, b.y0, lattice, W, H));
-  if (b.x1 < W - 1)
-    column(latticeBlock(b.x1, b.y0, lattice, W, H));
-  for (const auto& [i, j] : points)
-    if (this->sharedGridRay(prop, i, j, work).termination != Termination::Captured)
-      return true;
-  return false;
+  { return fallsIn(n.xm(), n.y0) && fallsIn(n.xm(), n.ym()) && fallsIn(n.xm(), n.y1); };
+  return (b.y0 > 0 && !row(latticeBlock(b.x0, b.y0 - 1, lattice, W, H))) ||
+         (b.y1 < H - 1 && !row(latticeBlock(b.x0, b.y1, lattice, W, H))) ||
+         (b.x0 > 0 && !column(latticeBlock(b.x0 - 1, b.y0, lattice, W, H))) ||
+         (b.x1 < W - 1 && !column(latticeBlock(b.x1, b.y0, lattice, W, H)));
 }
 
 void FrameTracer::refineBlock(Propagator& prop, const GridBlock& b, GridWork& work) const

@@ -87,9 +87,8 @@ struct AntialiasOptions
   /// every pixel's centre ray is traced. The default, 8 at tolerance 3e-4, is the cheapest
   /// setting measured (bench/REPORT.md, "The adaptive ray grid") whose frames stay within 40 dB
   /// of the full trace and within 0.2 dB of its score against a converged picture, with no
-  /// pixel changing object off an edge, on every scene at 200×200, 800×450 and 1920×1080, but
-  /// for Fig. 5 at 1920×1080, 0.4 dB below (16 loses thin higher-order images of Fig. 5's
-  /// cylinders at 1920×1080).
+  /// pixel changing object off an edge, on every scene at 200×200, 800×450 and 1920×1080 (16
+  /// loses thin higher-order images of Fig. 5's cylinders at 1920×1080).
   int gridLattice = 8;
   /// The largest error of the bilinear (u, v) at a block's check points that leaves it whole.
   double gridTolerance = 3e-4;

@@ -72,12 +72,6 @@ IntegratorConfig sampleIntegrator(const IntegratorConfig& frame)
   return c;
 }
 
-/// Whether two rays end alike: on the same object in the same image order, or the same way.
-bool endsAlike(const JacobianSample& a, const JacobianSample& b)
-{
-  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
-}
-
 /// A neighbour's screen-space misfit above this many pixels marks the footprint as non-linear.
 constexpr double kMaxFootprintMisfit = 0.5;
 

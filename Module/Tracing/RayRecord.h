@@ -67,6 +67,18 @@ inline JacobianSample jacobianSample(const RayRecord& r)
   return { r.i, r.j, r.u, r.v, r.objectId, r.imageOrder, r.termination };
 }
 
+/// Whether two rays end alike: on the same object in the same image order, or the same way. An
+/// edge runs between two pixels whose centre rays do not: the adaptive grid refines there, the
+/// anti-aliasing samples there.
+inline bool endsAlike(const JacobianSample& a, const JacobianSample& b)
+{
+  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
+}
+inline bool endsAlike(const RayRecord& a, const RayRecord& b)
+{
+  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
+}
+
 /// One point of a traced ray's polyline.
 struct PathPoint
 {
