@@ -79,7 +79,12 @@ Options:
                         charge or orbit angle), where they end alike
   --quality DB          with the path method (implied): re-trace, at each frame's parameters,
                         the pixels the key frames cannot vouch for and, worst estimated first,
-                        enough others for the frame to reach DB against the frame traced there
+                        enough others for the frame to reach DB against its converged picture
+                        (4x4 samples a pixel); the key frames' own error against theirs is
+                        measured first by a few probe pixels traced converged, and shown as
+                        "settings"
+  --against-traced      with --quality: hold the target against the frame traced at each
+                        frame's parameters with the key frames' settings instead
   --exact               with splats: re-trace the pixels the matching cannot vouch for (holes,
                         ambiguous pixels, and those where A and B disagree); slower, exact there
   --textures DIR        where the scene's relative texture paths lie, for --exact and the
@@ -241,14 +246,15 @@ FrameAt pathFrames(vtkGeodesicPathInterpolator* path, bool target)
       std::snprintf(text, sizeof text, " %9.1f", 100 * share);
       line += text;
     }
-    if (target)
-    {
-      std::snprintf(text, sizeof text, " %9.1f",
-                    frame->GetFieldData()->GetArray("EstimatedPsnr")
-                      ? fieldValue(frame, "EstimatedPsnr")
-                      : std::numeric_limits<double>::infinity());
-      line += text;
-    }
+    for (const char* name : { "EstimatedPsnr", "SettingsPsnr" })
+      if (target)
+      {
+        std::snprintf(text, sizeof text, " %9.1f",
+                      frame->GetFieldData()->GetArray(name)
+                        ? fieldValue(frame, name)
+                        : std::numeric_limits<double>::infinity());
+        line += text;
+      }
     return frame;
   };
 }
@@ -263,6 +269,7 @@ int runInterpolate(const std::vector<std::string>& args)
                                                  { "exact", OptionSpec::Flag },
                                                  { "method", OptionSpec::Value },
                                                  { "quality", OptionSpec::Value },
+                                                 { "against-traced", OptionSpec::Flag },
                                                  { "textures", OptionSpec::Value },
                                                  { "quiet", OptionSpec::Flag, 'q' },
                                                  { "scenes", OptionSpec::Flag },
@@ -307,6 +314,8 @@ int runInterpolate(const std::vector<std::string>& args)
       throw UsageError("--quality: the target must lie in (0, 100] dB, got " +
                        options.get("quality"));
   }
+  if (options.has("against-traced") && !options.has("quality"))
+    throw UsageError("--against-traced goes with --quality");
   const int fps = options.positiveInteger("fps").value_or(10);
   const std::string prefix = outputPrefix(options, "interpolated");
   const std::string moviePath = options.get("movie", prefix + ".ogv");
@@ -351,6 +360,7 @@ int runInterpolate(const std::vector<std::string>& args)
       along->AddKeyFrameConnection(ends[k]->GetOutputPort(1));
     along->SetNumberOfIntermediateFrames(intermediate);
     along->SetQualityTarget(quality);
+    along->SetHoldToConverged(!options.has("against-traced"));
     along->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
     messages.watchAlgorithm(along);
     along->UpdateInformation();
@@ -407,7 +417,7 @@ int runInterpolate(const std::vector<std::string>& args)
     for (int m = 0; m < kPathMethodCount; ++m)
       std::printf(" %8s%%", toString(static_cast<PathMethod>(m)));
     if (quality > 0.0)
-      std::printf(" %9s", "est. PSNR");
+      std::printf(" %9s %9s", "est. PSNR", "settings");
   }
   else
   {

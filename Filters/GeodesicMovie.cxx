@@ -8,6 +8,7 @@
 #include "RecordAllocation.h"
 #include "RetraceRays.h"
 #include "SceneFile.h"
+#include "SettingsError.h"
 #include "vtkGeodesicSource.h"
 
 #include "vtkCallbackCommand.h"
@@ -241,6 +242,8 @@ struct MovieMaker::Internals
   std::map<int, std::pair<std::vector<RayRecord>, MovieFrameReport>> served;
   /// The re-trace share estimate: the prior, then what the keys made measured.
   SpacingShareModel share;
+  /// Whole frames' own errors against their converged pictures, once measured.
+  std::map<int, SettingsError> settings;
   bool keysMade = false; ///< makeKeys() done: the plan is final
 };
 
@@ -470,10 +473,56 @@ struct MovieMaking
     };
   }
 
+  /// Whole frame k's own error against its converged picture: its probes (settingsProbes) traced
+  /// with the converged rendering, or read where they were traced before, and stored as a subset
+  /// of the frame's scene at that rendering. With `storeOnly`, probes not known are NotServed.
+  const SettingsError& settingsOf(int k, bool storeOnly)
+  {
+    const auto kept = in.settings.find(k);
+    if (kept != in.settings.end())
+      return kept->second;
+    const std::vector<RayRecord>& records = this->whole(k);
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    if (!maker.Settings.holdToConverged || isConvergedRendering(f.identity.rendering))
+      return in.settings.emplace(k, SettingsError{}).first->second;
+    const std::vector<std::int32_t> probes = settingsProbes(records);
+    std::vector<std::pair<int, int>> pixels;
+    for (std::int32_t p : probes)
+      pixels.emplace_back(p % maker.Width, p / maker.Width);
+    SceneDescription subset = f.identity;
+    subset.subset = pixelSubsetId(pixels);
+    subset.rendering = convergedRendering();
+    std::vector<RayRecord> converged;
+    if (auto found = this->known(k, subset, pixels))
+      converged = std::move(*found);
+    else if (storeOnly)
+      throw NotServed();
+    else
+    {
+      SceneDescription d = this->withTextures(f);
+      d.rendering = convergedRendering();
+      const FrameTracer tracer(d);
+      const auto t0 = std::chrono::steady_clock::now();
+      converged = tracer.tracePixels(pixels, this->progress());
+      if (this->cancelled())
+        throw MovieCancelled();
+      const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double rays = static_cast<double>(tracer.raysIntegrated());
+      maker.RaysTraced += rays;
+      maker.RaysOfMovie += rays;
+      if (maker.Store)
+        storeFrame(*maker.Store, maker.Settings, subset, converged, seconds);
+    }
+    return in.settings.emplace(k, settingsError(records, probes, converged)).first->second;
+  }
+
   /// Frame k interpolated between `keys` (the nearest of them around it), completed to the target
-  /// with the pixels `retrace` gives.
+  /// with the pixels `retrace` gives, held to the converged picture through the inner keys' own
+  /// errors (settingsOf, with `storeOnly`).
   PathCompletion interpolatedWith(int k, const std::vector<int>& keys, const PixelTracer& retrace,
-                                  std::vector<RayRecord>& records)
+                                  std::vector<RayRecord>& records, bool storeOnly,
+                                  SettingsError& settings)
   {
     const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
     // Frame order is the order of direction · s: the keys go in as they are.
@@ -492,8 +541,13 @@ struct MovieMaking
     options.movedEdges = false;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene, options);
-    const PathCompletion done =
-      completePathFrame(frame, retrace, maker.Settings.quality, kMovieProbeFraction);
+    const auto after = std::upper_bound(keys.begin(), keys.end(), k);
+    if (after == keys.begin() || after == keys.end())
+      throw InvalidParameter("frame " + std::to_string(k) + " lies outside its keys");
+    settings =
+      worseOf(this->settingsOf(*(after - 1), storeOnly), this->settingsOf(*after, storeOnly));
+    const PathCompletion done = completePathFrame(frame, retrace, maker.Settings.quality,
+                                                  kMovieProbeFraction, settings.mseBound);
     records = std::move(frame.records);
     return done;
   }
@@ -517,10 +571,12 @@ struct MovieMaking
       return *made;
     };
     std::vector<RayRecord> records;
-    const PathCompletion done =
-      this->interpolatedWith(k, keys, this->retracedPixels(k, tracer, report, storeOnly), records);
+    SettingsError settings;
+    const PathCompletion done = this->interpolatedWith(
+      k, keys, this->retracedPixels(k, tracer, report, storeOnly), records, storeOnly, settings);
     report.method = FrameMethod::Interpolated;
     report.estimatedPsnr = done.estimatedPsnr;
+    report.settingsPsnr = settings.psnr();
     report.shareRetraced = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
                            static_cast<double>(maker.Height);
     return records;
@@ -548,7 +604,9 @@ struct MovieMaking
       return out;
     };
     std::vector<RayRecord> records;
-    const PathCompletion done = this->interpolatedWith(k, wholeFrames, fromTruth, records);
+    SettingsError settings;
+    const PathCompletion done =
+      this->interpolatedWith(k, wholeFrames, fromTruth, records, false, settings);
     ShareMeasurement m;
     m.share = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
               static_cast<double>(maker.Height);
@@ -709,6 +767,9 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
     return making.interpolated(k, plan.keys(), report, false);
   const std::vector<RayRecord>& records = making.whole(k);
   const double rays = this->Impl->wholeRays.at(k);
+  const auto settings = this->Impl->settings.find(k);
+  if (settings != this->Impl->settings.end())
+    report.settingsPsnr = report.estimatedPsnr = settings->second.psnr();
   if (this->Frames[static_cast<std::size_t>(k)].storedId)
     report.raysReused = rays;
   else

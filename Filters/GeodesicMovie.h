@@ -125,7 +125,13 @@ struct MovieCancelled : std::runtime_error
 struct MovieFrameReport
 {
   FrameMethod method = FrameMethod::Key;
+  /// Against the converged picture (MovieSettings::holdToConverged), else against the frame
+  /// traced at the frame's parameters.
   double estimatedPsnr = std::numeric_limits<double>::infinity();
+  /// The bound on the settings' own PSNR against the converged picture: for an interpolated
+  /// frame the worse of its inner keys', for a whole frame its own where it was measured
+  /// (infinite where it was not).
+  double settingsPsnr = std::numeric_limits<double>::infinity();
   double shareRetraced = 0; ///< of its pixels traced for it (1 for a frame traced whole)
   /// Integrated for this frame, this time: a re-traced subset counts the edge neighbours that
   /// FrameTracer::tracePixels traces and drops (FrameTracer::raysIntegrated).
@@ -138,6 +144,11 @@ struct MovieSettings
 {
   /// The PSNR in dB every interpolated frame is to reach, in (0, kMaxQualityTargetDb].
   double quality = 35;
+  /// Whether `quality` is against the converged picture (SettingsError.h: each key an
+  /// interpolated frame uses has its own error against its converged picture measured by probe
+  /// pixels traced converged, stored and reused as a re-traced subset is), or against the frame
+  /// traced at the frame's parameters with the movie's settings.
+  bool holdToConverged = true;
   /// Where the scene's relative texture paths lie (its file's directory).
   std::string textureDirectory;
   /// The label of frames stored.

@@ -173,6 +173,7 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
       }
       asrt::MovieSettings settings;
       settings.quality = this->QualityTarget;
+      settings.holdToConverged = this->HoldToConverged != 0;
       settings.textureDirectory = vtksys::SystemTools::GetFilenamePath(this->SceneFileName);
       settings.label = text(this->StoreLabel);
       settings.cacheRetraced = true;
@@ -266,6 +267,7 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     method->InsertNextValue(asrt::toString(report.method));
     fd->AddArray(method);
     asrt::addDoubleField(fd, "EstimatedPsnr", { report.estimatedPsnr });
+    asrt::addDoubleField(fd, "SettingsPsnr", { report.settingsPsnr });
     asrt::addDoubleField(fd, "ShareRetraced", { report.shareRetraced });
     asrt::addDoubleField(fd, "PathParameter", { in.Maker->frames()[k].s });
     asrt::addCountField(fd, "FrameIndex", k);
@@ -305,6 +307,7 @@ void vtkGeodesicMovieSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CameraKeysFileName: " << text(this->CameraKeysFileName) << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
+  os << indent << "HoldToConverged: " << this->HoldToConverged << "\n";
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
   os << indent << "StoreConnection: " << (text(this->StoreConnection).empty() ? "(none)" : "(set)")
      << "\n";

@@ -22,10 +22,11 @@
  * the `.pvd` of `asrt movie`); a requested time is rounded to the nearest frame. Its arrays are
  * vtkGeodesicSource's ("Colors" as scalars, "ObjectId", "ImageOrder", "PathLength",
  * "Termination", "RaysPerPixel"); field data "FrameMethod" (a string: key, traced, interpolated
- * or reused), "EstimatedPsnr" (infinite for a frame traced or read whole), "ShareRetraced" (of the
- * frame's pixels traced for it, 1 for a frame traced whole, 0 for one read), "PathParameter" (its
- * value at the frame: mass, spin, charge, orbit angle in degrees or position among the key
- * cameras) and "FrameIndex".
+ * or reused), "EstimatedPsnr" (for a frame traced or read whole, its settings' bound where
+ * measured, else infinite), "SettingsPsnr" (asrt::MovieFrameReport::settingsPsnr), "ShareRetraced"
+ * (of the frame's pixels traced for it, 1 for a frame traced whole, 0 for one read),
+ * "PathParameter" (its value at the frame: mass, spin, charge, orbit angle in degrees or position
+ * among the key cameras) and "FrameIndex".
  *
  * Bad settings (no scene file, fewer than 2 frames, a target outside (0, 100] or NaN, an unknown
  * ramp parameter, equal ramp ends, an orbit of 0 or more than 360 degrees, a key-camera file
@@ -77,10 +78,20 @@ public:
   ///@}
 
   ///@{
-  /// The PSNR in dB every interpolated frame is to reach against the frame traced at its
-  /// parameters, in (0, 100] (default 35).
+  /// The PSNR in dB every interpolated frame is to reach against its converged picture (or,
+  /// without HoldToConverged, against the frame traced at its parameters), in (0, 100] (default
+  /// 35).
   vtkSetMacro(QualityTarget, double);
   vtkGetMacro(QualityTarget, double);
+  ///@}
+
+  ///@{
+  /// Whether QualityTarget is against the converged picture (on, the default: the keys' own error
+  /// against theirs is measured by a few probe pixels traced converged; asrt::MovieSettings) or
+  /// against the frame traced at the frame's parameters.
+  vtkSetMacro(HoldToConverged, vtkTypeBool);
+  vtkGetMacro(HoldToConverged, vtkTypeBool);
+  vtkBooleanMacro(HoldToConverged, vtkTypeBool);
   ///@}
 
   ///@{
@@ -134,6 +145,7 @@ protected:
   char* CameraKeysFileName = nullptr;
   int NumberOfFrames = 24;
   double QualityTarget = 35.0;
+  vtkTypeBool HoldToConverged = 1;
   int Resolution[2] = { 0, 0 };
   char* StoreConnection = nullptr;
   char* StoreLabel = nullptr;

@@ -11,6 +11,7 @@
 #include "InterpolatorPipeline.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
+#include "SettingsError.h"
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkDoubleArray.h"
@@ -28,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -64,6 +66,9 @@ struct vtkGeodesicPathInterpolator::Internals
   // The scene with its textures, for shading and tracing, and the text it was loaded from.
   asrt::SceneDescription Shading;
   std::string ShadingText, ShadingDirectory;
+  /// Each key's own error against its converged picture, once measured (reset when it is read
+  /// again).
+  std::vector<std::optional<asrt::SettingsError>> KeyError;
 
   /// The keys' scenes, checked against each other, and the path parameter.
   void Validate(vtkGeodesicPathInterpolator* self, const std::vector<vtkPolyData*>& hits)
@@ -171,6 +176,7 @@ struct vtkGeodesicPathInterpolator::Internals
   {
     const std::size_t K = hits.size();
     this->Records.resize(K);
+    this->KeyError.resize(K);
     this->InputData.resize(K, nullptr);
     this->InputTime.resize(K, 0);
     const asrt::CameraParameters& c = this->Scenes[0].camera;
@@ -187,9 +193,49 @@ struct vtkGeodesicPathInterpolator::Internals
                                      " rays, its frame " + std::to_string(c.width * c.height) +
                                      " pixels");
       this->Records[k] = std::move(r);
+      this->KeyError[k].reset();
       this->InputData[k] = hits[k];
       this->InputTime[k] = hits[k]->GetMTime();
     }
+  }
+
+  /// The scene of key k with its textures: the shading scene at the key's parameters.
+  asrt::SceneDescription KeyScene(std::size_t k) const
+  {
+    asrt::SceneDescription d = this->Shading;
+    asrt::applyParameters(asrt::parametersOf(this->Scenes[k]), d);
+    d.integrator = this->Scenes[k].integrator;
+    d.rendering = this->Scenes[k].rendering;
+    return d;
+  }
+
+  /// Key k's own error against its converged picture: probes traced converged, once a key.
+  const asrt::SettingsError& KeySettingsError(std::size_t k)
+  {
+    if (!this->KeyError[k])
+    {
+      asrt::SceneDescription d = this->KeyScene(k);
+      if (asrt::isConvergedRendering(d.rendering))
+        this->KeyError[k] = asrt::SettingsError{};
+      else
+      {
+        d.rendering = asrt::convergedRendering();
+        const asrt::FrameTracer converged(d);
+        const asrt::CameraParameters& c = d.camera;
+        this->KeyError[k] =
+          asrt::measureSettingsError(this->Records[k], c.width, c.height,
+                                     [&converged](const std::vector<std::pair<int, int>>& ij)
+                                     {
+                                       const std::int64_t before = converged.raysIntegrated();
+                                       asrt::TracedPixels out;
+                                       out.records = converged.tracePixels(ij);
+                                       out.rays =
+                                         static_cast<double>(converged.raysIntegrated() - before);
+                                       return out;
+                                     });
+      }
+    }
+    return *this->KeyError[k];
   }
 
   /// The scene with its image textures, loaded again only when its text or folder changed.
@@ -328,6 +374,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
   this->LastRetracedCount = 0;
   this->LastMustRetraceCount = 0;
   this->LastEstimatedPsnr = 0.0;
+  this->LastSettingsPsnr = 0.0;
   Internals& in = *this->Impl;
   try
   {
@@ -363,18 +410,29 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       asrt::CameraPath::Automatic);
     this->LastMustRetraceCount =
       static_cast<vtkIdType>(f.counts()[static_cast<std::size_t>(asrt::PathMethod::Retrace)]);
+    const double none = std::numeric_limits<double>::infinity();
     if (this->QualityTarget > 0.0 && !(fraction > 0.0 && fraction < 1.0))
-      this->LastEstimatedPsnr = std::numeric_limits<double>::infinity(); // a key itself
+    {
+      // A key itself: its own error is the frame's.
+      const std::size_t key = static_cast<std::size_t>(fraction >= 1.0 ? a + 1 : a);
+      this->LastSettingsPsnr = this->HoldToConverged ? in.KeySettingsError(key).psnr() : none;
+      this->LastEstimatedPsnr = this->LastSettingsPsnr;
+    }
     else if (this->QualityTarget > 0.0)
     {
+      const asrt::SettingsError settings =
+        this->HoldToConverged ? asrt::worseOf(in.KeySettingsError(static_cast<std::size_t>(a)),
+                                              in.KeySettingsError(static_cast<std::size_t>(a + 1)))
+                              : asrt::SettingsError{};
+      this->LastSettingsPsnr = settings.psnr();
       asrt::SceneDescription atT = in.Shading;
       asrt::applyParameters(p, atT);
       if (in.Scenes[a].integrator.method != in.Scenes[a + 1].integrator.method)
         atT.integrator.method = "auto"; // each key resolved "auto" for its own spacetime
       atT.rendering = asrt::scatteredPixelRendering(atT.rendering);
       const asrt::FrameTracer tracer(atT);
-      const asrt::PathCompletion done =
-        asrt::completePathFrame(f, tracer, this->QualityTarget, this->ProbeFraction);
+      const asrt::PathCompletion done = asrt::completePathFrame(
+        f, tracer, this->QualityTarget, this->ProbeFraction, settings.mseBound);
       this->LastRetracedCount = static_cast<vtkIdType>(done.retraced);
       this->LastEstimatedPsnr = done.estimatedPsnr;
     }
@@ -391,7 +449,10 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     asrt::addDoubleField(fd, "PathParameter", { s });
     asrt::addCountField(fd, "RetracedPixels", this->LastRetracedCount);
     if (this->QualityTarget > 0.0)
+    {
       asrt::addDoubleField(fd, "EstimatedPsnr", { this->LastEstimatedPsnr });
+      asrt::addDoubleField(fd, "SettingsPsnr", { this->LastSettingsPsnr });
+    }
     asrt::setParametersFieldData(p, fd);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
     this->UpdateProgress(1.0);
@@ -410,6 +471,7 @@ void vtkGeodesicPathInterpolator::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "NumberOfIntermediateFrames: " << this->NumberOfIntermediateFrames << "\n";
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
+  os << indent << "HoldToConverged: " << this->HoldToConverged << "\n";
   os << indent << "ProbeFraction: " << this->ProbeFraction << "\n";
   os << indent << "TextureDirectory: " << (this->TextureDirectory ? this->TextureDirectory : "")
      << "\n";
@@ -417,4 +479,5 @@ void vtkGeodesicPathInterpolator::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastRetracedCount: " << this->LastRetracedCount << "\n";
   os << indent << "LastMustRetraceCount: " << this->LastMustRetraceCount << "\n";
   os << indent << "LastEstimatedPsnr: " << this->LastEstimatedPsnr << "\n";
+  os << indent << "LastSettingsPsnr: " << this->LastSettingsPsnr << "\n";
 }

@@ -14,8 +14,10 @@
  * the texture filtered over its interpolated footprint. Pixels the keys cannot vouch for (they end
  * otherwise in the keys around t, or beside such a pixel) show the nearer key until re-traced.
  * With a QualityTarget, the filter re-traces them and then, worst estimated first, just enough
- * others for the frame's estimated PSNR against the frame traced at t to reach the target (the
- * estimate's scale is measured by tracing ProbeFraction of the pixels, asrt::completePathFrame).
+ * others for the frame's estimated PSNR against the converged picture at t to reach the target
+ * (the estimate's scale is measured by tracing ProbeFraction of the pixels,
+ * asrt::completePathFrame; the keys' own error against their converged pictures by a few probe
+ * pixels traced converged, asrt::measureSettingsError).
  *
  * Output: a temporal vtkImageData. TIME_STEPS are k + j/(N + 1) for key k and j = 0 … N (N =
  * NumberOfIntermediateFrames), up to the last key at K − 1: key k is the time k. Any requested
@@ -26,9 +28,10 @@
  * "ErrorEstimate"
  * (the estimated squared colour error, summed over the channels in levels² of 255; infinite where
  * the keys cannot vouch for the pixel, 0 where traced). Field data: "PathParameter" (its value at
- * t), "PathMethodFractions" (the eight methods' shares), "RetracedPixels", "EstimatedPsnr" (with a
- * target), and the parameters at t ("Mass", "Spin", "Charge", "CameraPosition", "FocalPoint",
- * "ViewUp"), those of interpolating the two keys around t as vtkGeodesicFrameInterpolator does.
+ * t), "PathMethodFractions" (the eight methods' shares), "RetracedPixels", "EstimatedPsnr" and
+ * "SettingsPsnr" (with a target), and the parameters at t ("Mass", "Spin", "Charge",
+ * "CameraPosition", "FocalPoint", "ViewUp"), those of interpolating the two keys around t as
+ * vtkGeodesicFrameInterpolator does.
  */
 #ifndef vtkGeodesicPathInterpolator_h
 #define vtkGeodesicPathInterpolator_h
@@ -61,10 +64,22 @@ public:
   ///@}
 
   ///@{
-  /// The PSNR in dB that every frame is to reach against the frame traced at its parameters,
-  /// by re-tracing; 0 (the default) re-traces nothing (a preview). At most 100.
+  /// The PSNR in dB that every frame is to reach against the converged picture at its parameters
+  /// (or, without HoldToConverged, against the frame traced there with the keys' settings), by
+  /// re-tracing; 0 (the default) re-traces nothing (a preview). At most 100.
   vtkSetMacro(QualityTarget, double);
   vtkGetMacro(QualityTarget, double);
+  ///@}
+
+  ///@{
+  /// Whether QualityTarget is held against the converged picture at t (on, the default) or
+  /// against the frame the keys' settings trace at t. On, each inner key's own error against its
+  /// converged picture is measured first, by a few probe pixels traced converged
+  /// (asrt::measureSettingsError, once per key), and the re-tracing leaves the frame only what
+  /// the target allows beyond the worse key's.
+  vtkSetMacro(HoldToConverged, vtkTypeBool);
+  vtkGetMacro(HoldToConverged, vtkTypeBool);
+  vtkBooleanMacro(HoldToConverged, vtkTypeBool);
   ///@}
 
   ///@{
@@ -87,10 +102,12 @@ public:
 
   ///@{
   /// What the last RequestData did: pixels re-traced (probes included), pixels the keys could not
-  /// vouch for, and the estimated PSNR (0 without a target).
+  /// vouch for, the estimated PSNR (0 without a target), and the bound on the worse inner key's
+  /// own PSNR against its converged picture (infinite without HoldToConverged or a target).
   vtkGetMacro(LastRetracedCount, vtkIdType);
   vtkGetMacro(LastMustRetraceCount, vtkIdType);
   vtkGetMacro(LastEstimatedPsnr, double);
+  vtkGetMacro(LastSettingsPsnr, double);
   ///@}
 
 protected:
@@ -104,11 +121,13 @@ protected:
 
   int NumberOfIntermediateFrames = 8;
   double QualityTarget = 0.0;
+  vtkTypeBool HoldToConverged = 1;
   double ProbeFraction = 0.01;
   char* TextureDirectory = nullptr;
   vtkIdType LastRetracedCount = 0;
   vtkIdType LastMustRetraceCount = 0;
   double LastEstimatedPsnr = 0.0;
+  double LastSettingsPsnr = 0.0;
 
 private:
   vtkGeodesicPathInterpolator(const vtkGeodesicPathInterpolator&) = delete;

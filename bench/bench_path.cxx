@@ -18,8 +18,8 @@
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
 // ASRT_BENCH_PATH_PATH_FRAMES frames (4) midway between keys, spread along the path: the plain
-// preview and --quality ASRT_BENCH_PATH_PATH_TARGET (35) against converged, and the estimate's rank
-// correlation.
+// preview and --quality at each of ASRT_BENCH_PATH_PATH_TARGETS ("30,35,40"), held to and scored
+// against converged pictures, and the estimate's rank correlation.
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
@@ -28,6 +28,7 @@
 #include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
 #include "PathInterpolation.h"
+#include "SettingsError.h"
 
 #include <omp.h>
 #include <unistd.h>
@@ -222,16 +223,36 @@ SceneDescription pathScene(const BenchPath& path, double s,
   return d;
 }
 
-/// One path frame's scores.
+/// One path frame's scores; the completions' per target (the paths table's targets).
 struct PathScore
 {
   double s = 0, tracedVsConverged = 0, mustBefore = 0, plainVsConverged = 0, plainVsTraced = 0,
-         spearman = 0, share = 0, doneVsConverged = 0, doneVsTraced = 0;
+         spearman = 0, settingsBound = 0;
+  std::vector<double> share, doneVsConverged, doneVsTraced, estimated;
 };
 
-/// The frame at s from the keys around it (traced once each, into `keys`), scored.
-PathScore scorePathFrame(const BenchPath& path, int interval, int intervals, double target,
-                         std::map<int, std::vector<RayRecord>>& keys, const Scene& shading)
+/// The settings' own error of a key at s (SettingsError.h): its probes traced converged.
+SettingsError keySettingsError(const BenchPath& path, double s, const std::vector<RayRecord>& key)
+{
+  const AntialiasOptions converged = convergedRendering();
+  const FrameTracer tracer(pathScene(path, s, &converged));
+  return measureSettingsError(key, kSide, kSide,
+                              [&tracer](const std::vector<std::pair<int, int>>& ij)
+                              {
+                                const std::int64_t before = tracer.raysIntegrated();
+                                TracedPixels out;
+                                out.records = tracer.tracePixels(ij);
+                                out.rays = static_cast<double>(tracer.raysIntegrated() - before);
+                                return out;
+                              });
+}
+
+/// The frame at s from the keys around it (traced once each, into `keys`, their settings' errors
+/// into `settings`), scored plain and completed to each target against the converged picture.
+PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
+                         const std::vector<double>& targets,
+                         std::map<int, std::vector<RayRecord>>& keys,
+                         std::map<int, SettingsError>& settings, const Scene& shading)
 {
   PathScore r;
   r.s = path.from + (interval + 0.5) * path.h;
@@ -242,12 +263,15 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals, dou
       keys[k] = FrameTracer(pathScene(path, path.from + k * path.h)).traceRows(0, kSide);
     around.push_back({ path.from + k * path.h, &keys[k] });
   }
+  for (int k : { interval, interval + 1 })
+    if (!settings.count(k))
+      settings[k] = keySettingsError(path, path.from + k * path.h, keys[k]);
+  const SettingsError held = worseOf(settings[interval], settings[interval + 1]);
+  r.settingsBound = held.psnr();
   const SceneDescription atS = pathScene(path, r.s);
   const FrameTracer tracer(atS);
   const std::vector<std::uint8_t> traced = rgbOf(tracer.traceRows(0, kSide));
-  AntialiasOptions converged;
-  converged.mode = AntialiasMode::None;
-  converged.supersample = kReferenceSide;
+  const AntialiasOptions converged = convergedRendering(kReferenceSide);
   const std::vector<std::uint8_t> reference =
     rgbOf(FrameTracer(pathScene(path, r.s, &converged)).traceRows(0, kSide));
   r.tracedVsConverged = psnrOf(traced, reference);
@@ -270,30 +294,39 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals, dou
       truth.push_back(error2(plainRgb, traced, p));
     }
   r.spearman = spearman(est, truth);
-  PathFrame done = plain;
-  const PathCompletion c = completePathFrame(done, tracer, target);
-  const std::vector<std::uint8_t> doneRgb = rgbOf(done.records);
-  r.share = c.retraced / n;
-  r.doneVsConverged = psnrOf(doneRgb, reference);
-  r.doneVsTraced = psnrOf(doneRgb, traced);
+  for (double target : targets)
+  {
+    PathFrame done = plain;
+    const PathCompletion c = completePathFrame(done, tracer, target, 0.01, held.mseBound);
+    const std::vector<std::uint8_t> doneRgb = rgbOf(done.records);
+    r.share.push_back(c.retraced / n);
+    r.doneVsConverged.push_back(psnrOf(doneRgb, reference));
+    r.doneVsTraced.push_back(psnrOf(doneRgb, traced));
+    r.estimated.push_back(c.estimatedPsnr);
+  }
   return r;
 }
 
-/// The paths table: per path, at its one key spacing, the mean (and worst) over its frames.
-void printPaths(const std::vector<BenchPath>& paths, int frameCount, double target)
+/// The paths table: per path, at its one key spacing, and per target, the mean (and worst) over
+/// its frames.
+void printPaths(const std::vector<BenchPath>& paths, int frameCount,
+                const std::vector<double>& targets)
 {
   std::printf("\n**Four paths** at one key spacing each (h: the must-re-trace share without moved "
               "edges lands near 10–20 %%), %d frames each midway between keys, spread along the "
               "path; 4 keys around each (`interpolateAlongPath` with moved edges, matched over "
-              "`vtkPointIndexFactory()`); converged: %d×%d point samples a pixel. **Plain**: "
-              "nothing re-traced. **--quality %.0f**: `completePathFrame` against the frame "
-              "traced at s. PSNR as mean / worst; Spearman of the estimate against the true error "
-              "(against the traced frame) over the predicted pixels, mean / worst:\n\n",
-              frameCount, kReferenceSide, kReferenceSide, target);
+              "`vtkPointIndexFactory()`); converged: %d×%d filtered samples a pixel, every centre "
+              "ray traced (`convergedRendering`). **Plain**: nothing re-traced. **--quality T**: "
+              "`completePathFrame` held to the converged picture: the inner keys' own error "
+              "against theirs measured by probes traced converged (`measureSettingsError`, the "
+              "worse key's bound, column *settings*). PSNR as mean / worst; Spearman of the "
+              "estimate against the true error (against the traced frame) over the predicted "
+              "pixels, mean / worst; *below T − 1*: frames under T − 1 dB against converged:\n\n",
+              frameCount, kReferenceSide, kReferenceSide);
   std::printf("| path | scene | h | traced vs converged | must re-trace without moved edges | "
-              "plain vs converged | plain vs traced | --quality %.0f: re-traced | vs converged | "
-              "vs traced | Spearman | time |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-              target);
+              "plain vs converged | plain vs traced | Spearman | T | settings | re-traced | vs "
+              "converged | below T − 1 | estimated | vs traced | time |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const BenchPath& path : paths)
   {
     const double t0 = now();
@@ -306,48 +339,70 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount, double targ
     }
     const SceneDescription shading = pathScene(path, path.from);
     std::map<int, std::vector<RayRecord>> keys;
+    std::map<int, SettingsError> settings;
     std::vector<PathScore> scores;
     for (int f = 0; f < frameCount; ++f)
     {
       const int interval = std::max(0, (f + 1) * intervals / frameCount - 1);
-      scores.push_back(scorePathFrame(path, interval, intervals, target, keys, *shading.scene));
+      scores.push_back(
+        scorePathFrame(path, interval, intervals, targets, keys, settings, *shading.scene));
       const PathScore& r = scores.back();
-      std::fprintf(stderr,
-                   "%s, %s = %.4g: plain %.1f dB, must %.1f %%, q%.0f %.1f %% %.1f dB, rho %.2f "
-                   "(%.0f s)\n",
-                   path.name.c_str(), path.parameter.c_str(), r.s, r.plainVsConverged,
-                   100 * r.mustBefore, target, 100 * r.share, r.doneVsConverged, r.spearman,
-                   now() - t0);
+      std::fprintf(stderr, "%s, %s = %.4g: traced %.1f dB, settings %.1f, plain %.1f dB, rho %.2f",
+                   path.name.c_str(), path.parameter.c_str(), r.s, r.tracedVsConverged,
+                   r.settingsBound, r.plainVsConverged, r.spearman);
+      for (std::size_t t = 0; t < targets.size(); ++t)
+        std::fprintf(stderr, "; q%.0f %.1f %% %.1f dB (est. %.1f)", targets[t], 100 * r.share[t],
+                     r.doneVsConverged[t], r.estimated[t]);
+      std::fprintf(stderr, " (%.0f s)\n", now() - t0);
     }
-    auto meanWorst = [&](double PathScore::*field, bool percent)
+    const double elapsed = now() - t0;
+    auto meanWorst = [&](const std::function<double(const PathScore&)>& field, bool percent)
     {
       double sum = 0, worst = 1e300;
       for (const PathScore& r : scores)
       {
-        sum += std::min(r.*field, 99.0);
-        worst = std::min(worst, r.*field);
+        sum += std::min(field(r), 99.0);
+        worst = std::min(worst, field(r));
       }
       const double mean = sum / static_cast<double>(scores.size());
       return percent ? pct(mean) : dbs(mean) + " / " + dbs(worst);
     };
-    char spearmanText[64];
     double rhoSum = 0, rhoWorst = 1;
     for (const PathScore& r : scores)
     {
       rhoSum += r.spearman;
       rhoWorst = std::min(rhoWorst, r.spearman);
     }
+    char spearmanText[64];
     std::snprintf(spearmanText, sizeof spearmanText, "%.2f / %.2f",
                   rhoSum / static_cast<double>(scores.size()), rhoWorst);
-    std::printf("| %s | `%s` | %g %s | %s | %s | %s | %s | %s | %s | %s | %s | %.0f s |\n",
-                path.name.c_str(), path.scene.c_str(), path.h, path.parameter.c_str(),
-                meanWorst(&PathScore::tracedVsConverged, false).c_str(),
-                meanWorst(&PathScore::mustBefore, true).c_str(),
-                meanWorst(&PathScore::plainVsConverged, false).c_str(),
-                meanWorst(&PathScore::plainVsTraced, false).c_str(),
-                meanWorst(&PathScore::share, true).c_str(),
-                meanWorst(&PathScore::doneVsConverged, false).c_str(),
-                meanWorst(&PathScore::doneVsTraced, false).c_str(), spearmanText, now() - t0);
+    char spacing[64];
+    std::snprintf(spacing, sizeof spacing, "%g %s", path.h, path.parameter.c_str());
+    for (std::size_t t = 0; t < targets.size(); ++t)
+    {
+      int below = 0;
+      for (const PathScore& r : scores)
+        below += r.doneVsConverged[t] < targets[t] - 1.0;
+      const bool first = t == 0;
+      std::printf(
+        "| %s | %s | %s | %s | %s | %s | %s | %s | %.0f | %s | %s | %s | %d of %zu | %s | %s | %s "
+        "|\n",
+        first ? path.name.c_str() : "", first ? ("`" + path.scene + "`").c_str() : "",
+        first ? spacing : "",
+        first ? meanWorst([](const PathScore& r) { return r.tracedVsConverged; }, false).c_str()
+              : "",
+        first ? meanWorst([](const PathScore& r) { return r.mustBefore; }, true).c_str() : "",
+        first ? meanWorst([](const PathScore& r) { return r.plainVsConverged; }, false).c_str()
+              : "",
+        first ? meanWorst([](const PathScore& r) { return r.plainVsTraced; }, false).c_str() : "",
+        first ? spearmanText : "", targets[t],
+        meanWorst([](const PathScore& r) { return r.settingsBound; }, false).c_str(),
+        meanWorst([t](const PathScore& r) { return r.share[t]; }, true).c_str(),
+        meanWorst([t](const PathScore& r) { return r.doneVsConverged[t]; }, false).c_str(), below,
+        scores.size(), meanWorst([t](const PathScore& r) { return r.estimated[t]; }, false).c_str(),
+        meanWorst([t](const PathScore& r) { return r.doneVsTraced[t]; }, false).c_str(),
+        first ? (std::to_string(static_cast<int>(elapsed)) + " s").c_str() : "");
+    }
   }
 }
 
@@ -651,7 +706,7 @@ int main()
     runRampStudy(tStart);
   if (!paths.empty())
     printPaths(paths, static_cast<int>(envNumber("ASRT_BENCH_PATH_PATH_FRAMES", 4)),
-               envNumber("ASRT_BENCH_PATH_PATH_TARGET", 35));
+               envList("ASRT_BENCH_PATH_PATH_TARGETS", { 30, 35, 40 }));
   std::printf("\nThe whole section took %.0f s.\n<!-- path:end -->\n", now() - tStart);
   return 0;
 }

@@ -91,6 +91,11 @@ double psnrOfMse(double mse)
   return mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
 }
 
+double mseOfPsnr(double psnr)
+{
+  return 255.0 * 255.0 * std::pow(10.0, -psnr / 10.0);
+}
+
 RetraceChoice chooseRetraceCount(std::size_t pixels, const std::vector<std::size_t>& probeRank,
                                  const std::vector<double>& probeError2, double targetDb,
                                  double confidence)

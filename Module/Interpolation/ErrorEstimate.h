@@ -81,6 +81,8 @@ ASRTINTERPOLATION_EXPORT RetraceChoice chooseRetraceCount(std::size_t pixels,
 
 /// PSNR of a mean squared error per channel (levels² of 255): infinite for 0.
 ASRTINTERPOLATION_EXPORT double psnrOfMse(double mse);
+/// The mean squared error per channel (levels² of 255) of a PSNR: psnrOfMse's inverse.
+ASRTINTERPOLATION_EXPORT double mseOfPsnr(double psnr);
 }
 
 #endif

@@ -656,7 +656,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
 }
 
 PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, double targetDb,
-                                 double probeFraction)
+                                 double probeFraction, double settingsMse)
 {
   const CameraParameters& cam = tracer.description().camera;
   if (cam.width != frame.width || cam.height != frame.height)
@@ -675,11 +675,11 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
       out.rays = static_cast<double>(tracer.raysIntegrated() - before);
       return out;
     },
-    targetDb, probeFraction);
+    targetDb, probeFraction, settingsMse);
 }
 
 PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixels, double targetDb,
-                                 double probeFraction)
+                                 double probeFraction, double settingsMse)
 {
   if (!(targetDb > 0.0 && targetDb <= kMaxQualityTargetDb))
   {
@@ -688,9 +688,13 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
        << "] dB, got " << targetDb;
     throw InvalidParameter(os.str());
   }
+  if (!(settingsMse >= 0.0) || std::isinf(settingsMse))
+    invalid("the settings' own error must be a finite mean squared error of 0 or more, got " +
+            std::to_string(settingsMse));
   const std::size_t n = frame.records.size();
   PathCompletion done;
-  done.estimatedPsnr = std::numeric_limits<double>::infinity();
+  done.settingsMse = settingsMse;
+  done.estimatedPsnr = psnrOfMse(settingsMse);
   if (frame.counts()[static_cast<std::size_t>(PathMethod::Key)] == n)
     return done;                                       // a key frame: nothing predicted
   const std::vector<float> estimates = frame.estimate; // as predicted, before any re-trace
@@ -798,14 +802,20 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
           methods[static_cast<std::size_t>(probes[q])], probeError[q] });
   const std::vector<double> left = remainingError(rest, calibrated, methods, placed);
   auto remaining = [&](std::size_t k) { return left[k] / (3.0 * static_cast<double>(n)); };
+  // The frame's error against the converged picture is what the prediction leaves against the
+  // frame traced at t plus that frame's own error (the settings'). Where the settings leave the
+  // prediction less than a quarter of the target's error, the prediction is held to that quarter:
+  // re-tracing with these settings cannot lift the frame above them.
+  const double targetMse = mseOfPsnr(targetDb);
+  const double budget = std::max(targetMse - settingsMse, 0.25 * targetMse);
   std::size_t count = rest.size();
   for (std::size_t k = 0; k <= rest.size(); ++k)
-    if (psnrOfMse(remaining(k)) >= targetDb)
+    if (remaining(k) <= budget)
     {
       count = k;
       break;
     }
-  done.estimatedPsnr = psnrOfMse(remaining(count));
+  done.estimatedPsnr = psnrOfMse(remaining(count) + settingsMse);
   trace(std::vector<std::int32_t>(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(count)));
   return done;
 }

@@ -152,7 +152,10 @@ struct PathCompletion
   std::size_t followed = 0;
   std::size_t retraced = 0; ///< pixels traced at t in all (the above, chosen ones and probes)
   std::size_t probes = 0;   ///< pixels traced to measure the estimate's scale
-  double estimatedPsnr = 0; ///< of the completed frame against the frame traced at t
+  /// Of the completed frame: against the converged picture, the error left untraced plus the
+  /// settings' own (settingsMse); against the frame traced at t where that is 0.
+  double estimatedPsnr = 0;
+  double settingsMse = 0; ///< the settings' own error the completion was given
   /// Rays integrated to trace them, as the pixel tracer counted them: with a FrameTracer, every
   /// ray it integrated (FrameTracer::raysIntegrated), the edge neighbours traced and dropped
   /// included, and a pixel traced again where a later list borders it.
@@ -176,13 +179,20 @@ struct PathCompletion
 /// that pair of pixels, the edge between them is one that neither the keys nor the prediction put
 /// there (the tip of a silhouette that sweeps across pixels both keys show behind it): the
 /// neighbour is traced too, with the pixels within two of it predicted to show what it shows, and
-/// so on until the traced edges close. Throws
-/// InvalidParameter for a target outside (0, kMaxQualityTargetDb] or NaN, or a tracer of another
-/// size.
+/// so on until the traced edges close.
+///
+/// The target is against the converged picture when `settingsMse` is the frame traced at t's
+/// own mean squared error against it (SettingsError.h; per channel, levels² of 255): the error
+/// left untraced is held to the target's less that, and to no less than a quarter of the
+/// target's where the settings leave less (they alone then miss the target, and the estimate
+/// says so). With 0 the target is against the frame traced at t. Throws InvalidParameter for a
+/// target outside (0, kMaxQualityTargetDb] or NaN, a settings error below 0 or not finite, or a
+/// tracer of another size.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const FrameTracer& tracer,
                                                           double targetDb,
-                                                          double probeFraction = 0.01);
+                                                          double probeFraction = 0.01,
+                                                          double settingsMse = 0.0);
 
 /// What a PixelTracer returns: the records of the pixels asked for, in the order given, and the
 /// rays integrated to make them (0 for records served from a store).
@@ -203,7 +213,8 @@ using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, 
 /// serve them from a store of pixels traced before, provided they are the traced records.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
                                                           const PixelTracer& trace, double targetDb,
-                                                          double probeFraction = 0.01);
+                                                          double probeFraction = 0.01,
+                                                          double settingsMse = 0.0);
 }
 
 #endif

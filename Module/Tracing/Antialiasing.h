@@ -110,6 +110,27 @@ inline int effectiveGridLattice(const AntialiasOptions& o)
   return o.supersample > 1 ? 1 : o.gridLattice;
 }
 
+/// The side of the converged rendering's pattern.
+constexpr int kConvergedSide = 4;
+/// The rendering of a view's converged picture, the one quality is measured against: every
+/// pixel's centre ray traced, and side × side samples on the rotated grid in every pixel, each
+/// filtered over its share of the footprint and traced as tightly as the centre rays.
+inline AntialiasOptions convergedRendering(int side = kConvergedSide)
+{
+  AntialiasOptions o;
+  o.mode = AntialiasMode::Filter;
+  o.supersample = side;
+  o.gridLattice = 1;
+  return o;
+}
+
+/// Whether a rendering is converged already: as many samples in every pixel as the converged
+/// rendering or more (its frames are their own converged pictures).
+inline bool isConvergedRendering(const AntialiasOptions& o)
+{
+  return o.supersample >= kConvergedSide;
+}
+
 /// The rendering for tracing scattered pixels, such as the pixels an interpolated frame re-traces:
 /// each its own centre ray, where the adaptive grid would process the whole lattice block around
 /// each of them.

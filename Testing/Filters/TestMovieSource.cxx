@@ -38,6 +38,9 @@ void configure(vtkGeodesicMovieSource* movie)
   movie->SetRampTo(kTo);
   movie->SetNumberOfFrames(kFrames);
   movie->SetQualityTarget(35);
+  // Held to the frames traced at their parameters, the truth these tests trace: at this size the
+  // default rendering itself scores near 30 dB against the converged pictures.
+  movie->HoldToConvergedOff();
   movie->SetResolution(kSide, kSide);
 }
 

@@ -1,0 +1,74 @@
+// The error a frame's rendering settings leave against the converged picture of the same view
+// (the picture its pixels converge to as they are sampled ever more densely; convergedRendering),
+// measured on a few probe pixels traced with the converged rendering. A quality target is a
+// promise against the converged picture: an interpolated frame completed to the frame traced at
+// its parameter carries that frame's own error too, and a target above what the settings reach
+// cannot be met by re-tracing with them.
+//
+//  - Strata. The error lies mostly where the frame sampled a pixel by more than its centre ray
+//    (an edge: the samples approximate the pixel's box average), less where the adaptive grid
+//    interpolated the centre ray, least where one traced ray's footprint filter did. Each of the
+//    three is probed apart (its pixels with the lowest hashes), and the frame's error is their
+//    means weighted by their shares of the frame: unbiased, with far less variance than one
+//    uniform sample of as many probes, since the rare large errors sit in the smallest stratum.
+//  - Bound. A stratum's mean is raised by two standard errors, and by one more probe of its
+//    largest error seen, as completePathFrame bounds what it leaves untraced: probes that all
+//    came out exact show only that errors are rare there.
+//  - Units. Mean squared error per channel in levels² of 255, as psnrOfMse takes it.
+#ifndef asrt_SettingsError_h
+#define asrt_SettingsError_h
+
+#include "PathInterpolation.h"
+#include "RayRecord.h"
+#include "asrtInterpolationModule.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace asrt
+{
+/// Probes drawn in each stratum of a frame (all of it where a stratum is smaller); the sampled
+/// pixels, which hold most of the error and its rare large values, get twice as many.
+constexpr std::size_t kSettingsProbesPerStratum = 40;
+/// The hash seed of the probes a movie or a filter draws: the same frame, the same probes.
+constexpr std::uint64_t kSettingsProbeSeed = 0x5851f42d4c957f2dULL;
+
+/// A frame's error against its converged picture, estimated from probes.
+struct SettingsError
+{
+  double mse = 0;      ///< the estimate: the strata's probe means weighted by their shares
+  double mseBound = 0; ///< an upper bound: each mean raised as the header says
+  std::size_t probes = 0;
+  double rays = 0; ///< rays integrated to trace the probes with the converged rendering
+  /// The bound's PSNR: what the settings are held to reach against the converged picture.
+  double psnr() const;
+};
+
+/// The probes of a whole frame's records (row-major, one per pixel): per stratum (sampled by
+/// more than the centre ray; centre interpolated by the grid; one traced ray), `perStratum` of
+/// its pixels (twice as many sampled ones), those whose indices hash lowest under `seed`, in
+/// increasing order.
+ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> settingsProbes(
+  const std::vector<RayRecord>& frame, std::size_t perStratum = kSettingsProbesPerStratum,
+  std::uint64_t seed = kSettingsProbeSeed);
+
+/// The estimate from the frame's records and the converged records of the probes (in the
+/// probes' order). Throws InvalidParameter when the counts differ.
+ASRTINTERPOLATION_EXPORT SettingsError settingsError(const std::vector<RayRecord>& frame,
+                                                     const std::vector<std::int32_t>& probes,
+                                                     const std::vector<RayRecord>& converged);
+
+/// The probes of `frame` (width × height records) traced by `converged` (the frame's scene with
+/// a converged rendering), and the estimate. Throws InvalidParameter for a frame of another
+/// size than width × height.
+ASRTINTERPOLATION_EXPORT SettingsError measureSettingsError(
+  const std::vector<RayRecord>& frame, int width, int height, const PixelTracer& converged,
+  std::size_t perStratum = kSettingsProbesPerStratum);
+
+/// The larger of two keys' estimates and of their bounds: a frame between the two keys
+/// is held to the worse of them, whose settings are its own.
+ASRTINTERPOLATION_EXPORT SettingsError worseOf(const SettingsError& a, const SettingsError& b);
+}
+
+#endif

@@ -1,0 +1,212 @@
+// A frame's error against its converged picture, measured on probes (SettingsError.h), and a
+// quality target held against the converged picture by completePathFrame, against converged
+// frames the tests trace themselves.
+#include "ErrorEstimate.h"
+#include "FrameTracer.h"
+#include "GeodesicFrameMatching.h"
+#include "PathInterpolation.h"
+#include "RampScene.h"
+#include "SettingsError.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+using namespace asrt;
+using asrt::testing::rampScene;
+
+namespace
+{
+std::vector<RayRecord> traceFrame(const SceneDescription& d)
+{
+  return FrameTracer(d).traceRows(0, d.camera.height);
+}
+
+SceneDescription converged(SceneDescription d)
+{
+  d.rendering = convergedRendering();
+  return d;
+}
+
+/// The mean squared error per channel of two frames' colours, over every pixel: the brute force.
+double frameMse(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
+{
+  double sum = 0;
+  for (std::size_t p = 0; p < a.size(); ++p)
+    sum += (255.0 * (a[p].color - b[p].color)).squaredNorm();
+  return sum / (3.0 * static_cast<double>(a.size()));
+}
+
+PixelTracer tracerOf(const FrameTracer& tracer)
+{
+  return [&tracer](const std::vector<std::pair<int, int>>& ij)
+  {
+    const std::int64_t before = tracer.raysIntegrated();
+    TracedPixels out;
+    out.records = tracer.tracePixels(ij);
+    out.rays = static_cast<double>(tracer.raysIntegrated() - before);
+    return out;
+  };
+}
+
+/// The ramp of Figs. 4–5 at 96 × 96: key frames with the default rendering and their converged
+/// pictures, traced once for the suite.
+class SettingsErrorRamp : public ::testing::Test
+{
+protected:
+  static constexpr int Side = 96;
+  static constexpr double From = 0.6, H = 0.1, T = 0.74;
+  static void SetUpTestSuite()
+  {
+    for (int k = 0; k < 4; ++k)
+      keys().push_back(traceFrame(rampScene(From + H * k, Side)));
+    truth() = traceFrame(converged(rampScene(T, Side)));
+    keyTruth() = traceFrame(converged(rampScene(From + H, Side)));
+  }
+  static std::vector<std::vector<RayRecord>>& keys()
+  {
+    static std::vector<std::vector<RayRecord>> k;
+    return k;
+  }
+  /// The converged picture at T, and at the second key.
+  static std::vector<RayRecord>& truth()
+  {
+    static std::vector<RayRecord> t;
+    return t;
+  }
+  static std::vector<RayRecord>& keyTruth()
+  {
+    static std::vector<RayRecord> t;
+    return t;
+  }
+  /// The settings' error of key k, measured with probes traced at the converged rendering.
+  static SettingsError measured(int k)
+  {
+    const FrameTracer probe(converged(rampScene(From + H * k, Side)));
+    return measureSettingsError(keys()[static_cast<std::size_t>(k)], Side, Side, tracerOf(probe));
+  }
+};
+
+TEST_F(SettingsErrorRamp, ProbingEveryPixelGivesTheFramesError)
+{
+  const std::vector<RayRecord>& key = keys()[1];
+  const std::vector<std::int32_t> all = settingsProbes(key, key.size());
+  ASSERT_EQ(all.size(), key.size());
+  std::vector<RayRecord> probes;
+  for (std::int32_t p : all)
+    probes.push_back(keyTruth()[static_cast<std::size_t>(p)]);
+  const SettingsError e = settingsError(key, all, probes);
+  const double brute = frameMse(key, keyTruth());
+  EXPECT_NEAR(e.mse, brute, 1e-9 * brute);
+  EXPECT_NEAR(e.mseBound, brute, 1e-9 * brute); // every stratum probed whole: no margin
+  EXPECT_GT(brute, 0.0);
+}
+
+TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
+{
+  const SettingsError e = measured(1);
+  const double brute = frameMse(keys()[1], keyTruth());
+  std::printf("[ settings ] key at M = %.2f: %.2f dB against converged; probes (%zu, %.0f rays): "
+              "%.2f dB, bound %.2f dB\n",
+              From + H, psnrOfMse(brute), e.probes, e.rays, psnrOfMse(e.mse), e.psnr());
+  EXPECT_LE(e.probes, 4 * kSettingsProbesPerStratum);
+  EXPECT_GT(e.rays, 0.0);
+  // Over many draws of the probes, the estimate is unbiased and the bound holds in most: the
+  // rare large errors at edges make any one draw uncertain.
+  const std::vector<RayRecord>& key = keys()[1];
+  constexpr int Draws = 64;
+  double sum = 0;
+  int bounded = 0;
+  for (int d = 0; d < Draws; ++d)
+  {
+    const std::vector<std::int32_t> probes =
+      settingsProbes(key, kSettingsProbesPerStratum, 1000 + 7 * d);
+    std::vector<RayRecord> at;
+    for (std::int32_t p : probes)
+      at.push_back(keyTruth()[static_cast<std::size_t>(p)]);
+    const SettingsError drawn = settingsError(key, probes, at);
+    sum += drawn.mse;
+    bounded += drawn.mseBound >= brute;
+  }
+  std::printf("[ settings ] %d draws: mean estimate %.2f dB, bound above the truth in %d\n", Draws,
+              psnrOfMse(sum / Draws), bounded);
+  EXPECT_NEAR(sum / Draws, brute, 0.2 * brute);
+  EXPECT_GE(bounded, 3 * Draws / 4);
+  // The probes are the converged frame's own records: a frame traced converged has no error.
+  const FrameTracer probe(converged(rampScene(From + H, Side)));
+  const SettingsError none = measureSettingsError(keyTruth(), Side, Side, tracerOf(probe));
+  EXPECT_EQ(none.mse, 0.0);
+}
+
+TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
+{
+  const SettingsError settings = worseOf(measured(1), measured(2));
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ From + H * k, &keys()[static_cast<std::size_t>(k)] });
+  PathOptions options;
+  options.pointIndex = vtkPointIndexFactory();
+  const SceneDescription atT = rampScene(T, Side);
+  const FrameTracer tracer(atT);
+  const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), truth()));
+  std::printf("[ settings ] traced at M = %.2f: %.2f dB against converged; keys' bound %.2f dB\n",
+              T, tracedDb, settings.psnr());
+  for (double target : { 30.0, 35.0, tracedDb })
+  {
+    PathFrame against = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+    PathFrame plain = against;
+    const PathCompletion held = completePathFrame(against, tracer, target, 0.01, settings.mseBound);
+    const PathCompletion loose = completePathFrame(plain, tracer, target);
+    const double heldDb = psnrOfMse(frameMse(against.records, truth()));
+    const double looseDb = psnrOfMse(frameMse(plain.records, truth()));
+    std::printf("[ settings ] target %.2f dB: held to converged %.2f dB (estimated %.2f, %zu "
+                "re-traced); held to the traced frame %.2f dB (%zu)\n",
+                target, heldDb, held.estimatedPsnr, held.retraced, looseDb, loose.retraced);
+    EXPECT_GE(heldDb, target - 1.0) << target;
+    EXPECT_GE(held.retraced, loose.retraced);
+    EXPECT_LE(held.estimatedPsnr, settings.psnr());
+  }
+}
+
+TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
+{
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ From + H * k, &keys()[static_cast<std::size_t>(k)] });
+  PathOptions options;
+  options.movedEdges = false;
+  const SceneDescription atT = rampScene(T, Side);
+  const FrameTracer tracer(atT);
+  for (double bad : { -1.0, std::nan(""), HUGE_VAL })
+  {
+    PathFrame f = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+    try
+    {
+      completePathFrame(f, tracer, 35.0, 0.01, bad);
+      ADD_FAILURE() << bad << " was taken";
+    }
+    catch (const InvalidParameter& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("settings' own error"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(SettingsError, ABadFrameOrProbeListIsRefused)
+{
+  std::vector<RayRecord> frame(12);
+  const PixelTracer none = [](const std::vector<std::pair<int, int>>& ij)
+  {
+    TracedPixels out;
+    out.records.resize(ij.size());
+    return out;
+  };
+  EXPECT_THROW(measureSettingsError(frame, 4, 4, none), InvalidParameter);
+  EXPECT_THROW(settingsError(frame, { 0, 1 }, std::vector<RayRecord>(1)), InvalidParameter);
+  EXPECT_THROW(settingsError(frame, { 40 }, std::vector<RayRecord>(1)), InvalidParameter);
+}
+}
