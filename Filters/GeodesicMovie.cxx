@@ -545,9 +545,9 @@ struct MovieMaking
     if (after == keys.begin() || after == keys.end())
       throw InvalidParameter("frame " + std::to_string(k) + " lies outside its keys");
     settings =
-      worseOf(this->settingsOf(*(after - 1), storeOnly), this->settingsOf(*after, storeOnly));
+      pooled(this->settingsOf(*(after - 1), storeOnly), this->settingsOf(*after, storeOnly));
     const PathCompletion done = completePathFrame(frame, retrace, maker.Settings.quality,
-                                                  kMovieProbeFraction, settings.mseBound);
+                                                  kMovieProbeFraction, settings.mseBound());
     records = std::move(frame.records);
     return done;
   }

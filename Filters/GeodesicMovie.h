@@ -129,7 +129,7 @@ struct MovieFrameReport
   /// traced at the frame's parameters.
   double estimatedPsnr = std::numeric_limits<double>::infinity();
   /// The bound on the settings' own PSNR against the converged picture: for an interpolated
-  /// frame the worse of its inner keys', for a whole frame its own where it was measured
+  /// frame its inner keys' probes pooled, for a whole frame its own where it was measured
   /// (infinite where it was not).
   double settingsPsnr = std::numeric_limits<double>::infinity();
   double shareRetraced = 0; ///< of its pixels traced for it (1 for a frame traced whole)

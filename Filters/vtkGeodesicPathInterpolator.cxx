@@ -421,8 +421,8 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     else if (this->QualityTarget > 0.0)
     {
       const asrt::SettingsError settings =
-        this->HoldToConverged ? asrt::worseOf(in.KeySettingsError(static_cast<std::size_t>(a)),
-                                              in.KeySettingsError(static_cast<std::size_t>(a + 1)))
+        this->HoldToConverged ? asrt::pooled(in.KeySettingsError(static_cast<std::size_t>(a)),
+                                             in.KeySettingsError(static_cast<std::size_t>(a + 1)))
                               : asrt::SettingsError{};
       this->LastSettingsPsnr = settings.psnr();
       asrt::SceneDescription atT = in.Shading;
@@ -432,7 +432,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       atT.rendering = asrt::scatteredPixelRendering(atT.rendering);
       const asrt::FrameTracer tracer(atT);
       const asrt::PathCompletion done = asrt::completePathFrame(
-        f, tracer, this->QualityTarget, this->ProbeFraction, settings.mseBound);
+        f, tracer, this->QualityTarget, this->ProbeFraction, settings.mseBound());
       this->LastRetracedCount = static_cast<vtkIdType>(done.retraced);
       this->LastEstimatedPsnr = done.estimatedPsnr;
     }

@@ -76,7 +76,7 @@ public:
   /// against the frame the keys' settings trace at t. On, each inner key's own error against its
   /// converged picture is measured first, by a few probe pixels traced converged
   /// (asrt::measureSettingsError, once per key), and the re-tracing leaves the frame only what
-  /// the target allows beyond the worse key's.
+  /// the target allows beyond the inner keys' (their probes pooled).
   vtkSetMacro(HoldToConverged, vtkTypeBool);
   vtkGetMacro(HoldToConverged, vtkTypeBool);
   vtkBooleanMacro(HoldToConverged, vtkTypeBool);
@@ -102,8 +102,8 @@ public:
 
   ///@{
   /// What the last RequestData did: pixels re-traced (probes included), pixels the keys could not
-  /// vouch for, the estimated PSNR (0 without a target), and the bound on the worse inner key's
-  /// own PSNR against its converged picture (infinite without HoldToConverged or a target).
+  /// vouch for, the estimated PSNR (0 without a target), and the bound on the inner keys'
+  /// own PSNR against their converged pictures (infinite without HoldToConverged or a target).
   vtkGetMacro(LastRetracedCount, vtkIdType);
   vtkGetMacro(LastMustRetraceCount, vtkIdType);
   vtkGetMacro(LastEstimatedPsnr, double);

@@ -266,7 +266,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   for (int k : { interval, interval + 1 })
     if (!settings.count(k))
       settings[k] = keySettingsError(path, path.from + k * path.h, keys[k]);
-  const SettingsError held = worseOf(settings[interval], settings[interval + 1]);
+  const SettingsError held = pooled(settings[interval], settings[interval + 1]);
   r.settingsBound = held.psnr();
   const SceneDescription atS = pathScene(path, r.s);
   const FrameTracer tracer(atS);
@@ -297,7 +297,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   for (double target : targets)
   {
     PathFrame done = plain;
-    const PathCompletion c = completePathFrame(done, tracer, target, 0.01, held.mseBound);
+    const PathCompletion c = completePathFrame(done, tracer, target, 0.01, held.mseBound());
     const std::vector<std::uint8_t> doneRgb = rgbOf(done.records);
     r.share.push_back(c.retraced / n);
     r.doneVsConverged.push_back(psnrOf(doneRgb, reference));
@@ -319,7 +319,8 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               "ray traced (`convergedRendering`). **Plain**: nothing re-traced. **--quality T**: "
               "`completePathFrame` held to the converged picture: the inner keys' own error "
               "against theirs measured by probes traced converged (`measureSettingsError`, the "
-              "worse key's bound, column *settings*). PSNR as mean / worst; Spearman of the "
+              "the inner keys' probes pooled, its bound in column *settings*). PSNR as mean / "
+              "worst; Spearman of the "
               "estimate against the true error (against the traced frame) over the predicted "
               "pixels, mean / worst; *below T − 1*: frames under T − 1 dB against converged:\n\n",
               frameCount, kReferenceSide, kReferenceSide);

@@ -151,35 +151,48 @@ float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, 
 }
 
 /// A pixel that a key supersampled (an edge runs through it) but whose topology holds between the
-/// keys: its colour, the average over the edge's two sides, varies smoothly with s while the edge
-/// stays inside it, so the colours themselves are interpolated; the record is the nearer key's.
+/// keys. Its colour is the average over the edge's two sides: a share α on the centre ray's side,
+/// whose colour C_c is the centre ray's, and 1 − α on the other, of colour C_o. The centre ray is
+/// predicted and re-shaded as any pixel's, and the rest, the key's colour less its centre ray's
+/// shade ((1 − α)(C_o − C_c)), interpolated: where a texture moves under the centre's side (an
+/// orbit, with the edges in place) only the other side's share of its motion is left to the
+/// interpolation, not the whole of it; where the edge moves, the rest follows α as the colour
+/// itself would. The record is the centre ray's prediction, colour aside.
 RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                           int width, int height, PathMethod& method, float& estimate)
+                           int width, int height, const Scene& scene, PathMethod& method,
+                           float& estimate)
 {
   const RayRecord& ra = (*keys[a].records)[p];
   const RayRecord& rb = (*keys[a + 1].records)[p];
   const bool left = a > 0 && endAlike((*keys[a - 1].records)[p], ra);
   const bool right = a + 2 < keys.size() && endAlike(rb, (*keys[a + 2].records)[p]);
   const std::size_t first = left ? a - 1 : a, last = right ? a + 2 : a + 1;
+  const RayRecord* nodes[4];
   double s[4], w[4];
-  Color c[4];
+  Color rest[4];
   int n = 0;
   for (std::size_t k = first; k <= last; ++k)
   {
-    c[n] = (*keys[k].records)[p].color;
+    nodes[n] = &(*keys[k].records)[p];
+    rest[n] = nodes[n]->color - shadePrediction(scene, *nodes[n]);
     s[n++] = keys[k].s;
   }
+  // The prediction through the nodes from `offset` on, `count` of them.
   auto blend = [&](int offset, int count)
   {
+    RayRecord centre = predictRecord(nodes + offset, s + offset, count, t);
     lagrangeWeights(s + offset, count, t, w);
-    Color out = Color::Zero();
+    Color out = shadePrediction(scene, centre);
     for (int k = 0; k < count; ++k)
-      out += w[k] * c[offset + k];
-    return Color(out.cwiseMax(0.0).cwiseMin(1.0));
+      out += w[k] * rest[offset + k];
+    centre.color = out.cwiseMax(0.0).cwiseMin(1.0);
+    return centre;
   };
   const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
-  RayRecord out = (*keys[nearerKey].records)[p];
-  out.color = blend(0, n);
+  RayRecord out = blend(0, n);
+  // The record's other fields are the nearer key's centre ray's, moved to t; its rays are the
+  // nearer key's (the anti-aliasing an edge pixel took).
+  out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
   method = PathMethod::EdgeBlend;
   if (n == 2)
   {
@@ -190,7 +203,7 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
   // roughly: the keys' colour step bounds what the edge's motion can change in between.
-  estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1)),
+  estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1).color),
                       colorError2(ra.color, rb.color));
   estimate = std::max(estimate, edgeContrast(*keys[nearerKey].records, p, width, height));
   return out;
@@ -645,7 +658,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       }
       PathMethod m;
       if (!singleRay(ka[p]) || !singleRay(kb[p]))
-        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, m, f.estimate[p]);
+        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, scene, m, f.estimate[p]);
       else
         f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
       f.method[p] = static_cast<std::uint8_t>(m);

@@ -20,9 +20,10 @@
 //    over the interpolated footprint (Scene::shadeFootprint), as a traced pixel's is.
 //  - Edges. A pixel that either inner key supersampled (an edge runs through it) but whose centre
 //    rays end alike shows the average over the edge's two sides, which varies with s as the edge
-//    moves inside it: its colours are interpolated themselves (EdgeBlend), the record is the
-//    nearer key's, and the estimate is at least the keys' colour step and the nearer key's
-//    contrast with its 4 neighbours (what the edge moving by a pixel changes).
+//    moves inside it: its centre ray is predicted and re-shaded as any pixel's, and what the keys'
+//    colours add to their centre rays' shades (the other side's share) is interpolated
+//    (EdgeBlend); the estimate is at least the keys' colour step and the nearer key's contrast
+//    with its 4 neighbours (what the edge moving by a pixel changes).
 //  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
 //    dropped; for a linear prediction, the nearer key) differs from the prediction by about the
 //    lower order's error: that squared difference, summed over the channels in levels² of 255,
@@ -71,8 +72,9 @@ enum class PathMethod : std::uint8_t
   Linear = 3,    ///< 2 nodes
   Retrace = 4,   ///< the keys cannot vouch for it: to be traced (its record is the nearer key's)
   Retraced = 5,  ///< traced at t
-  EdgeBlend = 6, ///< an edge pixel: the keys' colours interpolated (its record is the nearer key's)
-  MovedEdge = 7  ///< near an edge the inner keys disagree on: from the keys' scene points, moved
+  EdgeBlend =
+    6, ///< an edge pixel: its centre ray predicted, the keys' colour beyond it interpolated
+  MovedEdge = 7 ///< near an edge the inner keys disagree on: from the keys' scene points, moved
 };
 constexpr int kPathMethodCount = 8;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);

@@ -12,7 +12,7 @@ namespace asrt
 {
 namespace
 {
-constexpr int kStrata = 3;
+constexpr int kStrata = kSettingsStrata;
 /// Standard errors added to a stratum's mean, as completePathFrame's probe bound.
 constexpr double kSettingsConfidence = 2.0;
 
@@ -37,9 +37,44 @@ double channelError2(const Color& a, const Color& b)
 }
 }
 
+double SettingsError::mse() const
+{
+  double mse = 0;
+  for (const SettingsStratum& s : this->strata)
+    if (s.count > 0)
+      mse += s.share * s.sum / s.count;
+  return mse;
+}
+
+double SettingsError::mseBound() const
+{
+  double variance = 0;
+  for (const SettingsStratum& s : this->strata)
+  {
+    if (s.share <= 0)
+      continue;
+    if (s.count <= 0)
+      return std::numeric_limits<double>::infinity(); // a stratum nobody probed
+    if (s.count >= s.pixels)
+      continue; // probed whole: its mean is exact
+    const double mean = s.sum / s.count;
+    const double spread = std::max(0.0, s.sum2 / s.count - mean * mean);
+    variance += s.share * s.share * spread / s.count;
+  }
+  return this->mse() + kSettingsConfidence * std::sqrt(variance);
+}
+
+std::size_t SettingsError::probes() const
+{
+  double n = 0;
+  for (const SettingsStratum& s : this->strata)
+    n += s.count;
+  return static_cast<std::size_t>(n);
+}
+
 double SettingsError::psnr() const
 {
-  return psnrOfMse(this->mseBound);
+  return psnrOfMse(this->mseBound());
 }
 
 std::vector<std::int32_t> settingsProbes(const std::vector<RayRecord>& frame,
@@ -69,47 +104,22 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
   if (converged.size() != probes.size())
     invalid(std::to_string(converged.size()) + " converged records for " +
             std::to_string(probes.size()) + " probes");
-  std::size_t size[kStrata] = {};
+  SettingsError out;
   for (const RayRecord& r : frame)
-    ++size[stratumOf(r)];
-  double count[kStrata] = {}, sum[kStrata] = {}, sum2[kStrata] = {}, largest[kStrata] = {};
+    out.strata[stratumOf(r)].pixels += 1;
+  for (SettingsStratum& s : out.strata)
+    s.share = frame.empty() ? 0.0 : s.pixels / static_cast<double>(frame.size());
   for (std::size_t q = 0; q < probes.size(); ++q)
   {
     if (probes[q] < 0 || static_cast<std::size_t>(probes[q]) >= frame.size())
       invalid("probe " + std::to_string(probes[q]) + " lies outside the frame of " +
               std::to_string(frame.size()) + " pixels");
     const RayRecord& r = frame[static_cast<std::size_t>(probes[q])];
-    const int s = stratumOf(r);
     const double e = channelError2(r.color, converged[q].color);
-    count[s] += 1;
-    sum[s] += e;
-    sum2[s] += e * e;
-    largest[s] = std::max(largest[s], e);
-  }
-  SettingsError out;
-  out.probes = probes.size();
-  const double n = static_cast<double>(frame.size());
-  for (int s = 0; s < kStrata; ++s)
-  {
-    if (size[s] == 0)
-      continue;
-    const double share = static_cast<double>(size[s]) / n;
-    if (count[s] <= 0)
-    {
-      out.mseBound = std::numeric_limits<double>::infinity(); // a stratum nobody probed
-      continue;
-    }
-    const double mean = sum[s] / count[s];
-    out.mse += share * mean;
-    // Every pixel of a stratum probed: its mean is exact.
-    if (count[s] >= static_cast<double>(size[s]))
-    {
-      out.mseBound += share * mean;
-      continue;
-    }
-    const double variance = std::max(0.0, sum2[s] / count[s] - mean * mean);
-    out.mseBound += share * ((sum[s] + largest[s]) / (count[s] + 1) +
-                             kSettingsConfidence * std::sqrt(variance / count[s]));
+    SettingsStratum& s = out.strata[stratumOf(r)];
+    s.count += 1;
+    s.sum += e;
+    s.sum2 += e * e;
   }
   return out;
 }
@@ -132,12 +142,19 @@ SettingsError measureSettingsError(const std::vector<RayRecord>& frame, int widt
   return out;
 }
 
-SettingsError worseOf(const SettingsError& a, const SettingsError& b)
+SettingsError pooled(const SettingsError& a, const SettingsError& b)
 {
   SettingsError out;
-  out.mse = std::max(a.mse, b.mse);
-  out.mseBound = std::max(a.mseBound, b.mseBound);
-  out.probes = a.probes + b.probes;
+  for (int k = 0; k < kStrata; ++k)
+  {
+    const SettingsStratum &x = a.strata[k], &y = b.strata[k];
+    SettingsStratum& s = out.strata[k];
+    s.share = 0.5 * (x.share + y.share);
+    s.pixels = 0.5 * (x.pixels + y.pixels);
+    s.count = x.count + y.count;
+    s.sum = x.sum + y.sum;
+    s.sum2 = x.sum2 + y.sum2;
+  }
   out.rays = a.rays + b.rays;
   return out;
 }

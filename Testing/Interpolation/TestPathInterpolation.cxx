@@ -497,3 +497,63 @@ TEST(PathInterpolationOrbit, ASilhouetteSweepingAcrossPixelsTheKeysAgreeOnIsTrac
               swept);
   EXPECT_GT(swept, 0u) << "the path no longer has an object sweeping between its keys";
 }
+
+// The Kerr disk orbited about its axis: the edges (the disk's rims, the shadow) stay in place
+// while the disk's texture turns under them. An edge pixel's centre ray is predicted like any
+// pixel's, and only what the keys' colours add to their centre rays' shades is interpolated: the
+// edge pixels then come far closer to the frame traced there than the keys' colours interpolated
+// alone (the same Lagrange weights), which is what interpolating whole colours gave.
+TEST(PathInterpolationOrbit, EdgePixelsFollowATextureTurningUnderEdgesThatStay)
+{
+  constexpr int side = 96;
+  const std::string file = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/kerr-disk.json";
+  const SceneDescription start =
+    loadSceneFile(file, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
+  auto sceneAt = [&start](double degrees)
+  {
+    SceneDescription d = start;
+    d.camera.width = d.camera.height = side;
+    const CameraPose pose =
+      turnedAboutZ({ d.camera.position, d.camera.focalPoint, d.camera.viewUp }, degrees);
+    d.camera.position = pose.position;
+    d.camera.focalPoint = pose.focalPoint;
+    d.camera.viewUp = pose.viewUp;
+    return d;
+  };
+  const std::vector<double> s = { 20.0, 30.0, 40.0, 50.0 };
+  std::vector<std::vector<RayRecord>> records;
+  for (double degrees : s)
+    records.push_back(traceFrame(sceneAt(degrees)));
+  std::vector<PathKey> path;
+  for (std::size_t k = 0; k < s.size(); ++k)
+    path.push_back({ s[k], &records[k] });
+  PathOptions options;
+  options.movedEdges = false;
+  const double t = 35.0;
+  const SceneDescription atT = sceneAt(t);
+  const std::vector<RayRecord> truth = traceFrame(atT);
+  const PathFrame f = interpolateAlongPath(path, t, side, side, *atT.scene, options);
+  double w[4];
+  lagrangeWeights(s.data(), 4, t, w);
+  double predicted = 0, colours = 0;
+  std::size_t edges = 0;
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+  {
+    if (f.method[p] != static_cast<std::uint8_t>(PathMethod::EdgeBlend))
+      continue;
+    ++edges;
+    predicted += error2(f.records[p], truth[p]);
+    // The keys' colours alone, through the same 4 keys where they all vouch for the pixel.
+    Color blend = Color::Zero();
+    for (int k = 0; k < 4; ++k)
+      blend += w[k] * records[static_cast<std::size_t>(k)][p].color;
+    RayRecord alone = truth[p];
+    alone.color = blend.cwiseMax(0.0).cwiseMin(1.0);
+    colours += error2(alone, truth[p]);
+  }
+  std::printf("[ path ] Kerr disk at %.0f degrees: %zu edge pixels, squared error %.0f (keys' "
+              "colours alone: %.0f)\n",
+              t, edges, predicted, colours);
+  ASSERT_GT(edges, 100u) << "no edge pixels: this test checks nothing";
+  EXPECT_LT(predicted, 0.25 * colours);
+}

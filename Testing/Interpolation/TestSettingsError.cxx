@@ -101,8 +101,8 @@ TEST_F(SettingsErrorRamp, ProbingEveryPixelGivesTheFramesError)
     probes.push_back(keyTruth()[static_cast<std::size_t>(p)]);
   const SettingsError e = settingsError(key, all, probes);
   const double brute = frameMse(key, keyTruth());
-  EXPECT_NEAR(e.mse, brute, 1e-9 * brute);
-  EXPECT_NEAR(e.mseBound, brute, 1e-9 * brute); // every stratum probed whole: no margin
+  EXPECT_NEAR(e.mse(), brute, 1e-9 * brute);
+  EXPECT_NEAR(e.mseBound(), brute, 1e-9 * brute); // every stratum probed whole: no margin
   EXPECT_GT(brute, 0.0);
 }
 
@@ -112,8 +112,8 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
   const double brute = frameMse(keys()[1], keyTruth());
   std::printf("[ settings ] key at M = %.2f: %.2f dB against converged; probes (%zu, %.0f rays): "
               "%.2f dB, bound %.2f dB\n",
-              From + H, psnrOfMse(brute), e.probes, e.rays, psnrOfMse(e.mse), e.psnr());
-  EXPECT_LE(e.probes, 4 * kSettingsProbesPerStratum);
+              From + H, psnrOfMse(brute), e.probes(), e.rays, psnrOfMse(e.mse()), e.psnr());
+  EXPECT_LE(e.probes(), 4 * kSettingsProbesPerStratum);
   EXPECT_GT(e.rays, 0.0);
   // Over many draws of the probes, the estimate is unbiased and the bound holds in most: the
   // rare large errors at edges make any one draw uncertain.
@@ -129,8 +129,8 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
     for (std::int32_t p : probes)
       at.push_back(keyTruth()[static_cast<std::size_t>(p)]);
     const SettingsError drawn = settingsError(key, probes, at);
-    sum += drawn.mse;
-    bounded += drawn.mseBound >= brute;
+    sum += drawn.mse();
+    bounded += drawn.mseBound() >= brute;
   }
   std::printf("[ settings ] %d draws: mean estimate %.2f dB, bound above the truth in %d\n", Draws,
               psnrOfMse(sum / Draws), bounded);
@@ -139,12 +139,12 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
   // The probes are the converged frame's own records: a frame traced converged has no error.
   const FrameTracer probe(converged(rampScene(From + H, Side)));
   const SettingsError none = measureSettingsError(keyTruth(), Side, Side, tracerOf(probe));
-  EXPECT_EQ(none.mse, 0.0);
+  EXPECT_EQ(none.mse(), 0.0);
 }
 
 TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
 {
-  const SettingsError settings = worseOf(measured(1), measured(2));
+  const SettingsError settings = pooled(measured(1), measured(2));
   std::vector<PathKey> path;
   for (int k = 0; k < 4; ++k)
     path.push_back({ From + H * k, &keys()[static_cast<std::size_t>(k)] });
@@ -159,7 +159,8 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
   {
     PathFrame against = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
     PathFrame plain = against;
-    const PathCompletion held = completePathFrame(against, tracer, target, 0.01, settings.mseBound);
+    const PathCompletion held =
+      completePathFrame(against, tracer, target, 0.01, settings.mseBound());
     const PathCompletion loose = completePathFrame(plain, tracer, target);
     const double heldDb = psnrOfMse(frameMse(against.records, truth()));
     const double looseDb = psnrOfMse(frameMse(plain.records, truth()));
