@@ -37,7 +37,7 @@ namespace asrt
 {
 /// Probes drawn in each stratum of a frame (all of it where a stratum is smaller); the sampled
 /// pixels, which hold most of the error and its rare large values, get twice as many.
-constexpr std::size_t kSettingsProbesPerStratum = 40;
+constexpr std::size_t kSettingsProbesPerStratum = 20;
 /// The hash seed of the probes a movie or a filter draws: the same frame, the same probes.
 constexpr std::uint64_t kSettingsProbeSeed = 0x5851f42d4c957f2dULL;
 
