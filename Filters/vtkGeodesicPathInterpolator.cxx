@@ -222,17 +222,8 @@ struct vtkGeodesicPathInterpolator::Internals
         d.rendering = asrt::convergedRendering();
         const asrt::FrameTracer converged(d);
         const asrt::CameraParameters& c = d.camera;
-        this->KeyError[k] =
-          asrt::measureSettingsError(this->Records[k], c.width, c.height,
-                                     [&converged](const std::vector<std::pair<int, int>>& ij)
-                                     {
-                                       const std::int64_t before = converged.raysIntegrated();
-                                       asrt::TracedPixels out;
-                                       out.records = converged.tracePixels(ij);
-                                       out.rays =
-                                         static_cast<double>(converged.raysIntegrated() - before);
-                                       return out;
-                                     });
+        this->KeyError[k] = asrt::measureSettingsError(this->Records[k], c.width, c.height,
+                                                       asrt::pixelTracerOf(converged));
       }
     }
     return *this->KeyError[k];

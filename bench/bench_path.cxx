@@ -236,15 +236,7 @@ SettingsError keySettingsError(const BenchPath& path, double s, const std::vecto
 {
   const AntialiasOptions converged = convergedRendering();
   const FrameTracer tracer(pathScene(path, s, &converged));
-  return measureSettingsError(key, kSide, kSide,
-                              [&tracer](const std::vector<std::pair<int, int>>& ij)
-                              {
-                                const std::int64_t before = tracer.raysIntegrated();
-                                TracedPixels out;
-                                out.records = tracer.tracePixels(ij);
-                                out.rays = static_cast<double>(tracer.raysIntegrated() - before);
-                                return out;
-                              });
+  return measureSettingsError(key, kSide, kSide, pixelTracerOf(tracer));
 }
 
 /// The frame at s from the keys around it (traced once each, into `keys`, their settings' errors

@@ -676,19 +676,19 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
     invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
             std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
             std::to_string(frame.height));
-  // The tracer's count, read around each call: its records' raysPerPixel leave out the edge
-  // neighbours it traces and drops.
-  return completePathFrame(
-    frame,
-    [&tracer](const std::vector<std::pair<int, int>>& ij)
-    {
-      const std::int64_t before = tracer.raysIntegrated();
-      TracedPixels out;
-      out.records = tracer.tracePixels(ij);
-      out.rays = static_cast<double>(tracer.raysIntegrated() - before);
-      return out;
-    },
-    targetDb, probeFraction, settingsMse);
+  return completePathFrame(frame, pixelTracerOf(tracer), targetDb, probeFraction, settingsMse);
+}
+
+PixelTracer pixelTracerOf(const FrameTracer& tracer)
+{
+  return [&tracer](const std::vector<std::pair<int, int>>& ij)
+  {
+    const std::int64_t before = tracer.raysIntegrated();
+    TracedPixels out;
+    out.records = tracer.tracePixels(ij);
+    out.rays = static_cast<double>(tracer.raysIntegrated() - before);
+    return out;
+  };
 }
 
 PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixels, double targetDb,

@@ -208,6 +208,11 @@ struct TracedPixels
 /// whole frame's record of that pixel (FrameTracer::tracePixels's), and the rays it integrated.
 using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, int>>& pixels)>;
 
+/// The pixel tracer of a frame tracer (which must outlive it): FrameTracer::tracePixels, and the
+/// rays it integrated read around each call (FrameTracer::raysIntegrated; the records'
+/// raysPerPixel leave out the edge neighbours it traces and drops).
+ASRTINTERPOLATION_EXPORT PixelTracer pixelTracerOf(const FrameTracer& tracer);
+
 /// As above, the pixels got from `trace` (called with the must-retrace pixels and the probes,
 /// then once per round of neighbours that contradict traced pixels, then with the chosen ones;
 /// each list is a function of the frame as predicted and of the records traced before, so the

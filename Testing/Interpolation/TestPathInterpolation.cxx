@@ -71,9 +71,52 @@ RayRecord syntheticRecord(double s, const std::vector<double>& u, const std::vec
   return r;
 }
 
+/// A scene file of Data/scenes at `side` × `side`, its camera turned about the hole's axis by
+/// `degrees` (as asrt movie --orbit turns it).
+SceneDescription orbitScene(const SceneDescription& start, int side, double degrees)
+{
+  SceneDescription d = start;
+  d.camera.width = d.camera.height = side;
+  const CameraPose pose =
+    turnedAboutZ({ d.camera.position, d.camera.focalPoint, d.camera.viewUp }, degrees);
+  d.camera.position = pose.position;
+  d.camera.focalPoint = pose.focalPoint;
+  d.camera.viewUp = pose.viewUp;
+  return d;
+}
+
+SceneDescription sceneFile(const std::string& name)
+{
+  return loadSceneFile(std::string(ASRT_SOURCE_DIR) + "/Data/scenes/" + name,
+                       [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
+}
+
 std::vector<RayRecord> traceFrame(const SceneDescription& d)
 {
   return FrameTracer(d).traceRows(0, d.camera.height);
+}
+
+/// Key frames of an orbit at the given angles, traced.
+struct OrbitKeys
+{
+  std::vector<double> s;
+  std::vector<std::vector<RayRecord>> records;
+  std::vector<PathKey> path() const
+  {
+    std::vector<PathKey> keys;
+    for (std::size_t k = 0; k < s.size(); ++k)
+      keys.push_back({ s[k], &records[k] });
+    return keys;
+  }
+};
+
+OrbitKeys orbitKeys(const SceneDescription& start, int side, std::vector<double> degrees)
+{
+  OrbitKeys keys;
+  keys.s = std::move(degrees);
+  for (double d : keys.s)
+    keys.records.push_back(traceFrame(orbitScene(start, side, d)));
+  return keys;
 }
 
 /// Squared colour error summed over the channels, levels² of 255.
@@ -445,27 +488,11 @@ TEST(PathInterpolationOrbit, ASilhouetteSweepingAcrossPixelsTheKeysAgreeOnIsTrac
 {
   constexpr int side = 100;
   constexpr double target = 35.0;
-  const std::string file = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/fig1-cylinders.json";
-  const SceneDescription start =
-    loadSceneFile(file, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
-  auto sceneAt = [&start](double degrees)
-  {
-    SceneDescription d = start;
-    d.camera.width = d.camera.height = side;
-    const CameraPose pose =
-      turnedAboutZ({ d.camera.position, d.camera.focalPoint, d.camera.viewUp }, degrees);
-    d.camera.position = pose.position;
-    d.camera.focalPoint = pose.focalPoint;
-    d.camera.viewUp = pose.viewUp;
-    return d;
-  };
-  const std::vector<double> s = { 66.0, 72.0, 78.0, 84.0 };
-  std::vector<std::vector<RayRecord>> records;
-  for (double degrees : s)
-    records.push_back(traceFrame(sceneAt(degrees)));
-  std::vector<PathKey> path;
-  for (std::size_t k = 0; k < s.size(); ++k)
-    path.push_back({ s[k], &records[k] });
+  const SceneDescription start = sceneFile("fig1-cylinders.json");
+  auto sceneAt = [&start](double degrees) { return orbitScene(start, side, degrees); };
+  const OrbitKeys keys = orbitKeys(start, side, { 66.0, 72.0, 78.0, 84.0 });
+  const std::vector<PathKey> path = keys.path();
+  const std::vector<std::vector<RayRecord>>& records = keys.records;
   PathOptions options;
   options.movedEdges = false; // as asrt movie interpolates
   std::size_t swept = 0;
@@ -506,27 +533,12 @@ TEST(PathInterpolationOrbit, ASilhouetteSweepingAcrossPixelsTheKeysAgreeOnIsTrac
 TEST(PathInterpolationOrbit, EdgePixelsFollowATextureTurningUnderEdgesThatStay)
 {
   constexpr int side = 96;
-  const std::string file = std::string(ASRT_SOURCE_DIR) + "/Data/scenes/kerr-disk.json";
-  const SceneDescription start =
-    loadSceneFile(file, [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
-  auto sceneAt = [&start](double degrees)
-  {
-    SceneDescription d = start;
-    d.camera.width = d.camera.height = side;
-    const CameraPose pose =
-      turnedAboutZ({ d.camera.position, d.camera.focalPoint, d.camera.viewUp }, degrees);
-    d.camera.position = pose.position;
-    d.camera.focalPoint = pose.focalPoint;
-    d.camera.viewUp = pose.viewUp;
-    return d;
-  };
-  const std::vector<double> s = { 20.0, 30.0, 40.0, 50.0 };
-  std::vector<std::vector<RayRecord>> records;
-  for (double degrees : s)
-    records.push_back(traceFrame(sceneAt(degrees)));
-  std::vector<PathKey> path;
-  for (std::size_t k = 0; k < s.size(); ++k)
-    path.push_back({ s[k], &records[k] });
+  const SceneDescription start = sceneFile("kerr-disk.json");
+  auto sceneAt = [&start](double degrees) { return orbitScene(start, side, degrees); };
+  const OrbitKeys keys = orbitKeys(start, side, { 20.0, 30.0, 40.0, 50.0 });
+  const std::vector<PathKey> path = keys.path();
+  const std::vector<double>& s = keys.s;
+  const std::vector<std::vector<RayRecord>>& records = keys.records;
   PathOptions options;
   options.movedEdges = false;
   const double t = 35.0;

@@ -41,18 +41,6 @@ double frameMse(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b
   return sum / (3.0 * static_cast<double>(a.size()));
 }
 
-PixelTracer tracerOf(const FrameTracer& tracer)
-{
-  return [&tracer](const std::vector<std::pair<int, int>>& ij)
-  {
-    const std::int64_t before = tracer.raysIntegrated();
-    TracedPixels out;
-    out.records = tracer.tracePixels(ij);
-    out.rays = static_cast<double>(tracer.raysIntegrated() - before);
-    return out;
-  };
-}
-
 /// The ramp of Figs. 4–5 at 96 × 96: key frames with the default rendering and their converged
 /// pictures, traced once for the suite.
 class SettingsErrorRamp : public ::testing::Test
@@ -63,44 +51,32 @@ protected:
   static void SetUpTestSuite()
   {
     for (int k = 0; k < 4; ++k)
-      keys().push_back(traceFrame(rampScene(From + H * k, Side)));
-    truth() = traceFrame(converged(rampScene(T, Side)));
-    keyTruth() = traceFrame(converged(rampScene(From + H, Side)));
+      Keys.push_back(traceFrame(rampScene(From + H * k, Side)));
+    Truth = traceFrame(converged(rampScene(T, Side)));
+    KeyTruth = traceFrame(converged(rampScene(From + H, Side)));
   }
-  static std::vector<std::vector<RayRecord>>& keys()
-  {
-    static std::vector<std::vector<RayRecord>> k;
-    return k;
-  }
-  /// The converged picture at T, and at the second key.
-  static std::vector<RayRecord>& truth()
-  {
-    static std::vector<RayRecord> t;
-    return t;
-  }
-  static std::vector<RayRecord>& keyTruth()
-  {
-    static std::vector<RayRecord> t;
-    return t;
-  }
+  static inline std::vector<std::vector<RayRecord>> Keys;
+  /// The converged pictures at T and at the second key.
+  static inline std::vector<RayRecord> Truth, KeyTruth;
   /// The settings' error of key k, measured with probes traced at the converged rendering.
   static SettingsError measured(int k)
   {
     const FrameTracer probe(converged(rampScene(From + H * k, Side)));
-    return measureSettingsError(keys()[static_cast<std::size_t>(k)], Side, Side, tracerOf(probe));
+    return measureSettingsError(Keys[static_cast<std::size_t>(k)], Side, Side,
+                                pixelTracerOf(probe));
   }
 };
 
 TEST_F(SettingsErrorRamp, ProbingEveryPixelGivesTheFramesError)
 {
-  const std::vector<RayRecord>& key = keys()[1];
+  const std::vector<RayRecord>& key = Keys[1];
   const std::vector<std::int32_t> all = settingsProbes(key, key.size());
   ASSERT_EQ(all.size(), key.size());
   std::vector<RayRecord> probes;
   for (std::int32_t p : all)
-    probes.push_back(keyTruth()[static_cast<std::size_t>(p)]);
+    probes.push_back(KeyTruth[static_cast<std::size_t>(p)]);
   const SettingsError e = settingsError(key, all, probes);
-  const double brute = frameMse(key, keyTruth());
+  const double brute = frameMse(key, KeyTruth);
   EXPECT_NEAR(e.mse(), brute, 1e-9 * brute);
   EXPECT_NEAR(e.mseBound(), brute, 1e-9 * brute); // every stratum probed whole: no margin
   EXPECT_GT(brute, 0.0);
@@ -109,7 +85,7 @@ TEST_F(SettingsErrorRamp, ProbingEveryPixelGivesTheFramesError)
 TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
 {
   const SettingsError e = measured(1);
-  const double brute = frameMse(keys()[1], keyTruth());
+  const double brute = frameMse(Keys[1], KeyTruth);
   std::printf("[ settings ] key at M = %.2f: %.2f dB against converged; probes (%zu, %.0f rays): "
               "%.2f dB, bound %.2f dB\n",
               From + H, psnrOfMse(brute), e.probes(), e.rays, psnrOfMse(e.mse()), e.psnr());
@@ -117,7 +93,7 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
   EXPECT_GT(e.rays, 0.0);
   // Over many draws of the probes, the estimate is unbiased and the bound holds in most: the
   // rare large errors at edges make any one draw uncertain.
-  const std::vector<RayRecord>& key = keys()[1];
+  const std::vector<RayRecord>& key = Keys[1];
   constexpr int Draws = 64;
   double sum = 0;
   int bounded = 0;
@@ -127,7 +103,7 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
       settingsProbes(key, kSettingsProbesPerStratum, 1000 + 7 * d);
     std::vector<RayRecord> at;
     for (std::int32_t p : probes)
-      at.push_back(keyTruth()[static_cast<std::size_t>(p)]);
+      at.push_back(KeyTruth[static_cast<std::size_t>(p)]);
     const SettingsError drawn = settingsError(key, probes, at);
     sum += drawn.mse();
     bounded += drawn.mseBound() >= brute;
@@ -138,7 +114,7 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
   EXPECT_GE(bounded, 3 * Draws / 4);
   // The probes are the converged frame's own records: a frame traced converged has no error.
   const FrameTracer probe(converged(rampScene(From + H, Side)));
-  const SettingsError none = measureSettingsError(keyTruth(), Side, Side, tracerOf(probe));
+  const SettingsError none = measureSettingsError(KeyTruth, Side, Side, pixelTracerOf(probe));
   EXPECT_EQ(none.mse(), 0.0);
 }
 
@@ -147,12 +123,12 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
   const SettingsError settings = pooled(measured(1), measured(2));
   std::vector<PathKey> path;
   for (int k = 0; k < 4; ++k)
-    path.push_back({ From + H * k, &keys()[static_cast<std::size_t>(k)] });
+    path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
   PathOptions options;
   options.pointIndex = vtkPointIndexFactory();
   const SceneDescription atT = rampScene(T, Side);
   const FrameTracer tracer(atT);
-  const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), truth()));
+  const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), Truth));
   std::printf("[ settings ] traced at M = %.2f: %.2f dB against converged; keys' bound %.2f dB\n",
               T, tracedDb, settings.psnr());
   for (double target : { 30.0, 35.0, tracedDb })
@@ -162,8 +138,8 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
     const PathCompletion held =
       completePathFrame(against, tracer, target, 0.01, settings.mseBound());
     const PathCompletion loose = completePathFrame(plain, tracer, target);
-    const double heldDb = psnrOfMse(frameMse(against.records, truth()));
-    const double looseDb = psnrOfMse(frameMse(plain.records, truth()));
+    const double heldDb = psnrOfMse(frameMse(against.records, Truth));
+    const double looseDb = psnrOfMse(frameMse(plain.records, Truth));
     std::printf("[ settings ] target %.2f dB: held to converged %.2f dB (estimated %.2f, %zu "
                 "re-traced); held to the traced frame %.2f dB (%zu)\n",
                 target, heldDb, held.estimatedPsnr, held.retraced, looseDb, loose.retraced);
@@ -177,7 +153,7 @@ TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
 {
   std::vector<PathKey> path;
   for (int k = 0; k < 4; ++k)
-    path.push_back({ From + H * k, &keys()[static_cast<std::size_t>(k)] });
+    path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
   PathOptions options;
   options.movedEdges = false;
   const SceneDescription atT = rampScene(T, Side);
