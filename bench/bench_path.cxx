@@ -11,15 +11,16 @@
 // Environment, to keep a run short or widen it: ASRT_BENCH_PATH_SIDE (frame side, 200),
 // ASRT_BENCH_PATH_FRAMES (0: the four frames midway between h = 0.055 keys; N: the N frames of a
 // movie along the ramp, those that are not keys), ASRT_BENCH_PATH_SPACINGS (key spacings,
-// "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (point
-// samples a side of the converged frames, 8), ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's
-// study above).
+// "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (samples a
+// side of the converged frames, 8: point samples in the study, filtered ones in the paths table),
+// ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above).
 // Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
 // ASRT_BENCH_PATH_PATH_FRAMES frames (4) midway between keys, spread along the path: the plain
-// preview and --quality at each of ASRT_BENCH_PATH_PATH_TARGETS ("30,35,40"), held to and scored
-// against converged pictures, and the estimate's rank correlation.
+// preview and --quality at each of ASRT_BENCH_PATH_PATH_TARGETS ("30,35,40"), held to converged
+// pictures (the inner keys' own error measured by probes, SettingsError.h) and scored against
+// them, and the estimate's rank correlation.
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
