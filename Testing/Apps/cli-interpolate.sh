@@ -82,6 +82,8 @@ step "errors: usage (2), the database (3), a pair that cannot be interpolated (4
 "$expect" 4 "different scenes" -- "$asrt" interpolate "$A" "$OTHER" -o bad/
 "$expect" 4 "different resolutions" -- "$asrt" interpolate "$A" "$B" "$SMALL" -o bad/
 "$expect" 2 "--resolution only" -- "$asrt" interpolate "$A" "$B" -r 8x8 -o bad/
+"$expect" 2 "--against-traced goes with --quality" -- "$asrt" interpolate "$A" "$B" \
+  --against-traced -o bad/
 "$expect" 4 "cannot read scene file" -- "$asrt" interpolate --scenes no-such.json \
   "$scenes/fig5-mass-end.json" -r 8x8 -o bad/
 "$check" '!bad/interpolated-000.png' '!bad/interpolated.ogv' '!bad/interpolated.pvd'
