@@ -247,14 +247,15 @@ FrameAt pathFrames(vtkGeodesicPathInterpolator* path, bool target)
       line += text;
     }
     for (const char* name : { "EstimatedPsnr", "SettingsPsnr" })
-      if (target)
-      {
-        std::snprintf(text, sizeof text, " %9.1f",
-                      frame->GetFieldData()->GetArray(name)
-                        ? fieldValue(frame, name)
-                        : std::numeric_limits<double>::infinity());
-        line += text;
-      }
+    {
+      if (!target)
+        break;
+      std::snprintf(text, sizeof text, " %9.1f",
+                    frame->GetFieldData()->GetArray(name)
+                      ? fieldValue(frame, name)
+                      : std::numeric_limits<double>::infinity());
+      line += text;
+    }
     return frame;
   };
 }

@@ -422,6 +422,29 @@ struct MovieMaking
     return records;
   }
 
+  /// `pixels` traced by `tracer` and stored as `subset` (a subset frame of their frame's scene):
+  /// the tracer's count of rays, not the records' (these leave out the edge neighbours it traces
+  /// and drops, FrameTracer::raysIntegrated), counted as the movie's.
+  TracedPixels tracedSubset(const FrameTracer& tracer,
+                            const std::vector<std::pair<int, int>>& pixels,
+                            const SceneDescription& subset)
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::int64_t before = tracer.raysIntegrated();
+    TracedPixels out;
+    out.records = tracer.tracePixels(pixels, this->progress());
+    out.rays = static_cast<double>(tracer.raysIntegrated() - before);
+    if (this->cancelled())
+      throw MovieCancelled();
+    const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    maker.RaysTraced += out.rays;
+    maker.RaysOfMovie += out.rays;
+    if (maker.Store)
+      storeFrame(*maker.Store, maker.Settings, subset, out.records, seconds);
+    return out;
+  }
+
   /// The re-traced pixels of interpolated frame k: known ones read, else traced (and stored).
   /// With `storeOnly`, a subset not known is NotServed, and nothing is counted or kept.
   PixelTracer retracedPixels(int k, const std::function<const FrameTracer&()>& tracer,
@@ -451,22 +474,8 @@ struct MovieMaking
       }
       if (storeOnly)
         throw NotServed();
-      const auto t0 = std::chrono::steady_clock::now();
-      // The tracer's count, not the records': these leave out the edge neighbours it traces and
-      // drops (FrameTracer::raysIntegrated). The tracer is this frame's alone.
-      const FrameTracer& frameTracer = tracer();
-      const std::int64_t before = frameTracer.raysIntegrated();
-      out.records = frameTracer.tracePixels(pixels, this->progress());
-      out.rays = static_cast<double>(frameTracer.raysIntegrated() - before);
-      if (this->cancelled())
-        throw MovieCancelled();
-      const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      out = this->tracedSubset(tracer(), pixels, subset); // the tracer is this frame's alone
       report.raysTraced += out.rays;
-      maker.RaysTraced += out.rays;
-      maker.RaysOfMovie += out.rays;
-      if (maker.Store)
-        storeFrame(*maker.Store, maker.Settings, subset, out.records, seconds);
       if (maker.Settings.cacheRetraced)
         in.retraced.emplace(cacheKey, out.records);
       return out;
@@ -501,18 +510,7 @@ struct MovieMaking
     {
       SceneDescription d = this->withTextures(f);
       d.rendering = convergedRendering();
-      const FrameTracer tracer(d);
-      const auto t0 = std::chrono::steady_clock::now();
-      converged = tracer.tracePixels(pixels, this->progress());
-      if (this->cancelled())
-        throw MovieCancelled();
-      const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      const double rays = static_cast<double>(tracer.raysIntegrated());
-      maker.RaysTraced += rays;
-      maker.RaysOfMovie += rays;
-      if (maker.Store)
-        storeFrame(*maker.Store, maker.Settings, subset, converged, seconds);
+      converged = this->tracedSubset(FrameTracer(d), pixels, subset).records;
     }
     return in.settings.emplace(k, settingsError(records, probes, converged)).first->second;
   }

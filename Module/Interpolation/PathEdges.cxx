@@ -11,12 +11,6 @@ namespace asrt
 {
 namespace
 {
-float colorError2(const Color& a, const Color& b)
-{
-  const Color d = 255.0 * (a - b);
-  return static_cast<float>(d.squaredNorm());
-}
-
 /// The vertical view angle (degrees) the keys' rays were aimed with: from the directions, in the
 /// observer's frame (right, up, forward), of two rows about the middle of the middle column.
 double viewAngleOf(const std::vector<RayRecord>& records, int width, int height)

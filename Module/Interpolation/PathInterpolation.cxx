@@ -19,13 +19,6 @@ namespace
   throw InvalidParameter("path interpolation: " + what);
 }
 
-/// Squared colour difference summed over the channels, in levels² of 255.
-float colorError2(const Color& a, const Color& b)
-{
-  const Color d = 255.0 * (a - b);
-  return static_cast<float>(d.squaredNorm());
-}
-
 void checkKeys(const std::vector<PathKey>& keys, double t, int width, int height)
 {
   if (width <= 0 || height <= 0)
@@ -190,8 +183,8 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   };
   const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
   RayRecord out = blend(0, n);
-  // The record's other fields are the nearer key's centre ray's, moved to t; its rays are the
-  // nearer key's (the anti-aliasing an edge pixel took).
+  // The record is the centre ray's prediction at t; its rays are the nearer key's (the
+  // anti-aliasing an edge pixel took).
   out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
   method = PathMethod::EdgeBlend;
   if (n == 2)
@@ -706,7 +699,6 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
             std::to_string(settingsMse));
   const std::size_t n = frame.records.size();
   PathCompletion done;
-  done.settingsMse = settingsMse;
   done.estimatedPsnr = psnrOfMse(settingsMse);
   if (frame.counts()[static_cast<std::size_t>(PathMethod::Key)] == n)
     return done;                                       // a key frame: nothing predicted

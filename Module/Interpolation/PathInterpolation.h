@@ -104,6 +104,14 @@ struct PathFrame
   std::vector<std::size_t> counts() const;
 };
 
+/// Squared colour difference summed over the channels, in levels² of 255: the unit of a path
+/// frame's estimate.
+inline float colorError2(const Color& a, const Color& b)
+{
+  const Color d = 255.0 * (a - b);
+  return static_cast<float>(d.squaredNorm());
+}
+
 /// Lagrange weights w[k] of the nodes s[0..n) at t: Σ w[k] f(s[k]) is the polynomial of degree
 /// n − 1 through the nodes, at t. The nodes must be distinct; 1 ≤ n ≤ 4.
 ASRTINTERPOLATION_EXPORT void lagrangeWeights(const double* s, int n, double t, double* w);
@@ -157,7 +165,6 @@ struct PathCompletion
   /// Of the completed frame: against the converged picture, the error left untraced plus the
   /// settings' own (settingsMse); against the frame traced at t where that is 0.
   double estimatedPsnr = 0;
-  double settingsMse = 0; ///< the settings' own error the completion was given
   /// Rays integrated to trace them, as the pixel tracer counted them: with a FrameTracer, every
   /// ray it integrated (FrameTracer::raysIntegrated), the edge neighbours traced and dropped
   /// included, and a pixel traced again where a later list borders it.

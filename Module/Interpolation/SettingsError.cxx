@@ -24,13 +24,6 @@ int stratumOf(const RayRecord& r)
   return r.traced ? 2 : 1;
 }
 
-/// Squared colour difference per channel (the mean over the three), in levels² of 255.
-double channelError2(const Color& a, const Color& b)
-{
-  const Color d = 255.0 * (a - b);
-  return d.squaredNorm() / 3.0;
-}
-
 [[noreturn]] void invalid(const std::string& what)
 {
   throw InvalidParameter("settings error: " + what);
@@ -115,7 +108,8 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
       invalid("probe " + std::to_string(probes[q]) + " lies outside the frame of " +
               std::to_string(frame.size()) + " pixels");
     const RayRecord& r = frame[static_cast<std::size_t>(probes[q])];
-    const double e = channelError2(r.color, converged[q].color);
+    // Per channel, in double: colorError2's float would round a frame's sum.
+    const double e = (255.0 * (r.color - converged[q].color)).squaredNorm() / 3.0;
     SettingsStratum& s = out.strata[stratumOf(r)];
     s.count += 1;
     s.sum += e;

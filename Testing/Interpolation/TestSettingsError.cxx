@@ -58,6 +58,13 @@ protected:
   static inline std::vector<std::vector<RayRecord>> Keys;
   /// The converged pictures at T and at the second key.
   static inline std::vector<RayRecord> Truth, KeyTruth;
+  static std::vector<PathKey> keyPath()
+  {
+    std::vector<PathKey> path;
+    for (int k = 0; k < 4; ++k)
+      path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
+    return path;
+  }
   /// The settings' error of key k, measured with probes traced at the converged rendering.
   static SettingsError measured(int k)
   {
@@ -121,9 +128,7 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
 TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
 {
   const SettingsError settings = pooled(measured(1), measured(2));
-  std::vector<PathKey> path;
-  for (int k = 0; k < 4; ++k)
-    path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
+  const std::vector<PathKey> path = keyPath();
   PathOptions options;
   options.pointIndex = vtkPointIndexFactory();
   const SceneDescription atT = rampScene(T, Side);
@@ -151,9 +156,7 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
 
 TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
 {
-  std::vector<PathKey> path;
-  for (int k = 0; k < 4; ++k)
-    path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
+  const std::vector<PathKey> path = keyPath();
   PathOptions options;
   options.movedEdges = false;
   const SceneDescription atT = rampScene(T, Side);
