@@ -244,6 +244,13 @@ struct MovieMaker::Internals
   SpacingShareModel share;
   /// Whole frames' own errors against their converged pictures, once measured.
   std::map<int, SettingsError> settings;
+  /// The store's id of each whole frame made, read or traced and stored.
+  std::map<int, std::int64_t> storedIds;
+  /// Interpolated frames the store records as made from keys that are frames of this movie, and
+  /// stored: each is made again between exactly those keys, whatever keys the plan has.
+  std::map<int, std::vector<int>> recorded;
+  /// The frames the plan plans: every frame not recorded, in order.
+  std::vector<int> open;
   bool keysMade = false; ///< makeKeys() done: the plan is final
 };
 
@@ -278,22 +285,34 @@ namespace
 {
 /// Stores a frame (whole or a subset). Another writer may have stored it since it was looked up:
 /// then its copy stands.
-void storeFrame(RayStore& store, const MovieSettings& settings, const SceneDescription& identity,
-                const std::vector<RayRecord>& records, double seconds)
+std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
+                        const SceneDescription& identity, const std::vector<RayRecord>& records,
+                        double seconds)
 {
   std::function<bool()> cancelled = settings.cancelled ? settings.cancelled : [] { return false; };
   try
   {
-    store.writeFrame(identity, settings.label, records,
-                     FrameWriteOptions().tracedIn(seconds).cancelledWhen(cancelled));
+    return store.writeFrame(identity, settings.label, records,
+                            FrameWriteOptions().tracedIn(seconds).cancelledWhen(cancelled));
   }
   catch (const StoreError&)
   {
     if (cancelled())
       throw MovieCancelled();
-    if (!store.findFrame(identity))
+    const std::optional<std::int64_t> theirs = store.findFrame(identity);
+    if (!theirs)
       throw;
+    return *theirs;
   }
+}
+
+/// How a movie's interpolated frames are made, as recorded with their keys in the store
+/// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame.
+std::string interpolationRecipe(const MovieSettings& settings)
+{
+  return "asrt movie 1: quality " + formatNumber(settings.quality) + " dB against " +
+         (settings.holdToConverged ? "converged" : "traced") + ", probes " +
+         formatNumber(kMovieProbeFraction) + ", estimate scaled by its probes' ratio";
 }
 
 /// The keys of `keys` (sorted) that interpolating at frame k uses: the two on either side.
@@ -350,6 +369,7 @@ struct MovieMaking
                          std::to_string(records.size()) + " rays, the movie's frames " +
                          std::to_string(maker.Width * maker.Height) + " pixels");
       rays = raysOf(records);
+      in.storedIds[k] = *f.storedId;
     }
     else
     {
@@ -368,7 +388,7 @@ struct MovieMaking
       rays = static_cast<double>(tracer.raysIntegrated());
       maker.RaysTraced += rays;
       if (maker.Store)
-        storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
+        in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
     }
     maker.RaysOfMovie += rays;
     maker.RaysOfKeys += rays;
@@ -572,12 +592,37 @@ struct MovieMaking
     SettingsError settings;
     const PathCompletion done = this->interpolatedWith(
       k, keys, this->retracedPixels(k, tracer, report, storeOnly), records, storeOnly, settings);
+    if (!storeOnly) // made while planning: recorded when frame() hands it out
+      this->recordKeys(k, keys);
     report.method = FrameMethod::Interpolated;
     report.estimatedPsnr = done.estimatedPsnr;
     report.settingsPsnr = settings.psnr();
     report.shareRetraced = static_cast<double>(done.retraced) / static_cast<double>(maker.Width) /
                            static_cast<double>(maker.Height);
     return records;
+  }
+
+  /// Records in the store that frame k was made between the keys of `keys` around it, unless it
+  /// was recorded so before; nothing without a store, or with a key it did not store.
+  void recordKeys(int k, const std::vector<int>& keys)
+  {
+    if (!maker.Store)
+      return;
+    const std::vector<int> used = keysAround(keys, k);
+    const auto before = in.recorded.find(k);
+    if (before != in.recorded.end() && before->second == used)
+      return;
+    std::vector<std::int64_t> ids;
+    for (int key : used)
+    {
+      const auto id = in.storedIds.find(key);
+      if (id == in.storedIds.end())
+        return;
+      ids.push_back(id->second);
+    }
+    maker.Store->recordInterpolatedFrame(maker.Frames[static_cast<std::size_t>(k)].identity,
+                                         interpolationRecipe(maker.Settings), ids);
+    in.recorded[k] = used;
   }
 
   /// Whole frame k interpolated between the whole frames `wholeFrames` around it (k not among
@@ -620,21 +665,98 @@ const SpacingShareModel& MovieMaker::shareModel() const
   return this->Impl->share;
 }
 
+namespace
+{
+/// The plan of the frames `open` (a plan of open.size() frames, indices into `open`) as the plan
+/// of the whole movie of n frames: the frames not open are the recorded ones, interpolated
+/// between their recorded keys at no cost.
+MoviePlan wholeMoviePlan(const MoviePlan& planned, const std::vector<int>& open, std::size_t n,
+                         const std::map<int, std::vector<int>>& recorded)
+{
+  MoviePlan plan = planned;
+  plan.frames.assign(n, FramePlan());
+  for (std::size_t i = 0; i < open.size(); ++i)
+  {
+    FramePlan f = planned.frames[i];
+    if (f.keyBefore >= 0)
+      f.keyBefore = open[static_cast<std::size_t>(f.keyBefore)];
+    if (f.keyAfter >= 0)
+      f.keyAfter = open[static_cast<std::size_t>(f.keyAfter)];
+    plan.frames[static_cast<std::size_t>(open[i])] = f;
+  }
+  for (const auto& [k, keys] : recorded)
+  {
+    FramePlan& f = plan.frames[static_cast<std::size_t>(k)];
+    f.method = FrameMethod::Interpolated;
+    const auto after = std::upper_bound(keys.begin(), keys.end(), k);
+    f.keyBefore = *(after - 1);
+    f.keyAfter = *after;
+    plan.directRays += planned.frameRays;
+    plan.tracedAllRays += planned.frameRays;
+  }
+  return plan;
+}
+}
+
+void MovieMaker::findRecorded(const std::vector<bool>& stored)
+{
+  std::map<std::int64_t, int> frameOfId;
+  for (std::size_t k = 0; k < this->Frames.size(); ++k)
+    if (stored[k])
+      frameOfId[*this->Frames[k].storedId] = static_cast<int>(k);
+  const std::string recipe = interpolationRecipe(this->Settings);
+  for (std::size_t k = 0; k < this->Frames.size() && this->Store; ++k)
+  {
+    if (stored[k])
+      continue;
+    const auto ids = this->Store->interpolatedFrameKeys(this->Frames[k].identity, recipe);
+    if (!ids)
+      continue;
+    std::vector<int> keys;
+    for (std::int64_t id : *ids)
+    {
+      const auto key = frameOfId.find(id);
+      if (key == frameOfId.end())
+        break;
+      keys.push_back(key->second);
+    }
+    // Keys of another movie (another frame count, another path) are not this movie's to read.
+    const bool bracketed = keys.size() == ids->size() && std::is_sorted(keys.begin(), keys.end()) &&
+                           keys.front() < static_cast<int>(k) && keys.back() > static_cast<int>(k);
+    if (bracketed)
+      this->Impl->recorded[static_cast<int>(k)] = keys;
+  }
+  this->Impl->open.clear();
+  for (std::size_t k = 0; k < this->Frames.size(); ++k)
+    if (!this->Impl->recorded.count(static_cast<int>(k)))
+      this->Impl->open.push_back(static_cast<int>(k));
+}
+
 const MoviePlan& MovieMaker::plan()
 {
   if (this->Plan)
     return *this->Plan;
   const std::size_t n = this->Frames.size();
-  std::vector<double> s;
-  std::vector<bool> stored(n, false);
+  std::vector<bool> storedAll(n, false);
   for (std::size_t k = 0; k < n; ++k)
   {
     MovieFrame& f = this->Frames[k];
-    s.push_back(f.s);
     if (this->Store)
       f.storedId = this->Store->findFrame(f.identity);
-    stored[k] = f.storedId.has_value();
+    storedAll[k] = f.storedId.has_value();
   }
+  // Frames made before between keys stored now are made again between those (findRecorded); the
+  // plan is of the others, the open frames (indices into `open` below).
+  this->findRecorded(storedAll);
+  const std::vector<int>& open = this->Impl->open;
+  std::vector<double> s;
+  std::vector<bool> stored;
+  for (int k : open)
+  {
+    s.push_back(this->Frames[static_cast<std::size_t>(k)].s);
+    stored.push_back(storedAll[static_cast<std::size_t>(k)]);
+  }
+  const std::size_t m = open.size();
   SpacingShareModel& share = this->Impl->share;
   share.pathLength = std::abs(s.back() - s.front());
   share.floor =
@@ -644,32 +766,33 @@ const MoviePlan& MovieMaker::plan()
   const double pixels = static_cast<double>(this->Width) * this->Height;
   const MovieCostModel model = movieCostPrior(pixels).model(pixels, share.function());
   MoviePlan bisected = planMovie(s, stored, model);
-  std::vector<int> storedKeys;
-  for (std::size_t k = 0; k < n; ++k)
-    if (stored[k])
-      storedKeys.push_back(static_cast<int>(k));
+  std::vector<int> storedKeys, plannedKeys;
+  for (std::size_t i = 0; i < m; ++i)
+    if (stored[i])
+      storedKeys.push_back(open[i]);
+  for (int i : bisected.keys())
+    plannedKeys.push_back(open[static_cast<std::size_t>(i)]);
   // The other candidate, the stored frames as the only keys, is worth a look only when the
   // bisection wants keys of its own and the store has both ends (planBetweenStored).
-  if (bisected.keys() != storedKeys && stored.front() && stored.back())
+  if (plannedKeys != storedKeys && stored.front() && stored.back())
   {
     MovieMaking making{ *this, *this->Impl };
-    std::vector<bool> served(n, false);
+    std::vector<bool> served(m, false);
     double kept = 0;
-    for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t i = 0; i < m; ++i)
     {
-      if (stored[k])
+      if (stored[i])
         continue;
       MovieFrameReport dry;
       try
       {
-        std::vector<RayRecord> records =
-          making.interpolated(static_cast<int>(k), storedKeys, dry, true);
-        served[k] = true;
+        std::vector<RayRecord> records = making.interpolated(open[i], storedKeys, dry, true);
+        served[i] = true;
         const double bytes = static_cast<double>(records.size() * sizeof(RayRecord));
         if (kept + bytes <= servedBytesKept())
         {
           kept += bytes;
-          this->Impl->served.emplace(static_cast<int>(k), std::make_pair(std::move(records), dry));
+          this->Impl->served.emplace(open[i], std::make_pair(std::move(records), dry));
         }
       }
       catch (const NotServed&)
@@ -682,7 +805,7 @@ const MoviePlan& MovieMaker::plan()
     else // other keys: the frames made between the stored ones are not the plan's
       this->Impl->served.clear();
   }
-  this->Plan = bisected;
+  this->Plan = wholeMoviePlan(bisected, open, n, this->Impl->recorded);
   return *this->Plan;
 }
 
@@ -699,36 +822,39 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
   if (traces)
   {
     // Keys to trace: made coarse first, each measured against an interpolation of itself, and
-    // the rest planned again with what was learnt (planProgressively).
+    // the rest planned again with what was learnt (planProgressively), over the open frames.
+    const std::vector<int>& open = this->Impl->open;
     std::vector<double> s;
     std::vector<bool> stored;
-    for (const MovieFrame& f : this->Frames)
+    for (int k : open)
     {
-      s.push_back(f.s);
-      stored.push_back(f.storedId.has_value());
+      s.push_back(this->Frames[static_cast<std::size_t>(k)].s);
+      stored.push_back(this->Frames[static_cast<std::size_t>(k)].storedId.has_value());
     }
     std::vector<bool> whole = stored;
     KeyMaking keyMaking;
-    keyMaking.makeWhole = [&](int k)
+    keyMaking.makeWhole = [&](int i)
     {
-      whole[static_cast<std::size_t>(k)] = true;
+      whole[static_cast<std::size_t>(i)] = true;
+      const int k = open[static_cast<std::size_t>(i)];
       making.whole(k);
       const double rays = this->Impl->wholeRays.at(k);
       if (afterEach)
         afterEach();
       return rays;
     };
-    keyMaking.measureShare = [&](int k, int, int)
+    keyMaking.measureShare = [&](int i, int, int)
     {
       std::vector<int> around;
       for (std::size_t w = 0; w < whole.size(); ++w)
-        if (whole[w] && static_cast<int>(w) != k)
-          around.push_back(static_cast<int>(w));
-      return making.measuredShare(k, around);
+        if (whole[w] && static_cast<int>(w) != i)
+          around.push_back(open[w]);
+      return making.measuredShare(open[static_cast<std::size_t>(i)], around);
     };
     const double pixels = static_cast<double>(this->Width) * this->Height;
-    this->Plan =
+    const MoviePlan planned =
       planProgressively(s, stored, pixels, this->Impl->share, keyMaking, movieCostPrior(pixels));
+    this->Plan = wholeMoviePlan(planned, open, this->Frames.size(), this->Impl->recorded);
   }
   for (int k : this->plan().keys())
   {
@@ -759,10 +885,15 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
     report = served->second.second;
     this->RaysOfMovie += report.raysReused;
     this->Impl->served.erase(served);
+    making.recordKeys(k, plan.keys());
     return records;
   }
   if (report.method == FrameMethod::Interpolated)
-    return making.interpolated(k, plan.keys(), report, false);
+  {
+    const auto recorded = this->Impl->recorded.find(k);
+    return making.interpolated(
+      k, recorded != this->Impl->recorded.end() ? recorded->second : plan.keys(), report, false);
+  }
   const std::vector<RayRecord>& records = making.whole(k);
   const double rays = this->Impl->wholeRays.at(k);
   const auto settings = this->Impl->settings.find(k);

@@ -6,7 +6,10 @@
 // target with the pixels it needs re-traced, read from the store where it has them.
 //
 // Reuse. A whole frame is found by its identity (the scene at the frame's parameters), whoever
-// stored it. The pixels an interpolated frame re-traces are stored as subset frames: the scene at
+// stored it. An interpolated frame's keys are recorded with it in the store
+// (RayStore::recordInterpolatedFrame, by its recipe: the target and what it is held to); a later
+// movie whose frames include it and those keys makes it again between exactly those keys,
+// whatever keys its own plan has, and plans only the other frames. The pixels an interpolated frame re-traces are stored as subset frames: the scene at
 // the frame's parameters with a "subset" naming the pixels (count and digest), so they never pass
 // for the whole frame. completePathFrame asks for two lists of pixels, each a function of the keys
 // and of the records traced before; the same keys therefore ask for the same lists. So the plan
@@ -208,6 +211,10 @@ public:
 
 private:
   friend struct MovieMaking;
+  /// The frames not stored whole that the store records as interpolated, by this movie's recipe,
+  /// between keys that are frames of this movie and stored (`stored`: per frame), and the frames
+  /// left to plan.
+  void findRecorded(const std::vector<bool>& stored);
   struct Internals;
   std::vector<MovieFrame> Frames;
   std::string Parameter;

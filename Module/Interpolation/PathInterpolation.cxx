@@ -282,6 +282,46 @@ struct ProbeSample
   }
 };
 
+/// A probe's estimate and its true error.
+struct ProbePair
+{
+  double estimate = 0, error = 0;
+};
+
+/// The least scale of a way of predicting's estimates: its order of re-tracing kept where its
+/// probes were all exact.
+constexpr double kLeastScale = 1.0 / 1024.0;
+
+/// The scale of a way of predicting's estimates from its probes. Ratio: Cochran's ratio estimate
+/// R = Σ error / Σ estimate, raised by kConfidence of its standard errors,
+/// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
+/// 3rd ed., § 6.3). The estimate is the lower order's error, which over-states it where the
+/// higher order is better: the ratio brings it down. Edge blends and moved edges keep at least
+/// 1: their errors are rare and large, and a ratio their probes happen to set low would leave
+/// them untraced. AtLeastOne: the ratio, at least 1 for every way.
+double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, EstimateScaling scaling)
+{
+  double estimated = 0, erred = 0;
+  for (const ProbePair& q : probes)
+  {
+    estimated += q.estimate;
+    erred += q.error;
+  }
+  if (!(estimated > 0))
+    return 1.0;
+  const double ratio = erred / estimated;
+  if (scaling == EstimateScaling::AtLeastOne)
+    return std::max(1.0, ratio);
+  const double n = static_cast<double>(probes.size());
+  double spread = 0;
+  for (const ProbePair& q : probes)
+    spread += (q.error - ratio * q.estimate) * (q.error - ratio * q.estimate);
+  const double standardError = n > 1 ? std::sqrt(spread / (n - 1) / n) / (estimated / n) : ratio;
+  const double raised = ratio + kConfidence * standardError;
+  const bool rareAndLarge = m == PathMethod::EdgeBlend || m == PathMethod::MovedEdge;
+  return std::max(rareAndLarge ? 1.0 : kLeastScale, raised);
+}
+
 /// A probe: where its calibrated estimate places it in the order of re-tracing, its way of
 /// predicting and its true error.
 struct PlacedProbe
@@ -662,14 +702,15 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
 }
 
 PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, double targetDb,
-                                 double probeFraction, double settingsMse)
+                                 double probeFraction, double settingsMse, EstimateScaling scaling)
 {
   const CameraParameters& cam = tracer.description().camera;
   if (cam.width != frame.width || cam.height != frame.height)
     invalid("the tracer's frame is " + std::to_string(cam.width) + " x " +
             std::to_string(cam.height) + ", the path frame " + std::to_string(frame.width) + " x " +
             std::to_string(frame.height));
-  return completePathFrame(frame, pixelTracerOf(tracer), targetDb, probeFraction, settingsMse);
+  return completePathFrame(frame, pixelTracerOf(tracer), targetDb, probeFraction, settingsMse,
+                           scaling);
 }
 
 PixelTracer pixelTracerOf(const FrameTracer& tracer)
@@ -685,7 +726,7 @@ PixelTracer pixelTracerOf(const FrameTracer& tracer)
 }
 
 PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixels, double targetDb,
-                                 double probeFraction, double settingsMse)
+                                 double probeFraction, double settingsMse, EstimateScaling scaling)
 {
   if (!(targetDb > 0.0 && targetDb <= kMaxQualityTargetDb))
   {
@@ -762,10 +803,10 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
     trace(from);
   }
 
-  // Each way of predicting has its own scale: the probes' true error over their estimate, at
-  // least 1 (the estimate is the lower order's error, an over-estimate where the higher order is
-  // better). Where a way's estimate misses errors altogether, its probes' bound below sees them.
-  double trueSum[kPathMethodCount] = {}, estimatedSum[kPathMethodCount] = {};
+  // Each way of predicting has its own scale, from its probes' true errors against their
+  // estimates (estimateScale). Where a way's estimate misses errors altogether, its probes' bound
+  // below sees them.
+  std::vector<ProbePair> pairs[kPathMethodCount];
   std::vector<double> probeError(probes.size(), -1.0); // −1: not a prediction
   for (std::size_t q = 0; q < probes.size(); ++q)
   {
@@ -773,16 +814,15 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
     if (!isPrediction(methods[p]))
       continue;
     probeError[q] = colorError2(predicted[q].color, frame.records[p].color);
-    trueSum[methods[p]] += probeError[q];
-    estimatedSum[methods[p]] += estimates[p];
+    pairs[methods[p]].push_back({ estimates[p], probeError[q] });
   }
+  double scale[kPathMethodCount];
+  for (int m = 0; m < kPathMethodCount; ++m)
+    scale[m] = estimateScale(static_cast<PathMethod>(m), pairs[m], scaling);
   std::vector<double> calibrated(n, 0.0);
   for (std::size_t p = 0; p < n; ++p)
-  {
-    const int m = methods[p];
-    if (isPrediction(methods[p]) && estimatedSum[m] > 0)
-      calibrated[p] = std::max(1.0, trueSum[m] / estimatedSum[m]) * estimates[p];
-  }
+    if (isPrediction(methods[p]))
+      calibrated[p] = scale[methods[p]] * estimates[p];
   auto worse = [&](std::int32_t a, std::int32_t b)
   {
     const double ca = calibrated[static_cast<std::size_t>(a)];

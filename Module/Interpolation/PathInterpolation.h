@@ -171,12 +171,23 @@ struct PathCompletion
   double raysTraced = 0;
 };
 
+/// How completePathFrame scales a way of predicting's estimates by its probes.
+enum class EstimateScaling : std::uint8_t
+{
+  /// The probes' true error over their estimates (Cochran's ratio estimate) raised by two of its
+  /// standard errors; at least 1 for edge blends and moved edges, whose errors are rare and large.
+  Ratio = 0,
+  /// The probes' true error over their estimates, at least 1 for every way: the estimate only
+  /// ever scaled up.
+  AtLeastOne = 1
+};
+
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
 /// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
 /// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge):
-/// per way, the probes' true error over their estimate, at least 1. What the chosen pixels leave
+/// per way, as `scaling` says. What the chosen pixels leave
 /// untraced is bounded per way of predicting by the larger of its calibrated estimates and its
 /// probes placed at or below them in the order (at least 16): their mean error plus two standard
 /// errors, with one more probe of the way's typical error counted in, since probes that all came
@@ -197,11 +208,9 @@ struct PathCompletion
 /// says so). With 0 the target is against the frame traced at t. Throws InvalidParameter for a
 /// target outside (0, kMaxQualityTargetDb] or NaN, a settings error below 0 or not finite, or a
 /// tracer of another size.
-ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
-                                                          const FrameTracer& tracer,
-                                                          double targetDb,
-                                                          double probeFraction = 0.01,
-                                                          double settingsMse = 0.0);
+ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
+  PathFrame& frame, const FrameTracer& tracer, double targetDb, double probeFraction = 0.01,
+  double settingsMse = 0.0, EstimateScaling scaling = EstimateScaling::Ratio);
 
 /// What a PixelTracer returns: the records of the pixels asked for, in the order given, and the
 /// rays integrated to make them (0 for records served from a store).
@@ -225,10 +234,9 @@ ASRTINTERPOLATION_EXPORT PixelTracer pixelTracerOf(const FrameTracer& tracer);
 /// each list is a function of the frame as predicted and of the records traced before, so the
 /// same keys and the same records choose the same lists). A caller may
 /// serve them from a store of pixels traced before, provided they are the traced records.
-ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(PathFrame& frame,
-                                                          const PixelTracer& trace, double targetDb,
-                                                          double probeFraction = 0.01,
-                                                          double settingsMse = 0.0);
+ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
+  PathFrame& frame, const PixelTracer& trace, double targetDb, double probeFraction = 0.01,
+  double settingsMse = 0.0, EstimateScaling scaling = EstimateScaling::Ratio);
 }
 
 #endif

@@ -839,6 +839,28 @@ catch (...)
   storage::rethrowReadFailure(this->P->Limits);
 }
 
+void RayStore::recordInterpolatedFrame(const SceneDescription& scene, const std::string& recipe,
+                                       const std::vector<std::int64_t>& keys)
+{
+  const storage::SceneTexts texts = storage::sceneTexts(scene);
+  this->P->requireSchema();
+  storage::recordInterpolatedKeys(this->P->conn(), texts, recipe, keys);
+}
+
+std::optional<std::vector<std::int64_t>> RayStore::interpolatedFrameKeys(
+  const SceneDescription& scene, const std::string& recipe)
+try
+{
+  const storage::SceneTexts texts = storage::sceneTexts(scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
+  this->P->requireSchema();
+  return storage::interpolatedKeys(this->P->conn(), texts, recipe);
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
+
 void RayStore::deleteFrame(std::int64_t id)
 {
   this->P->requireSchema();

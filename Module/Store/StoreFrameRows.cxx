@@ -439,4 +439,59 @@ void checkFrameSize(std::int64_t id, int width, int height, std::int64_t rayCoun
                                        " rays (2^28) a frame may trace"));
   }
 }
+
+namespace storage
+{
+void recordInterpolatedKeys(PGconn* conn, const SceneTexts& texts, const std::string& recipe,
+                            const std::vector<std::int64_t>& keys)
+{
+  if (recipe.empty() || keys.empty() || keys.size() > 16)
+    throw StoreError("recording an interpolated frame: " +
+                     (recipe.empty() ? std::string("the recipe is empty")
+                                     : std::to_string(keys.size()) + " keys (1 to 16)"));
+  std::string array = "{";
+  for (std::int64_t id : keys)
+    array += (array.size() > 1 ? "," : "") + std::to_string(id);
+  array += "}";
+  // Written only when every key is a complete frame: a record never names a key that is not
+  // there to make the frame from.
+  pg::Result r =
+    pg::Params()
+      .bytes(texts.frame)
+      .text(recipe)
+      .text(array)
+      .exec(
+        conn,
+        "INSERT INTO interpolated_frames (frame_hash, recipe, key_frame_ids) SELECT sha256($1), "
+        "$2, "
+        "$3::bigint[] WHERE (SELECT count(*) FROM frames WHERE id = ANY ($3::bigint[]) AND status "
+        "= "
+        "'complete') = (SELECT count(DISTINCT k) FROM unnest($3::bigint[]) k) ON CONFLICT "
+        "(frame_hash, recipe) DO UPDATE SET key_frame_ids = EXCLUDED.key_frame_ids, created_at = "
+        "now() RETURNING 1",
+        "recording an interpolated frame failed");
+  if (PQntuples(r.get()) == 0)
+    throw StoreError("recording an interpolated frame: a key of " + array +
+                     " is no complete stored frame");
+}
+
+std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const SceneTexts& texts,
+                                                          const std::string& recipe)
+{
+  pg::Result r = pg::Params()
+                   .bytes(texts.frame)
+                   .text(recipe)
+                   .exec(conn,
+                         "SELECT u.k FROM interpolated_frames f, unnest(f.key_frame_ids) WITH "
+                         "ORDINALITY AS u (k, n) "
+                         "WHERE f.frame_hash = sha256($1) AND f.recipe = $2 ORDER BY u.n",
+                         "looking for the interpolated frame failed");
+  if (PQntuples(r.get()) == 0)
+    return std::nullopt;
+  std::vector<std::int64_t> keys;
+  for (int row = 0; row < PQntuples(r.get()); ++row)
+    keys.push_back(pg::getI64(r.get(), row, 0));
+  return keys;
+}
+}
 }

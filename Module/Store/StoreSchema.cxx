@@ -310,9 +310,13 @@ void runMigration(PGconn* conn, int version)
   {
     migrateToVersion5(conn, what);
   }
-  else
+  else if (version == 7)
   {
     migrateToVersion7(conn, what);
+  }
+  else
+  {
+    pg::execScript(conn, SchemaV8, what);
   }
 }
 }

@@ -653,5 +653,16 @@ CREATE OR REPLACE FUNCTION asrt_selected_rays(frame bigint, predicate text)
 AS $function$)SQL") + SelectedRaysBodyV7 +
                                  "$function$;\n";
 const char* const SchemaV7 = SchemaV7Text.c_str();
+const char* const SchemaV8 = R"SQL(
+-- How a frame that is not stored whole was made: interpolated by a recipe (its quality target
+-- and what it is held to) between the stored frames key_frame_ids, in order. Making it again
+-- from the same keys asks for the same re-traced pixels, whatever keys a later plan has.
+CREATE TABLE interpolated_frames (
+  frame_hash bytea NOT NULL,
+  recipe text NOT NULL CHECK (recipe <> ''),
+  key_frame_ids bigint[] NOT NULL CHECK (cardinality(key_frame_ids) BETWEEN 1 AND 16),
+  created_at timestamptz NOT NULL DEFAULT now(),
+  PRIMARY KEY (frame_hash, recipe));
+)SQL";
 }
 }

@@ -72,6 +72,9 @@ extern const char* const SchemaV7Finish;
 extern const char* const SchemaV7;
 /// The body of version 7's function, as pg_proc.prosrc holds it.
 extern const char* const SelectedRaysBodyV7;
+/// Migration 8 (version 7 to 8): the table of the keys interpolated frames were made from
+/// (RayStore::recordInterpolatedFrame). A script.
+extern const char* const SchemaV8;
 }
 }
 

@@ -209,6 +209,10 @@ TEST(StoreMigrations, FrozenLayoutsKeepTheirColumns)
   EXPECT_EQ(columnsOf(db, "rays_v"),
             "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
   EXPECT_EQ(columnsOf(db, "path_points_v"), "frame_id,i,j,path,point,x,y,z,lambda,r,abs_h");
+  store.migrate(8);
+  EXPECT_EQ(columnsOf(db, "interpolated_frames"), "frame_hash,recipe,key_frame_ids,created_at");
+  EXPECT_EQ(columnsOf(db, "rays_v"),
+            "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
 }
 
 TEST(StoreMigrations, VersionOneRaysComeBackBitExact)
@@ -294,6 +298,9 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
   store.migrate(6);
   EXPECT_EQ(store.schemaVersion(), 6);
   store.migrate(7);
+  EXPECT_EQ(store.schemaVersion(), 7);
+  // Version 8 adds the table of interpolated frames' keys only.
+  store.migrate(8);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
 }
 

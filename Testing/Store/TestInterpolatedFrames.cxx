@@ -1,0 +1,114 @@
+// The record of which stored frames an interpolated frame was made from: written and read back in
+// order, replaced for the same frame and recipe, kept apart per recipe and per frame, refused for a
+// key that is no complete frame (nothing written), and created by the migration from version 7.
+#include "RayStore.h"
+#include "SharedServer.h"
+#include "StoreTestSupport.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+using asrt::RayRecord;
+using asrt::RayStore;
+using namespace asrt::testing;
+
+namespace
+{
+std::string freshDatabase()
+{
+  return databaseNamed("if_" + currentTestName());
+}
+
+asrt::SceneDescription scene(double mass)
+{
+  asrt::SceneDescription d;
+  d.name = "interpolated";
+  d.spacetime.mass = mass;
+  d.camera.width = 6;
+  d.camera.height = 5;
+  return d;
+}
+
+std::vector<RayRecord> records(std::uint64_t seed)
+{
+  std::vector<RayRecord> out;
+  for (std::size_t k = 0; k < 30; ++k)
+    out.push_back(syntheticRecord(seed, k, 6));
+  return out;
+}
+
+using Keys = std::optional<std::vector<std::int64_t>>;
+}
+
+TEST(InterpolatedFrames, KeysComeBackInOrderPerFrameAndRecipe)
+{
+  RayStore store(freshDatabase());
+  store.migrate();
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
+  const std::int64_t b = store.writeFrame(scene(0.3), "key", records(2));
+  const std::int64_t c = store.writeFrame(scene(0.5), "key", records(3));
+  const asrt::SceneDescription between = scene(0.2), other = scene(0.4);
+
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), std::nullopt);
+  store.recordInterpolatedFrame(between, "quality=35", { c, a, b });
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), (Keys{ { c, a, b } }));
+  // Another recipe and another frame are other records.
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=40"), std::nullopt);
+  EXPECT_EQ(store.interpolatedFrameKeys(other, "quality=35"), std::nullopt);
+  store.recordInterpolatedFrame(between, "quality=40", { a, b });
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=40"), (Keys{ { a, b } }));
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), (Keys{ { c, a, b } }));
+  // The same frame and recipe again: replaced.
+  store.recordInterpolatedFrame(between, "quality=35", { b, c });
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), (Keys{ { b, c } }));
+  // A frame stored whole is no interpolated frame: its own record stays empty.
+  EXPECT_EQ(store.interpolatedFrameKeys(scene(0.1), "quality=35"), std::nullopt);
+}
+
+TEST(InterpolatedFrames, ABadRecordIsRefusedAndNothingIsWritten)
+{
+  RayStore store(freshDatabase());
+  store.migrate();
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
+  const std::int64_t tiled = store.beginTiledFrame(scene(0.3), "being written", 2);
+  const asrt::SceneDescription between = scene(0.2);
+  const std::string missing = errorOf(
+    [&] {
+      store.recordInterpolatedFrame(between, "quality=35", { a, a + tiled + 100 });
+    });
+  EXPECT_NE(missing.find("is no complete stored frame"), std::string::npos) << missing;
+  const std::string incomplete = errorOf(
+    [&] {
+      store.recordInterpolatedFrame(between, "quality=35", { a, tiled });
+    });
+  EXPECT_NE(incomplete.find("is no complete stored frame"), std::string::npos) << incomplete;
+  const std::string noRecipe = errorOf([&] { store.recordInterpolatedFrame(between, "", { a }); });
+  EXPECT_NE(noRecipe.find("the recipe is empty"), std::string::npos) << noRecipe;
+  const std::string noKeys = errorOf([&] { store.recordInterpolatedFrame(between, "q", {}); });
+  EXPECT_NE(noKeys.find("0 keys (1 to 16)"), std::string::npos) << noKeys;
+  const std::string tooMany =
+    errorOf([&] { store.recordInterpolatedFrame(between, "q", std::vector<std::int64_t>(17, a)); });
+  EXPECT_NE(tooMany.find("17 keys (1 to 16)"), std::string::npos) << tooMany;
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), std::nullopt);
+  EXPECT_EQ(store.interpolatedFrameKeys(between, "q"), std::nullopt);
+}
+
+TEST(InterpolatedFrames, AVersionSevenStoreGainsTheTable)
+{
+  const std::string ci = freshDatabase();
+  RayStore store(ci);
+  store.migrate(7);
+  EXPECT_EQ(store.schemaVersion(), 7);
+  Db db(ci);
+  EXPECT_EQ(db.value("SELECT to_regclass('interpolated_frames') IS NULL"), "t");
+  store.migrate();
+  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
+  EXPECT_EQ(db.value("SELECT to_regclass('interpolated_frames') IS NULL"), "f");
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
+  store.recordInterpolatedFrame(scene(0.2), "quality=35", { a });
+  EXPECT_EQ(store.interpolatedFrameKeys(scene(0.2), "quality=35"), (Keys{ { a } }));
+}
