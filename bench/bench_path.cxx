@@ -20,7 +20,9 @@
 // ASRT_BENCH_PATH_PATH_FRAMES frames (4) midway between keys, spread along the path: the plain
 // preview and --quality at each of ASRT_BENCH_PATH_PATH_TARGETS ("30,35,40"), held to converged
 // pictures (the inner keys' own error measured by probes, SettingsError.h) and scored against
-// them, and the estimate's rank correlation.
+// them, and the estimate's rank correlation. ASRT_BENCH_PATH_KEY_PRESET = NAME traces the keys,
+// and the frames at s that re-trace, with that preset's rendering (renderingPreset; unset: the
+// scene's own): settings that can reach a higher target.
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
@@ -53,6 +55,19 @@ namespace
 const std::string kScene = "Data/scenes/fig4-mass-start.json";
 int kSide = 200;
 int kReferenceSide = 8;
+/// The keys' (and the frames traced at s') rendering preset in the paths table
+/// (renderingPreset); empty: the scene's own rendering.
+std::string kKeyPreset;
+
+/// The rendering the paths table traces keys and frames at s with (null: the scene's).
+const AntialiasOptions* keyRendering()
+{
+  static AntialiasOptions o;
+  if (kKeyPreset.empty())
+    return nullptr;
+  o = renderingPreset(kKeyPreset);
+  return &o;
+}
 
 double envNumber(const char* name, double fallback)
 {
@@ -253,7 +268,8 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   for (int k = std::max(0, interval - 1); k <= std::min(intervals, interval + 2); ++k)
   {
     if (!keys.count(k))
-      keys[k] = FrameTracer(pathScene(path, path.from + k * path.h)).traceRows(0, kSide);
+      keys[k] =
+        FrameTracer(pathScene(path, path.from + k * path.h, keyRendering())).traceRows(0, kSide);
     around.push_back({ path.from + k * path.h, &keys[k] });
   }
   for (int k : { interval, interval + 1 })
@@ -261,7 +277,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
       settings[k] = keySettingsError(path, path.from + k * path.h, keys[k]);
   const SettingsError held = pooled(settings[interval], settings[interval + 1]);
   r.settingsBound = held.psnr();
-  const SceneDescription atS = pathScene(path, r.s);
+  const SceneDescription atS = pathScene(path, r.s, keyRendering());
   const FrameTracer tracer(atS);
   const std::vector<std::uint8_t> traced = rgbOf(tracer.traceRows(0, kSide));
   const AntialiasOptions converged = convergedRendering(kReferenceSide);
@@ -309,14 +325,17 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               "edges lands near 10–20 %%), %d frames each midway between keys, spread along the "
               "path; 4 keys around each (`interpolateAlongPath` with moved edges, matched over "
               "`vtkPointIndexFactory()`); converged: %d×%d filtered samples a pixel, every centre "
-              "ray traced (`convergedRendering`). **Plain**: nothing re-traced. **--quality T**: "
+              "ray traced (`convergedRendering`); keys and frames traced at s with %s. "
+              "**Plain**: nothing re-traced. **--quality T**: "
               "`completePathFrame` held to the converged picture: the inner keys' own error "
               "against theirs measured by probes traced converged (`measureSettingsError`, the "
               "the inner keys' probes pooled, its bound in column *settings*). PSNR as mean / "
               "worst; Spearman of the "
               "estimate against the true error (against the traced frame) over the predicted "
               "pixels, mean / worst; *below T − 1*: frames under T − 1 dB against converged:\n\n",
-              frameCount, kReferenceSide, kReferenceSide);
+              frameCount, kReferenceSide, kReferenceSide,
+              kKeyPreset.empty() ? "the scene's rendering"
+                                 : ("the `" + kKeyPreset + "` preset's rendering").c_str());
   std::printf("| path | scene | h | traced vs converged | must re-trace without moved edges | "
               "plain vs converged | plain vs traced | Spearman | T | settings | re-traced | vs "
               "converged | below T − 1 | estimated | vs traced | time |\n"
@@ -689,6 +708,8 @@ int main()
   const double tStart = now();
   kSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_SIDE", 200));
   kReferenceSide = static_cast<int>(envNumber("ASRT_BENCH_PATH_REFERENCE", 8));
+  if (const char* preset = std::getenv("ASRT_BENCH_PATH_KEY_PRESET"))
+    kKeyPreset = preset;
   const std::vector<BenchPath> paths = selectedPaths();
   std::printf("<!-- path:begin -->\n## Interpolation along a path, per pixel\n\n");
   std::printf("- **Machine:** %ld CPU(s), %d OpenMP threads, load average %.1f when the run "
