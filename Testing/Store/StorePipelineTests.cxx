@@ -1,5 +1,10 @@
 // The VTK side of accumulation: vtkGeodesicSource → vtkGeodesicPostgreSQLWriter → a real
-// throwaway server → vtkGeodesicPostgreSQLReader gives back the same frame, bit for bit.
+// throwaway server → vtkGeodesicPostgreSQLReader gives back the same frame, bit for bit; and a
+// movie's interpolated frames, made again between the keys they were recorded with.
+#include "FrameTracer.h"
+#include "GeodesicMovie.h"
+#include "GeodesicSceneLoading.h"
+#include "MoviePlan.h"
 #include "SceneFile.h"
 #include "StoreTestSupport.h"
 #include "ThrowawayPostgres.h"
@@ -665,4 +670,61 @@ TEST(StorePipeline, AFrameRowEditedToAnImpossibleSizeIsAnErrorNotAnAllocation)
   EXPECT_NE(e.find("frame " + std::to_string(id) + " (8 x 6 pixels, 48 rays) needs about"),
             std::string::npos)
     << e;
+}
+
+// A movie's interpolated frame is made again between the keys it was made between, whatever
+// frames are stored since: another user storing a frame beside it whole (a key for free to any
+// later plan) changes neither its records nor its cost, nothing is traced for it.
+TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
+{
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetResolution(48, 48);
+  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 13);
+  asrt::MovieSettings settings;
+  settings.quality = 35;
+  settings.holdToConverged = false;
+  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  settings.label = "first";
+  asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
+  std::vector<std::vector<asrt::RayRecord>> made;
+  for (int k = 0; k < 13; ++k)
+  {
+    asrt::MovieFrameReport report;
+    made.push_back(first.frame(k, report));
+  }
+  // Two interpolated frames side by side: the second user stores the first of them whole.
+  const asrt::MoviePlan& plan = first.plan();
+  int other = -1;
+  for (int k = 1; k + 1 < 13 && other < 0; ++k)
+    if (plan.frames[k].method == asrt::FrameMethod::Interpolated &&
+        plan.frames[k + 1].method == asrt::FrameMethod::Interpolated)
+      other = k;
+  ASSERT_GE(other, 0) << "the movie interpolates no two frames side by side: nothing to check";
+  const asrt::MovieFrame& f = first.frames()[static_cast<std::size_t>(other)];
+  const asrt::SceneDescription whole =
+    asrt::loadScene(f.sceneText.c_str(), nullptr, settings.textureDirectory.c_str());
+  store.writeFrame(f.identity, "another user",
+                   asrt::FrameTracer(whole).traceRows(0, whole.camera.height));
+
+  settings.label = "again";
+  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  EXPECT_EQ(again.plan().frames[other].method, asrt::FrameMethod::Reused);
+  for (int k = 0; k < 13; ++k)
+  {
+    if (k == other || plan.frames[k].method != asrt::FrameMethod::Interpolated)
+      continue;
+    EXPECT_EQ(again.plan().frames[k].method, asrt::FrameMethod::Interpolated) << "frame " << k;
+    EXPECT_EQ(again.plan().frames[k].keyBefore, plan.frames[k].keyBefore) << "frame " << k;
+    EXPECT_EQ(again.plan().frames[k].keyAfter, plan.frames[k].keyAfter) << "frame " << k;
+    asrt::MovieFrameReport report;
+    const std::vector<asrt::RayRecord> records = again.frame(k, report);
+    EXPECT_EQ(report.raysTraced, 0) << "frame " << k;
+    ASSERT_EQ(records.size(), made[k].size());
+    for (std::size_t p = 0; p < records.size(); ++p)
+      ASSERT_TRUE(records[p].color == made[k][p].color) << "frame " << k << ", pixel " << p;
+  }
+  EXPECT_EQ(again.raysTraced(), 0);
 }
