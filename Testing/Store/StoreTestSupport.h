@@ -111,6 +111,29 @@ inline RayRecord syntheticRecord(std::uint64_t seed, std::size_t k, int width)
   return r;
 }
 
+/// `count` synthetic records of a seed, `width` to a row.
+inline std::vector<RayRecord> syntheticRecords(std::uint64_t seed, std::size_t count = 30,
+                                               int width = 6)
+{
+  std::vector<RayRecord> out;
+  for (std::size_t k = 0; k < count; ++k)
+    out.push_back(syntheticRecord(seed, k, width));
+  return out;
+}
+
+/// A scene of `width` × `height` pixels, its identity its name and mass: a frame for synthetic
+/// records.
+inline SceneDescription syntheticScene(const std::string& name, double mass, int width = 6,
+                                       int height = 5)
+{
+  SceneDescription d;
+  d.name = name;
+  d.spacetime.mass = mass;
+  d.camera.width = width;
+  d.camera.height = height;
+  return d;
+}
+
 /// `r` as a store of schema version 6 or earlier kept it, read back by the current version:
 /// traced (migration 7).
 inline RayRecord tracedRay(RayRecord r)

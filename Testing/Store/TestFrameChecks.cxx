@@ -31,20 +31,12 @@ std::string freshDatabase()
 
 asrt::SceneDescription scene(double mass)
 {
-  asrt::SceneDescription d;
-  d.name = "identity";
-  d.spacetime.mass = mass;
-  d.camera.width = 6;
-  d.camera.height = 5;
-  return d;
+  return syntheticScene("identity", mass);
 }
 
 std::vector<RayRecord> records(std::uint64_t seed)
 {
-  std::vector<RayRecord> out;
-  for (std::size_t k = 0; k < 30; ++k)
-    out.push_back(syntheticRecord(seed, k, 6));
-  return out;
+  return syntheticRecords(seed);
 }
 
 /// Every field of every record the same, bit for bit.

@@ -23,22 +23,10 @@ std::string freshDatabase()
   return databaseNamed("if_" + currentTestName());
 }
 
+/// The frame at this mass of one small synthetic scene.
 asrt::SceneDescription scene(double mass)
 {
-  asrt::SceneDescription d;
-  d.name = "interpolated";
-  d.spacetime.mass = mass;
-  d.camera.width = 6;
-  d.camera.height = 5;
-  return d;
-}
-
-std::vector<RayRecord> records(std::uint64_t seed)
-{
-  std::vector<RayRecord> out;
-  for (std::size_t k = 0; k < 30; ++k)
-    out.push_back(syntheticRecord(seed, k, 6));
-  return out;
+  return syntheticScene("interpolated", mass);
 }
 
 using Keys = std::optional<std::vector<std::int64_t>>;
@@ -48,9 +36,9 @@ TEST(InterpolatedFrames, KeysComeBackInOrderPerFrameAndRecipe)
 {
   RayStore store(freshDatabase());
   store.migrate();
-  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
-  const std::int64_t b = store.writeFrame(scene(0.3), "key", records(2));
-  const std::int64_t c = store.writeFrame(scene(0.5), "key", records(3));
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", syntheticRecords(1));
+  const std::int64_t b = store.writeFrame(scene(0.3), "key", syntheticRecords(2));
+  const std::int64_t c = store.writeFrame(scene(0.5), "key", syntheticRecords(3));
   const asrt::SceneDescription between = scene(0.2), other = scene(0.4);
 
   EXPECT_EQ(store.interpolatedFrameKeys(between, "quality=35"), std::nullopt);
@@ -73,7 +61,7 @@ TEST(InterpolatedFrames, ABadRecordIsRefusedAndNothingIsWritten)
 {
   RayStore store(freshDatabase());
   store.migrate();
-  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", syntheticRecords(1));
   const std::int64_t tiled = store.beginTiledFrame(scene(0.3), "being written", 2);
   const asrt::SceneDescription between = scene(0.2);
   const std::string missing = errorOf(
@@ -108,7 +96,7 @@ TEST(InterpolatedFrames, AVersionSevenStoreGainsTheTable)
   store.migrate();
   EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
   EXPECT_EQ(db.value("SELECT to_regclass('interpolated_frames') IS NULL"), "f");
-  const std::int64_t a = store.writeFrame(scene(0.1), "key", records(1));
+  const std::int64_t a = store.writeFrame(scene(0.1), "key", syntheticRecords(1));
   store.recordInterpolatedFrame(scene(0.2), "quality=35", { a });
   EXPECT_EQ(store.interpolatedFrameKeys(scene(0.2), "quality=35"), (Keys{ { a } }));
 }
