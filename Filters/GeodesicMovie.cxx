@@ -866,6 +866,16 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
   this->Impl->keysMade = true;
 }
 
+double MovieMaker::settingsReach(int k)
+{
+  if (k < 0 || k >= static_cast<int>(this->Frames.size()))
+    throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
+                           std::to_string(this->Frames.size()) + " frames");
+  this->plan(); // the stored frames looked up: a stored frame is read, not traced again
+  MovieMaking making{ *this, *this->Impl };
+  return psnrOfMse(making.settingsOf(k, false).mse());
+}
+
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
 {
   if (k < 0 || k >= static_cast<int>(this->Frames.size()))

@@ -9,15 +9,15 @@
 // stored it. An interpolated frame's keys are recorded with it in the store
 // (RayStore::recordInterpolatedFrame, by its recipe: the target and what it is held to); a later
 // movie whose frames include it and those keys makes it again between exactly those keys,
-// whatever keys its own plan has, and plans only the other frames. The pixels an interpolated frame re-traces are stored as subset frames: the scene at
-// the frame's parameters with a "subset" naming the pixels (count and digest), so they never pass
-// for the whole frame. completePathFrame asks for two lists of pixels, each a function of the keys
-// and of the records traced before; the same keys therefore ask for the same lists. So the plan
-// is stable under storing its own whole frames (MoviePlan.h), and a denser movie over a stored
-// path is offered the stored frames as its only keys (planBetweenStored), its old interpolated
-// frames then served whole by the store: which of them are is found by making them from the store
-// alone before planning, and the frames so made are kept (within a memory bound) for frame() to
-// hand out rather than made again.
+// whatever keys its own plan has, and plans only the other frames. The pixels an interpolated frame
+// re-traces are stored as subset frames: the scene at the frame's parameters with a "subset" naming
+// the pixels (count and digest), so they never pass for the whole frame. completePathFrame asks for
+// two lists of pixels, each a function of the keys and of the records traced before; the same keys
+// therefore ask for the same lists. So the plan is stable under storing its own whole frames
+// (MoviePlan.h), and a denser movie over a stored path is offered the stored frames as its only
+// keys (planBetweenStored), its old interpolated frames then served whole by the store: which of
+// them are is found by making them from the store alone before planning, and the frames so made are
+// kept (within a memory bound) for frame() to hand out rather than made again.
 //
 // Learning. The plan starts from a prior of the re-trace share (SpacingShareModel) and of the
 // costs, in rays integrated: a whole frame's, a re-trace's (one ray a re-traced pixel, and the
@@ -188,6 +188,12 @@ public:
   const std::string& parameter() const { return this->Parameter; }
   int width() const { return this->Width; }
   int height() const { return this->Height; }
+
+  /// What frame k's settings reach against its converged picture, as a PSNR: its own error
+  /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
+  /// whole and its probes, traced and stored or read, as the movie would. Infinite when the movie
+  /// is not held to converged, or its rendering is converged already.
+  double settingsReach(int k);
 
   /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
   /// traces whole frames, they are made coarse first and the plan learns from each
