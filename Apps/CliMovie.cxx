@@ -440,13 +440,12 @@ int runMovie(const std::vector<std::string>& args)
     if (making.holdToConverged && !settings.plan && !renderingAsked &&
         frames.front().identity.rendering == AntialiasOptions())
     {
-      defaultReach = std::min(maker->settingsReach(0),
-                              maker->settingsReach(static_cast<int>(frames.size()) - 1));
-      if (defaultReach < settings.quality + 1)
+      defaultReach = maker->renderingReach();
+      if (raisesMovieRendering(defaultReach, settings.quality))
       {
         choosingRays = maker->raysTraced();
         raised = true;
-        source->SetIntegrationPreset("accurate");
+        source->SetIntegrationPreset(kRaisedMoviePreset);
         frames = movieFrames(source, path);
         maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
       }

@@ -876,6 +876,12 @@ double MovieMaker::settingsReach(int k)
   return psnrOfMse(making.settingsOf(k, false).mse());
 }
 
+double MovieMaker::renderingReach()
+{
+  return std::min(this->settingsReach(0),
+                  this->settingsReach(static_cast<int>(this->Frames.size()) - 1));
+}
+
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
 {
   if (k < 0 || k >= static_cast<int>(this->Frames.size()))

@@ -168,6 +168,15 @@ struct MovieSettings
   std::function<void(const std::vector<RayRecord>&, int frame)> checkTraced;
 };
 
+/// The preset a movie is raised to when its default rendering does not reach its target.
+constexpr const char* kRaisedMoviePreset = "accurate";
+/// Whether a movie whose default rendering reaches `reach` dB against the converged picture is
+/// raised to kRaisedMoviePreset for a target of `quality` dB: below the target plus 1 dB.
+inline bool raisesMovieRendering(double reach, double quality)
+{
+  return reach < quality + 1.0;
+}
+
 /// One movie: its plan, made once, and its frames, each made on demand.
 class ASRTFILTERS_EXPORT MovieMaker
 {
@@ -194,6 +203,10 @@ public:
   /// whole and its probes, traced and stored or read, as the movie would. Infinite when the movie
   /// is not held to converged, or its rendering is converged already.
   double settingsReach(int k);
+  /// What the movie's rendering reaches, as asrt movie and vtkGeodesicMovieSource judge it
+  /// before raising it: the smaller settingsReach of the first and last frames (keys of every
+  /// plan).
+  double renderingReach();
 
   /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
   /// traces whole frames, they are made coarse first and the plan learns from each

@@ -17,6 +17,7 @@
 #include "vtkInformationVector.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 
@@ -35,6 +36,13 @@ struct vtkGeodesicMovieSource::Internals
   std::unique_ptr<asrt::RayStore> Store;
   std::unique_ptr<asrt::MovieMaker> Maker;
   vtkMTimeType MadeAt = 0; ///< the source's MTime the maker was made for
+  /// What the maker was made of, to make it again with the raised rendering.
+  vtkSmartPointer<vtkGeodesicSource> Source;
+  asrt::MoviePath Path;
+  asrt::MovieSettings Settings;
+  bool RenderingChecked = false; ///< whether the rendering was judged against the target
+  bool RenderingRaised = false;
+  double ChoosingRays = 0; ///< traced by the maker of the default rendering before it was raised
 };
 
 vtkGeodesicMovieSource::vtkGeodesicMovieSource()
@@ -143,6 +151,8 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
     {
       in.Maker.reset();
       in.Store.reset();
+      in.RenderingChecked = in.RenderingRaised = false;
+      in.ChoosingRays = 0;
       this->RaysTraced = 0;
       const std::string parameter = text(this->PathParameter);
       checkSettings(this->SceneFileName, parameter, this->NumberOfFrames, this->QualityTarget,
@@ -201,6 +211,9 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
             "steps, above MaxFailedShare (" +
             number(100 * failedShare) + " %)");
       };
+      in.Source = source.Get();
+      in.Path = path;
+      in.Settings = settings;
       in.Maker = std::make_unique<asrt::MovieMaker>(std::move(frames), path.parameter,
                                                     in.Store.get(), std::move(settings));
       in.Maker->plan();
@@ -249,16 +262,17 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     std::vector<asrt::RayRecord> records;
     try
     {
+      this->JudgeRendering();
       records = in.Maker->frame(k, report);
     }
     catch (const asrt::MovieCancelled&)
     {
-      this->RaysTraced = in.Maker->raysTraced();
+      this->RaysTraced = in.ChoosingRays + in.Maker->raysTraced();
       asrt::reportAbort(this);
       image->Initialize();
       return 1;
     }
-    this->RaysTraced = in.Maker->raysTraced();
+    this->RaysTraced = in.ChoosingRays + in.Maker->raysTraced();
     image->Initialize();
     asrt::recordsToImage(records, in.Maker->width(), 0, in.Maker->height(), image);
     vtkFieldData* fd = image->GetFieldData();
@@ -271,6 +285,7 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     asrt::addDoubleField(fd, "ShareRetraced", { report.shareRetraced });
     asrt::addDoubleField(fd, "PathParameter", { in.Maker->frames()[k].s });
     asrt::addCountField(fd, "FrameIndex", k);
+    asrt::addCountField(fd, "RenderingRaised", in.RenderingRaised ? 1 : 0);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), static_cast<double>(k));
     this->UpdateProgress(1.0);
   }
@@ -281,6 +296,24 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     return 0;
   }
   return 1;
+}
+
+void vtkGeodesicMovieSource::JudgeRendering()
+{
+  Internals& in = *this->Impl;
+  if (in.RenderingChecked)
+    return;
+  const bool judged = this->RaiseRenderingForTarget && in.Settings.holdToConverged &&
+                      in.Maker->frames().front().identity.rendering == asrt::AntialiasOptions();
+  if (judged && asrt::raisesMovieRendering(in.Maker->renderingReach(), in.Settings.quality))
+  {
+    in.ChoosingRays = in.Maker->raysTraced();
+    in.Source->SetIntegrationPreset(asrt::kRaisedMoviePreset);
+    in.Maker = std::make_unique<asrt::MovieMaker>(asrt::movieFrames(in.Source, in.Path),
+                                                  in.Path.parameter, in.Store.get(), in.Settings);
+    in.RenderingRaised = true;
+  }
+  in.RenderingChecked = true;
 }
 
 int vtkGeodesicMovieSource::GetNumberOfPlannedKeys()
@@ -308,6 +341,7 @@ void vtkGeodesicMovieSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
   os << indent << "HoldToConverged: " << this->HoldToConverged << "\n";
+  os << indent << "RaiseRenderingForTarget: " << this->RaiseRenderingForTarget << "\n";
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
   os << indent << "StoreConnection: " << (text(this->StoreConnection).empty() ? "(none)" : "(set)")
      << "\n";

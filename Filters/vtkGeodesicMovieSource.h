@@ -95,6 +95,17 @@ public:
   ///@}
 
   ///@{
+  /// Whether a target the scene's rendering does not reach makes the movie with the accurate
+  /// preset, as asrt movie does (on, the default): held to converged, and the scene's rendering
+  /// the default one, the first frame requested measures what it reaches on the first and last
+  /// frames (MovieMaker::renderingReach), and below the target plus 1 dB the movie is made
+  /// with kRaisedMoviePreset. The field RenderingRaised says which.
+  vtkSetMacro(RaiseRenderingForTarget, vtkTypeBool);
+  vtkGetMacro(RaiseRenderingForTarget, vtkTypeBool);
+  vtkBooleanMacro(RaiseRenderingForTarget, vtkTypeBool);
+  ///@}
+
+  ///@{
   /// Resolution override (width, height); 0 keeps the scene's.
   vtkSetVector2Macro(Resolution, int);
   vtkGetVector2Macro(Resolution, int);
@@ -136,6 +147,9 @@ protected:
 
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Once per maker: the rendering judged against the target, and raised where it falls short
+  /// (RaiseRenderingForTarget).
+  void JudgeRendering();
 
   char* SceneFileName = nullptr;
   char* PathParameter = nullptr;
@@ -146,6 +160,7 @@ protected:
   int NumberOfFrames = 24;
   double QualityTarget = 35.0;
   vtkTypeBool HoldToConverged = 1;
+  vtkTypeBool RaiseRenderingForTarget = 1;
   int Resolution[2] = { 0, 0 };
   char* StoreConnection = nullptr;
   char* StoreLabel = nullptr;

@@ -271,6 +271,9 @@ TEST(MovieSource, AnOrbitHasItsAnglesAsParameters)
   movie->SetOrbitDegrees(20);
   movie->SetNumberOfFrames(3);
   movie->SetResolution(24, 24);
+  // At 24x24 the scene's rendering does not reach the default target against the converged
+  // picture: kept as it is, the frames are the ones vtkGeodesicSource traces by default.
+  movie->RaiseRenderingForTargetOff();
   const vtkSmartPointer<vtkImageData> last = frameAt(movie, 2);
   ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
   EXPECT_DOUBLE_EQ(fieldOf(last, "PathParameter"), 20.0);
@@ -298,6 +301,9 @@ TEST(MovieSource, ACameraPathThroughKeyCamerasEndsAtTheLastKey)
   movie->SetCameraKeysFileName(file.c_str());
   movie->SetNumberOfFrames(3);
   movie->SetResolution(24, 24);
+  // At 24x24 the scene's rendering does not reach the default target against the converged
+  // picture: kept as it is, the frames are the ones vtkGeodesicSource traces by default.
+  movie->RaiseRenderingForTargetOff();
   const vtkSmartPointer<vtkImageData> last = frameAt(movie, 2);
   ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
   EXPECT_DOUBLE_EQ(fieldOf(last, "PathParameter"), 2.0); // the third key
@@ -320,6 +326,52 @@ TEST(MovieSource, ACameraPathThroughKeyCamerasEndsAtTheLastKey)
   EXPECT_TRUE(catcher->Mentions("CameraKeysFileName")) << catcher->AllErrors();
   EXPECT_TRUE(catcher->Mentions("at least 2 key cameras")) << catcher->AllErrors();
   std::remove(file.c_str());
+}
+
+TEST(MovieSource, ATargetTheScenesRenderingDoesNotReachRaisesItToTheAccuratePreset)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  movie->HoldToConvergedOn();
+  movie->SetNumberOfFrames(3);
+  movie->SetResolution(24, 24);
+  movie->SetQualityTarget(40); // the default rendering reaches about 31 dB at this size
+  auto tracedAt = [](double mass, const char* preset)
+  {
+    vtkNew<vtkGeodesicSource> source;
+    source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+    source->SetResolution(24, 24);
+    source->SetMass(mass);
+    if (preset)
+      source->SetIntegrationPreset(preset);
+    source->Update();
+    return colours(source->GetOutput());
+  };
+  // The last frame is a key of every plan: the frame traced with the rendering chosen.
+  const vtkSmartPointer<vtkImageData> raised = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(fieldOf(raised, "RenderingRaised"), 1.0);
+  EXPECT_EQ(colours(raised), tracedAt(kTo, "accurate"));
+  EXPECT_NE(colours(raised), tracedAt(kTo, nullptr));
+  // Its rays count the default rendering's two end frames traced to judge it.
+  const double withJudging = movie->GetRaysTraced();
+
+  movie->RaiseRenderingForTargetOff();
+  const vtkSmartPointer<vtkImageData> kept = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(fieldOf(kept, "RenderingRaised"), 0.0);
+  EXPECT_EQ(colours(kept), tracedAt(kTo, nullptr));
+  EXPECT_GT(withJudging, movie->GetRaysTraced());
+
+  // A target the scene's rendering reaches keeps it.
+  movie->RaiseRenderingForTargetOn();
+  movie->SetQualityTarget(20);
+  const vtkSmartPointer<vtkImageData> low = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(fieldOf(low, "RenderingRaised"), 0.0);
+  EXPECT_EQ(colours(low), tracedAt(kTo, nullptr));
 }
 
 TEST(MovieSource, AnAbortStopsTheFrameAndTheNextRequestMakesIt)
