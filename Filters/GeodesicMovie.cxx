@@ -15,6 +15,8 @@
 #include "vtkCommand.h"
 #include "vtkNew.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -221,6 +223,16 @@ double raysOf(const std::vector<RayRecord>& records)
   return rays;
 }
 
+/// A scene text without what a movie's path varies (the hole, the camera, the integrator, the
+/// rendering, a subset): two frames whose texts give the same have the same objects and textures.
+std::string objectsText(const std::string& sceneText)
+{
+  nlohmann::json j = nlohmann::json::parse(sceneText);
+  for (const char* varied : { "spacetime", "camera", "integrator", "rendering", "subset" })
+    j.erase(varied);
+  return j.dump();
+}
+
 /// What completePathFrame asked of the store alone did not have.
 struct NotServed
 {
@@ -236,6 +248,7 @@ struct MovieMaker::Internals
   /// digest.
   std::map<std::pair<int, std::string>, std::vector<RayRecord>> retraced;
   std::optional<SceneDescription> shading; ///< the first frame's scene, textures loaded
+  std::string shadingObjects;              ///< its text without what a path varies
   /// Frames the plan made from the store alone between the stored frames, with how: kept when the
   /// plan interpolates them between the same keys, until frame() hands them out (the same records
   /// it would make again).
@@ -344,9 +357,23 @@ struct MovieMaking
     };
   }
 
+  /// The frame's scene with its textures: the first frame's objects and textures, read once,
+  /// where the frame's text differs from the first's only in what a path varies (the hole, the
+  /// camera, the integrator, the rendering); else read from its own text.
   SceneDescription withTextures(const MovieFrame& f) const
   {
-    return loadScene(f.sceneText.c_str(), nullptr, maker.Settings.textureDirectory.c_str());
+    const MovieFrame& first = maker.Frames.front();
+    if (!in.shading)
+    {
+      in.shading =
+        loadScene(first.sceneText.c_str(), nullptr, maker.Settings.textureDirectory.c_str());
+      in.shadingObjects = objectsText(first.sceneText);
+    }
+    if (objectsText(f.sceneText) != in.shadingObjects)
+      return loadScene(f.sceneText.c_str(), nullptr, maker.Settings.textureDirectory.c_str());
+    SceneDescription d = f.identity; // parsed as loadScene parses it, without the images
+    d.scene = in.shading->scene;
+    return d;
   }
 
   /// A whole frame's records, in pixel order: kept, read from the store, or traced (and stored).
@@ -549,7 +576,7 @@ struct MovieMaking
       pathKeys.push_back(
         { direction * maker.Frames[static_cast<std::size_t>(key)].s, &this->whole(key) });
     if (!in.shading)
-      in.shading = this->withTextures(maker.Frames.front());
+      this->withTextures(maker.Frames.front());
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     // Without moved edges: on whole movies (bench/REPORT.md, "Movies") predicting them cost more
     // CPU than the rays they saved (the mass ramp's first run 1.73 of direct with them, 1.05
