@@ -82,7 +82,10 @@ The path (one of):
 
 Options:
   -n, --frames N        frames of the movie, at least 2 (default 24)
-  --quality DB          the PSNR every interpolated frame is to reach, in (0, 100] (default 35)
+  --quality DB          the PSNR every interpolated frame is to reach, in (0, 100] (default 35);
+                        where the default rendering does not reach it (measured on the first
+                        and last frames) and no rendering option is given, the movie is made
+                        with the accurate preset
   --against-traced      hold the target against the frame traced at each frame's parameters
                         with the movie's settings, not against the converged picture
   --fps F               the movie's frames per second (default 24)
@@ -437,8 +440,9 @@ int runMovie(const std::vector<std::string>& args)
   std::vector<MovieFrameReport> reports;
   try
   {
-    if (making.holdToConverged && !settings.plan && !renderingAsked &&
-        frames.front().identity.rendering == AntialiasOptions())
+    const bool judged = making.holdToConverged && !renderingAsked &&
+                        frames.front().identity.rendering == AntialiasOptions();
+    if (judged && !settings.plan)
     {
       defaultReach = maker->renderingReach();
       if (raisesMovieRendering(defaultReach, settings.quality))
@@ -454,6 +458,11 @@ int runMovie(const std::vector<std::string>& args)
     if (settings.plan)
     {
       printPlan(plan, maker->frames(), path.parameter);
+      if (judged)
+        std::printf("rendering: the default, planned without tracing; the movie measures what it "
+                    "reaches on the first and last frames and, below %s dB, is made with the "
+                    "accurate preset instead\n",
+                    formatNumber(settings.quality + 1).c_str());
       return kOk;
     }
     makeFrames(*maker, settings, files, *movie, prefix, reports);
