@@ -282,8 +282,8 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   bar.finish("-> " + prefix + "-*.png");
 }
 
-/// `extraRays`: traced before this maker's movie (the frame that measured the default
-/// rendering's reach, when the rendering was then raised).
+/// `extraRays`: traced before this maker's movie (the first and last frames that measured the
+/// default rendering's reach, when it was then `raised` to the accurate preset).
 void printReport(MovieMaker& maker, const std::vector<MovieFrameReport>& reports, double quality,
                  double extraRays, bool raised)
 {
@@ -428,10 +428,9 @@ int runMovie(const std::vector<std::string>& args)
   };
   auto maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
   // A target the default rendering does not reach against the converged picture (what the first
-  // and last frames' probes measure it to reach, with a dB to spare; both are keys of every
-  // plan), when no rendering was asked for: the movie
-  // is made with the accurate preset, whose keys reach 40 dB on the bench's paths (bench/REPORT.md,
-  // "T = 40 held on all four paths").
+  // and last frames' probes measure it to reach, with a dB to spare; both are keys of every plan),
+  // when no rendering was asked for: the movie is made with the accurate preset, whose keys reach
+  // 40 dB on the bench's paths (bench/REPORT.md, "T = 40 held on all four paths").
   const bool renderingAsked =
     std::any_of(kRenderingOptions.begin(), kRenderingOptions.end(),
                 [&options](const char* name) { return options.has(name); });

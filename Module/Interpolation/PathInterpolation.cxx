@@ -282,23 +282,11 @@ struct ProbeSample
   }
 };
 
-/// A probe's estimate and its true error.
-struct ProbePair
-{
-  double estimate = 0, error = 0;
-};
-
 /// The least scale of a way of predicting's estimates: its order of re-tracing kept where its
 /// probes were all exact.
 constexpr double kLeastScale = 1.0 / 1024.0;
+}
 
-/// The scale of a way of predicting's estimates from its probes. Ratio: Cochran's ratio estimate
-/// R = Σ error / Σ estimate, raised by kConfidence of its standard errors,
-/// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
-/// 3rd ed., § 6.3). The estimate is the lower order's error, which over-states it where the
-/// higher order is better: the ratio brings it down. Edge blends and moved edges keep at least
-/// 1: their errors are rare and large, and a ratio their probes happen to set low would leave
-/// them untraced. AtLeastOne: the ratio, at least 1 for every way.
 double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, EstimateScaling scaling)
 {
   double estimated = 0, erred = 0;
@@ -318,9 +306,14 @@ double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, Estimat
     spread += (q.error - ratio * q.estimate) * (q.error - ratio * q.estimate);
   const double standardError = n > 1 ? std::sqrt(spread / (n - 1) / n) / (estimated / n) : ratio;
   const double raised = ratio + kConfidence * standardError;
+  // Edge blends' and moved edges' errors are rare and large: a ratio their probes happen to set
+  // low would leave them untraced.
   const bool rareAndLarge = m == PathMethod::EdgeBlend || m == PathMethod::MovedEdge;
   return std::max(rareAndLarge ? 1.0 : kLeastScale, raised);
 }
+
+namespace
+{
 
 /// A probe: where its calibrated estimate places it in the order of re-tracing, its way of
 /// predicting and its true error.

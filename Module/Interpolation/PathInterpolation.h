@@ -182,6 +182,21 @@ enum class EstimateScaling : std::uint8_t
   AtLeastOne = 1
 };
 
+/// A probe's estimate and its true error (squared colour errors summed over the channels).
+struct ProbePair
+{
+  double estimate = 0, error = 0;
+};
+
+/// The scale of way `m`'s estimates from its probes. Ratio: Cochran's ratio estimate
+/// R = Σ error / Σ estimate raised by two of its standard errors,
+/// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
+/// 3rd ed., § 6.3), at least 1 for edge blends and moved edges and at least 1/1024 for the others
+/// (their order of re-tracing kept where every probe came out exact). AtLeastOne: R, at least 1.
+/// 1 where the probes' estimates sum to 0 (or there are none).
+ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,
+                                              EstimateScaling scaling);
+
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
