@@ -401,7 +401,7 @@ int runMovie(const std::vector<std::string>& args)
     throw UsageError(std::string("--movie/--fps: ") + e.what());
   }
 
-  std::vector<MovieFrame> frames = movieFrames(source, path);
+  const std::vector<MovieFrame> frames = movieFrames(source, path);
   // Connect before tracing: an unreachable database should not cost a trace first.
   std::unique_ptr<RayStore> store;
   if (settings.store)
@@ -427,32 +427,24 @@ int runMovie(const std::vector<std::string>& args)
                    frames[static_cast<std::size_t>(k)].describe + ")");
   };
   auto maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
-  // A target the default rendering does not reach against the converged picture (what the first
-  // and last frames' probes measure it to reach, with a dB to spare; both are keys of every plan),
-  // when no rendering was asked for: the movie is made with the accurate preset, whose keys reach
-  // 40 dB on the bench's paths (bench/REPORT.md, "T = 40 held on all four paths").
+  // A target the default rendering does not reach, when no rendering was asked for: the movie is
+  // made with the accurate preset (MovieMaker::withRaisedRendering).
   const bool renderingAsked =
     std::any_of(kRenderingOptions.begin(), kRenderingOptions.end(),
                 [&options](const char* name) { return options.has(name); });
+  const bool judged = !renderingAsked && maker->judgesRendering();
   double defaultReach = std::numeric_limits<double>::infinity(), choosingRays = 0;
   bool raised = false;
   std::vector<MovieFrameReport> reports;
   try
   {
-    const bool judged = making.holdToConverged && !renderingAsked &&
-                        frames.front().identity.rendering == AntialiasOptions();
     if (judged && !settings.plan)
-    {
-      defaultReach = maker->renderingReach();
-      if (raisesMovieRendering(defaultReach, settings.quality))
+      if (auto higher = maker->withRaisedRendering(source, path, defaultReach))
       {
         choosingRays = maker->raysTraced();
         raised = true;
-        source->SetIntegrationPreset(kRaisedMoviePreset);
-        frames = movieFrames(source, path);
-        maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
+        maker = std::move(higher);
       }
-    }
     const MoviePlan& plan = maker->plan();
     if (settings.plan)
     {

@@ -262,8 +262,6 @@ struct MovieMaker::Internals
   /// Interpolated frames the store records as made from keys that are frames of this movie, and
   /// stored: each is made again between exactly those keys, whatever keys the plan has.
   std::map<int, std::vector<int>> recorded;
-  /// The frames the plan plans: every frame not recorded, in order.
-  std::vector<int> open;
   bool keysMade = false; ///< makeKeys() done: the plan is final
 };
 
@@ -723,18 +721,28 @@ MoviePlan wholeMoviePlan(const MoviePlan& planned, const std::vector<int>& open,
   }
   return plan;
 }
+
+/// The frames a plan plans (of a movie of n frames): every frame not recorded, in order.
+std::vector<int> openFrames(std::size_t n, const std::map<int, std::vector<int>>& recorded)
+{
+  std::vector<int> open;
+  for (int k = 0; k < static_cast<int>(n); ++k)
+    if (!recorded.count(k))
+      open.push_back(k);
+  return open;
+}
 }
 
-void MovieMaker::findRecorded(const std::vector<bool>& stored)
+void MovieMaker::findRecorded()
 {
   std::map<std::int64_t, int> frameOfId;
   for (std::size_t k = 0; k < this->Frames.size(); ++k)
-    if (stored[k])
+    if (this->Frames[k].storedId)
       frameOfId[*this->Frames[k].storedId] = static_cast<int>(k);
   const std::string recipe = interpolationRecipe(this->Settings);
   for (std::size_t k = 0; k < this->Frames.size() && this->Store; ++k)
   {
-    if (stored[k])
+    if (this->Frames[k].storedId)
       continue;
     const auto ids = this->Store->interpolatedFrameKeys(this->Frames[k].identity, recipe);
     if (!ids)
@@ -753,10 +761,6 @@ void MovieMaker::findRecorded(const std::vector<bool>& stored)
     if (bracketed)
       this->Impl->recorded[static_cast<int>(k)] = keys;
   }
-  this->Impl->open.clear();
-  for (std::size_t k = 0; k < this->Frames.size(); ++k)
-    if (!this->Impl->recorded.count(static_cast<int>(k)))
-      this->Impl->open.push_back(static_cast<int>(k));
 }
 
 const MoviePlan& MovieMaker::plan()
@@ -764,24 +768,19 @@ const MoviePlan& MovieMaker::plan()
   if (this->Plan)
     return *this->Plan;
   const std::size_t n = this->Frames.size();
-  std::vector<bool> storedAll(n, false);
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    MovieFrame& f = this->Frames[k];
+  for (MovieFrame& f : this->Frames)
     if (this->Store)
       f.storedId = this->Store->findFrame(f.identity);
-    storedAll[k] = f.storedId.has_value();
-  }
   // Frames made before between keys stored now are made again between those (findRecorded); the
   // plan is of the others, the open frames (indices into `open` below).
-  this->findRecorded(storedAll);
-  const std::vector<int>& open = this->Impl->open;
+  this->findRecorded();
+  const std::vector<int> open = openFrames(n, this->Impl->recorded);
   std::vector<double> s;
   std::vector<bool> stored;
   for (int k : open)
   {
     s.push_back(this->Frames[static_cast<std::size_t>(k)].s);
-    stored.push_back(storedAll[static_cast<std::size_t>(k)]);
+    stored.push_back(this->Frames[static_cast<std::size_t>(k)].storedId.has_value());
   }
   const std::size_t m = open.size();
   SpacingShareModel& share = this->Impl->share;
@@ -850,7 +849,7 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
   {
     // Keys to trace: made coarse first, each measured against an interpolation of itself, and
     // the rest planned again with what was learnt (planProgressively), over the open frames.
-    const std::vector<int>& open = this->Impl->open;
+    const std::vector<int> open = openFrames(this->Frames.size(), this->Impl->recorded);
     std::vector<double> s;
     std::vector<bool> stored;
     for (int k : open)
@@ -895,18 +894,32 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
 
 double MovieMaker::settingsReach(int k)
 {
-  if (k < 0 || k >= static_cast<int>(this->Frames.size()))
-    throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
-                           std::to_string(this->Frames.size()) + " frames");
   this->plan(); // the stored frames looked up: a stored frame is read, not traced again
   MovieMaking making{ *this, *this->Impl };
   return psnrOfMse(making.settingsOf(k, false).mse());
 }
 
-double MovieMaker::renderingReach()
+bool MovieMaker::judgesRendering() const
 {
-  return std::min(this->settingsReach(0),
-                  this->settingsReach(static_cast<int>(this->Frames.size()) - 1));
+  return this->Settings.holdToConverged &&
+         this->Frames.front().identity.rendering == AntialiasOptions();
+}
+
+std::unique_ptr<MovieMaker> MovieMaker::withRaisedRendering(vtkGeodesicSource* source,
+                                                            const MoviePath& path, double& reach)
+{
+  reach = std::numeric_limits<double>::infinity();
+  if (!this->judgesRendering())
+    return nullptr;
+  reach = std::min(this->settingsReach(0),
+                   this->settingsReach(static_cast<int>(this->Frames.size()) - 1));
+  if (!(reach < this->Settings.quality + 1.0))
+    return nullptr;
+  // The accurate preset's keys hold 40 dB on the bench's four paths (bench/REPORT.md, "T = 40
+  // held on all four paths").
+  source->SetIntegrationPreset("accurate");
+  return std::make_unique<MovieMaker>(movieFrames(source, path), this->Parameter, this->Store,
+                                      this->Settings);
 }
 
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)

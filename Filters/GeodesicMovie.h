@@ -168,15 +168,6 @@ struct MovieSettings
   std::function<void(const std::vector<RayRecord>&, int frame)> checkTraced;
 };
 
-/// The preset a movie is raised to when its default rendering does not reach its target.
-constexpr const char* kRaisedMoviePreset = "accurate";
-/// Whether a movie whose default rendering reaches `reach` dB against the converged picture is
-/// raised to kRaisedMoviePreset for a target of `quality` dB: below the target plus 1 dB.
-inline bool raisesMovieRendering(double reach, double quality)
-{
-  return reach < quality + 1.0;
-}
-
 /// One movie: its plan, made once, and its frames, each made on demand.
 class ASRTFILTERS_EXPORT MovieMaker
 {
@@ -198,15 +189,17 @@ public:
   int width() const { return this->Width; }
   int height() const { return this->Height; }
 
-  /// What frame k's settings reach against its converged picture, as a PSNR: its own error
-  /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
-  /// whole and its probes, traced and stored or read, as the movie would. Infinite when the movie
-  /// is not held to converged, or its rendering is converged already.
-  double settingsReach(int k);
-  /// What the movie's rendering reaches, as asrt movie and vtkGeodesicMovieSource judge it
-  /// before raising it: the smaller settingsReach of the first and last frames (keys of every
-  /// plan).
-  double renderingReach();
+  /// Whether the movie's rendering is judged against its target: held to converged, and its
+  /// frames' rendering the default one (a rendering asked for is kept).
+  bool judgesRendering() const;
+  /// Where the movie's default rendering does not reach its target against the converged picture
+  /// (what its first and last frames' probes measure it to reach, below the target plus 1 dB;
+  /// both are keys of every plan, made whole here, traced and stored or read): the same movie
+  /// with `source`, the frames' source as movieFrames took them along `path`, set to the
+  /// accurate preset. Null where the rendering reaches the target or is not judged. `reach`
+  /// gets what it reaches (infinite where not judged).
+  std::unique_ptr<MovieMaker> withRaisedRendering(vtkGeodesicSource* source, const MoviePath& path,
+                                                  double& reach);
 
   /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
   /// traces whole frames, they are made coarse first and the plan learns from each
@@ -231,9 +224,12 @@ public:
 private:
   friend struct MovieMaking;
   /// The frames not stored whole that the store records as interpolated, by this movie's recipe,
-  /// between keys that are frames of this movie and stored (`stored`: per frame), and the frames
-  /// left to plan.
-  void findRecorded(const std::vector<bool>& stored);
+  /// between keys that are frames of this movie and stored (their storedId looked up).
+  void findRecorded();
+  /// What frame k's settings reach against its converged picture, as a PSNR: its own error
+  /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
+  /// whole and its probes, traced and stored or read, as the movie would.
+  double settingsReach(int k);
   struct Internals;
   std::vector<MovieFrame> Frames;
   std::string Parameter;

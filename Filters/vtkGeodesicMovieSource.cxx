@@ -39,7 +39,6 @@ struct vtkGeodesicMovieSource::Internals
   /// What the maker was made of, to make it again with the raised rendering.
   vtkSmartPointer<vtkGeodesicSource> Source;
   asrt::MoviePath Path;
-  asrt::MovieSettings Settings;
   bool RenderingChecked = false; ///< whether the rendering was judged against the target
   bool RenderingRaised = false;
   double ChoosingRays = 0; ///< traced by the maker of the default rendering before it was raised
@@ -213,7 +212,6 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
       };
       in.Source = source.Get();
       in.Path = path;
-      in.Settings = settings;
       in.Maker = std::make_unique<asrt::MovieMaker>(std::move(frames), path.parameter,
                                                     in.Store.get(), std::move(settings));
       in.Maker->plan();
@@ -303,16 +301,14 @@ void vtkGeodesicMovieSource::JudgeRendering()
   Internals& in = *this->Impl;
   if (in.RenderingChecked)
     return;
-  const bool judged = this->RaiseRenderingForTarget && in.Settings.holdToConverged &&
-                      in.Maker->frames().front().identity.rendering == asrt::AntialiasOptions();
-  if (judged && asrt::raisesMovieRendering(in.Maker->renderingReach(), in.Settings.quality))
-  {
-    in.ChoosingRays = in.Maker->raysTraced();
-    in.Source->SetIntegrationPreset(asrt::kRaisedMoviePreset);
-    in.Maker = std::make_unique<asrt::MovieMaker>(asrt::movieFrames(in.Source, in.Path),
-                                                  in.Path.parameter, in.Store.get(), in.Settings);
-    in.RenderingRaised = true;
-  }
+  double reach = 0;
+  if (this->RaiseRenderingForTarget)
+    if (auto higher = in.Maker->withRaisedRendering(in.Source, in.Path, reach))
+    {
+      in.ChoosingRays = in.Maker->raysTraced();
+      in.Maker = std::move(higher);
+      in.RenderingRaised = true;
+    }
   in.RenderingChecked = true;
 }
 

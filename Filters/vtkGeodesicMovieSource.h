@@ -98,8 +98,8 @@ public:
   /// Whether a target the scene's rendering does not reach makes the movie with the accurate
   /// preset, as asrt movie does (on, the default): held to converged, and the scene's rendering
   /// the default one, the first frame requested measures what it reaches on the first and last
-  /// frames (MovieMaker::renderingReach), and below the target plus 1 dB the movie is made
-  /// with kRaisedMoviePreset. The field RenderingRaised says which.
+  /// frames (MovieMaker::withRaisedRendering), and below the target plus 1 dB the movie is made
+  /// with the accurate preset. The field RenderingRaised says which.
   vtkSetMacro(RaiseRenderingForTarget, vtkTypeBool);
   vtkGetMacro(RaiseRenderingForTarget, vtkTypeBool);
   vtkBooleanMacro(RaiseRenderingForTarget, vtkTypeBool);
