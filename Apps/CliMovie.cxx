@@ -33,6 +33,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <sstream>
 
 namespace asrt
 {
@@ -92,6 +93,8 @@ Options:
   -o, --output PREFIX   where to write; a directory (an existing one, or ending in '/') gets the
                         scene's file name: -o out/ gives out/fig4-mass-start-000.png
   --movie FILE          the movie's file: .ogv or .ogg (Ogg Theora), .mp4 (needs ffmpeg)
+  --formats LIST        which of png,vti,movie to write (default: all three; vti brings the
+                        .pvd with it)
   --plan                print the plan and its estimated cost, trace and write nothing (the
                         plan from the prior estimate: a run learns as it makes its keys)
   --store[=LABEL]       accumulate in PostgreSQL and reuse what is stored (label of new frames)
@@ -210,7 +213,32 @@ struct MovieOptions
   int fps = 24;
   bool plan = false, quiet = false, store = false;
   bool againstTraced = false;
+  /// The outputs --formats names: the PNG frames, the VTI frames with their .pvd, the movie file.
+  bool png = true, vti = true, movie = true;
 };
+
+/// --formats LIST: which of png, vti and movie to write.
+void parseMovieFormats(const std::string& list, MovieOptions& m)
+{
+  m.png = m.vti = m.movie = false;
+  std::stringstream items(list);
+  std::string item;
+  while (std::getline(items, item, ','))
+  {
+    if (item.empty())
+      continue;
+    if (item == "png")
+      m.png = true;
+    else if (item == "vti")
+      m.vti = true;
+    else if (item == "movie")
+      m.movie = true;
+    else
+      throw UsageError("--formats: unknown format " + quotedArgument(item) + " (png, vti, movie)");
+  }
+  if (!m.png && !m.vti && !m.movie)
+    throw UsageError("--formats: the list is empty; name one or more of png, vti, movie");
+}
 
 MovieOptions movieOptions(const Options& options)
 {
@@ -228,6 +256,11 @@ MovieOptions movieOptions(const Options& options)
                        quotedArgument(text));
   }
   m.fps = options.positiveInteger("fps").value_or(24);
+  if (options.has("formats"))
+    parseMovieFormats(options.get("formats"), m);
+  if (!m.movie && (options.has("movie") || options.has("fps")))
+    throw UsageError(std::string(options.has("movie") ? "--movie" : "--fps") +
+                     ": --formats leaves the movie file out");
   m.againstTraced = options.has("against-traced");
   m.plan = options.has("plan");
   m.quiet = options.has("quiet");
@@ -239,7 +272,7 @@ MovieOptions movieOptions(const Options& options)
 
 /// Makes every frame and writes it into the set, in order; fills `reports`.
 void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFileSet& files,
-                tools::MovieWriter& movie, const std::string& prefix,
+                tools::MovieWriter* movie, const std::string& prefix,
                 std::vector<MovieFrameReport>& reports)
 {
   const int n = static_cast<int>(maker.frames().size());
@@ -265,21 +298,28 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
     recordsToImage(records, maker.width(), 0, maker.height(), image);
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
-    tools::writePng(image, files.add(prefix + number + ".png"));
-    tools::writeVti(image, files.add(prefix + number + ".vti"));
-    series.add(k, prefix + number + ".vti");
-    movie.addFrame(image);
+    if (settings.png)
+      tools::writePng(image, files.add(prefix + number + ".png"));
+    if (settings.vti)
+    {
+      tools::writeVti(image, files.add(prefix + number + ".vti"));
+      series.add(k, prefix + number + ".vti");
+    }
+    if (movie)
+      movie->addFrame(image);
     stopIfInterrupted();
     bar.update(++done / steps);
   }
-  series.write(files.add(prefix + ".pvd"));
-  movie.close();
+  if (settings.vti)
+    series.write(files.add(prefix + ".pvd"));
+  if (movie)
+    movie->close();
   // Frames of an earlier, longer movie at this prefix would look like part of this one.
   for (const std::string& path : staleFrames(prefix, n))
     files.remove(path);
   stopIfInterrupted();
   files.commit();
-  bar.finish("-> " + prefix + "-*.png");
+  bar.finish("-> " + prefix + (settings.png ? "-*.png" : settings.vti ? "-*.vti" : ""));
 }
 
 /// `extraRays`: traced before this maker's movie (the first and last frames that measured the
@@ -352,6 +392,7 @@ int runMovie(const std::vector<std::string>& args)
                                                  { "fps", OptionSpec::Value },
                                                  { "output", OptionSpec::Value, 'o' },
                                                  { "movie", OptionSpec::Value },
+                                                 { "formats", OptionSpec::Value },
                                                  { "plan", OptionSpec::Flag },
                                                  { "store", OptionSpec::OptionalValue },
                                                  { "quiet", OptionSpec::Flag, 'q' } } +
@@ -394,7 +435,8 @@ int runMovie(const std::vector<std::string>& args)
   std::unique_ptr<tools::MovieWriter> movie;
   try
   {
-    movie = std::make_unique<tools::MovieWriter>(moviePath, settings.fps, &files);
+    if (settings.movie)
+      movie = std::make_unique<tools::MovieWriter>(moviePath, settings.fps, &files);
   }
   catch (const std::invalid_argument& e)
   {
@@ -456,7 +498,7 @@ int runMovie(const std::vector<std::string>& args)
                     formatNumber(settings.quality + 1).c_str());
       return kOk;
     }
-    makeFrames(*maker, settings, files, *movie, prefix, reports);
+    makeFrames(*maker, settings, files, movie.get(), prefix, reports);
   }
   catch (const MovieCancelled&)
   {
@@ -479,8 +521,19 @@ int runMovie(const std::vector<std::string>& args)
       "--preset chooses another\n",
       defaultReach, choosingRays);
   printReport(*maker, reports, settings.quality, choosingRays, raised);
-  std::printf("  wrote %s-000.png ... %s-%03zu.png (and .vti), %s.pvd, %s\n", prefix.c_str(),
-              prefix.c_str(), frames.size() - 1, prefix.c_str(), moviePath.c_str());
+  std::vector<std::string> wrote;
+  char last[32];
+  std::snprintf(last, sizeof last, "-%03zu", frames.size() - 1);
+  if (settings.png)
+    wrote.push_back(prefix + "-000.png ... " + prefix + last + ".png");
+  if (settings.vti)
+    wrote.push_back(prefix + "-000.vti ... " + prefix + last + ".vti, " + prefix + ".pvd");
+  if (settings.movie)
+    wrote.push_back(moviePath);
+  std::string list;
+  for (const std::string& w : wrote)
+    list += (list.empty() ? "" : ", ") + w;
+  std::printf("  wrote %s\n", list.c_str());
   return kOk;
 }
 }
