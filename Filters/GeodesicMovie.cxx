@@ -11,10 +11,6 @@
 #include "SettingsError.h"
 #include "vtkGeodesicSource.h"
 
-#include "vtkCallbackCommand.h"
-#include "vtkCommand.h"
-#include "vtkNew.h"
-
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -26,157 +22,6 @@
 
 namespace asrt
 {
-CameraPose sceneCameraOfText(const std::string& sceneText)
-{
-  const SceneDescription scene = parseSceneWithoutImages(sceneText);
-  return { scene.camera.position, scene.camera.focalPoint, scene.camera.viewUp };
-}
-
-CameraPose turnedAboutZ(const CameraPose& pose, double degrees)
-{
-  const double t = degrees * M_PI / 180.0, c = std::cos(t), s = std::sin(t);
-  auto turn = [c, s](const Vec3& v)
-  { return Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()); };
-  return { turn(pose.position), turn(pose.focalPoint), turn(pose.viewUp) };
-}
-
-double orbitAngle(int k, int n, double degrees)
-{
-  if (n <= 1)
-    return 0.0;
-  const bool closed = std::abs(std::abs(degrees) - 360.0) < 1e-9;
-  return degrees * k / (closed ? n : n - 1);
-}
-
-void setCamera(vtkGeodesicSource* source, const CameraPose& pose)
-{
-  source->SetCameraPosition(pose.position.x(), pose.position.y(), pose.position.z());
-  source->SetFocalPoint(pose.focalPoint.x(), pose.focalPoint.y(), pose.focalPoint.z());
-  source->SetViewUp(pose.viewUp.x(), pose.viewUp.y(), pose.viewUp.z());
-}
-
-namespace
-{
-std::string formatNumber(double v)
-{
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
-void checkFrameCount(int n)
-{
-  if (n < 2 || n > kMaxMovieFrames)
-    throw InvalidParameter("frames: a movie has 2 to " + std::to_string(kMaxMovieFrames) +
-                           " frames, got " + std::to_string(n));
-}
-}
-
-MoviePath rampMoviePath(const std::string& parameter, double from, double to, int n)
-{
-  if (parameter != "mass" && parameter != "spin" && parameter != "charge")
-    throw InvalidParameter("ramp: unknown parameter '" + parameter.substr(0, 40) +
-                           "' (mass, spin or charge)");
-  checkFrameCount(n);
-  if (!std::isfinite(from) || !std::isfinite(to))
-    throw InvalidParameter("ramp: FROM and TO must be finite numbers");
-  if (from == to)
-    throw InvalidParameter("ramp: FROM and TO are equal (" + formatNumber(from) + "): no path");
-  MoviePath path;
-  path.parameter = parameter;
-  for (int k = 0; k < n; ++k)
-  {
-    // The formula of asrt trace --sweep, so that its frames are these frames.
-    const double v = from + (to - from) * k / (n - 1);
-    path.s.push_back(v);
-    path.apply.push_back(
-      [parameter, v](vtkGeodesicSource* src)
-      {
-        if (parameter == "mass")
-          src->SetMass(v);
-        else if (parameter == "spin")
-          src->SetSpin(v);
-        else
-          src->SetCharge(v);
-      });
-  }
-  return path;
-}
-
-MoviePath orbitMoviePath(const CameraPose& pose, double degrees, int n)
-{
-  checkFrameCount(n);
-  if (!std::isfinite(degrees) || degrees == 0 || std::abs(degrees) > 360)
-    throw InvalidParameter("orbit: DEGREES must be nonzero and at most 360 in magnitude, got " +
-                           formatNumber(degrees));
-  MoviePath path;
-  path.parameter = "orbit angle";
-  for (int k = 0; k < n; ++k)
-  {
-    const double angle = orbitAngle(k, n, degrees);
-    const CameraPose turned = turnedAboutZ(pose, angle);
-    path.s.push_back(angle);
-    path.apply.push_back([turned](vtkGeodesicSource* src) { setCamera(src, turned); });
-  }
-  return path;
-}
-
-namespace
-{
-/// The first error the source reports while watched, instead of VTK's output window.
-struct SourceErrors
-{
-  std::string first;
-  static void onError(vtkObject*, unsigned long, void* clientData, void* callData)
-  {
-    auto* self = static_cast<SourceErrors*>(clientData);
-    if (self->first.empty() && callData)
-      self->first = static_cast<const char*>(callData);
-  }
-};
-}
-
-std::vector<MovieFrame> movieFrames(vtkGeodesicSource* source, const MoviePath& path)
-{
-  std::vector<MovieFrame> frames(path.s.size());
-  SourceErrors errors;
-  vtkNew<vtkCallbackCommand> onError;
-  onError->SetClientData(&errors);
-  onError->SetCallback(&SourceErrors::onError);
-  const unsigned long tag = source->AddObserver(vtkCommand::ErrorEvent, onError);
-  try
-  {
-    for (std::size_t k = 0; k < frames.size(); ++k)
-    {
-      MovieFrame& f = frames[k];
-      f.s = path.s[k];
-      f.describe = path.parameter + " = " + formatNumber(f.s);
-      path.apply[k](source);
-      errors.first.clear();
-      // The textures, which the path does not change, are read (and so checked) once.
-      f.sceneText = k == 0 ? source->GetFrameSceneText() : source->GetFrameSceneTextWithoutImages();
-      if (!errors.first.empty() || f.sceneText.empty())
-      {
-        // VTK's messages lead with where they were raised: the reason is after the last ": ".
-        std::string reason = errors.first;
-        const std::size_t at = reason.find("): ");
-        if (at != std::string::npos)
-          reason = reason.substr(at + 3);
-        while (!reason.empty() && (reason.back() == '\n' || reason.back() == ' '))
-          reason.pop_back();
-        throw InvalidParameter("frame " + std::to_string(k) + " (" + f.describe + "): " + reason);
-      }
-      f.identity = parseSceneWithoutImages(f.sceneText);
-    }
-  }
-  catch (...)
-  {
-    source->RemoveObserver(tag);
-    throw;
-  }
-  source->RemoveObserver(tag);
-  return frames;
-}
 
 namespace
 {
@@ -278,8 +123,8 @@ MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, Ra
                            std::to_string(this->Frames.size()));
   if (!(this->Settings.quality > 0.0 && this->Settings.quality <= kMaxQualityTargetDb))
     throw InvalidParameter("quality: the target must lie in (0, " +
-                           formatNumber(kMaxQualityTargetDb) + "] dB, got " +
-                           formatNumber(this->Settings.quality));
+                           formatParameter(kMaxQualityTargetDb) + "] dB, got " +
+                           formatParameter(this->Settings.quality));
   this->Width = this->Frames.front().identity.camera.width;
   this->Height = this->Frames.front().identity.camera.height;
   for (const MovieFrame& f : this->Frames)
@@ -321,9 +166,9 @@ std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
 /// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame.
 std::string interpolationRecipe(const MovieSettings& settings)
 {
-  return "asrt movie 1: quality " + formatNumber(settings.quality) + " dB against " +
+  return "asrt movie 1: quality " + formatParameter(settings.quality) + " dB against " +
          (settings.holdToConverged ? "converged" : "traced") + ", probes " +
-         formatNumber(kMovieProbeFraction) + ", estimate scaled by its probes' ratio";
+         formatParameter(kMovieProbeFraction) + ", estimate scaled by its probes' ratio";
 }
 
 /// The keys of `keys` (sorted) that interpolating at frame k uses: the two on either side.

@@ -54,6 +54,9 @@ namespace asrt
 class RayStore;
 struct MovieMaking;
 
+/// A path parameter's text, as a frame describes itself ("%.6g": 0.675, 1e-05).
+ASRTFILTERS_EXPORT std::string formatParameter(double v);
+
 /// A camera: eye, focal point and up.
 struct CameraPose
 {
