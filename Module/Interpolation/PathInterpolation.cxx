@@ -44,18 +44,6 @@ void checkKeys(const std::vector<PathKey>& keys, double t, int width, int height
                 std::to_string(r[p].i) + ", " + std::to_string(r[p].j) + "), not (" +
                 std::to_string(p % width) + ", " + std::to_string(p / width) + ")");
   }
-  if (keys.front().known || keys.back().known)
-    invalid("the first and the last key frames must be whole (not partial)");
-  for (std::size_t k = 0; k < keys.size(); ++k)
-  {
-    if (keys[k].known && keys[k].known->size() != n)
-      invalid("partial key frame " + std::to_string(k) + " knows " +
-              std::to_string(keys[k].known->size()) + " pixels' flags, the frame has " +
-              std::to_string(n) + " pixels");
-    if (keys[k].known && keys[k].s == t)
-      invalid("t is the parameter of partial key frame " + std::to_string(k) +
-              ", which knows only some of its pixels");
-  }
   if (!(t >= keys.front().s && t <= keys.back().s))
   {
     std::ostringstream os;
@@ -96,103 +84,40 @@ float predictionError(const Scene& scene, const RayRecord& out, const RayRecord&
   return estimate;
 }
 
-/// The keys that serve one pixel as nodes: the inner pair around t (inner[0] before it,
-/// inner[1] after it) and the next key out on either side (outer, −1 where there is none). A
-/// partial key serves only the pixels it knows (PathKey::known).
-struct PixelNodes
+/// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike;
+/// sets `estimate` as the header says.
+RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                       const Scene& scene, PathMethod& method, float& estimate)
 {
-  int inner[2] = { -1, -1 };
-  int outer[2] = { -1, -1 };
-};
-
-bool knows(const PathKey& key, std::size_t p)
-{
-  return !key.known || (*key.known)[p] != 0;
-}
-
-/// The nodes of pixel p around t, between the full keys fa and fb around t (partial keys lie
-/// between them in `keys` where they lie between them in s).
-PixelNodes nodesOf(const std::vector<PathKey>& keys, int fa, int fb, std::size_t p, double t)
-{
-  PixelNodes nodes;
-  int before = fa, after = fb;
-  // Partial keys between the full pair, nearer t, take their place where they know the pixel.
-  for (int k = fa + 1; k < fb; ++k)
-    if (knows(keys[static_cast<std::size_t>(k)], p))
-    {
-      if (keys[static_cast<std::size_t>(k)].s < t)
-        before = k;
-      else
-      {
-        after = k;
-        break;
-      }
-    }
-  nodes.inner[0] = before;
-  nodes.inner[1] = after;
-  for (int k = before - 1; k >= 0; --k)
-    if (knows(keys[static_cast<std::size_t>(k)], p))
-    {
-      nodes.outer[0] = k;
-      break;
-    }
-  for (int k = after + 1; k < static_cast<int>(keys.size()); ++k)
-    if (knows(keys[static_cast<std::size_t>(k)], p))
-    {
-      nodes.outer[1] = k;
-      break;
-    }
-  return nodes;
-}
-
-const RayRecord& recordOf(const std::vector<PathKey>& keys, int k, std::size_t p)
-{
-  return (*keys[static_cast<std::size_t>(k)].records)[p];
-}
-
-double sOf(const std::vector<PathKey>& keys, int k)
-{
-  return keys[static_cast<std::size_t>(k)].s;
-}
-
-/// The prediction of one pixel from its inner pair and the outer nodes that end alike; sets
-/// `estimate` as the header says.
-RayRecord predictPixel(const std::vector<PathKey>& keys, const PixelNodes& nd, std::size_t p,
-                       double t, const Scene& scene, PathMethod& method, float& estimate)
-{
-  const RayRecord* inner[2] = { &recordOf(keys, nd.inner[0], p), &recordOf(keys, nd.inner[1], p) };
-  const bool left = nd.outer[0] >= 0 && singleRay(recordOf(keys, nd.outer[0], p)) &&
-                    endAlike(recordOf(keys, nd.outer[0], p), *inner[0]);
-  const bool right = nd.outer[1] >= 0 && singleRay(recordOf(keys, nd.outer[1], p)) &&
-                     endAlike(*inner[1], recordOf(keys, nd.outer[1], p));
+  const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
+  const bool left =
+    a > 0 && singleRay((*keys[a - 1].records)[p]) && endAlike((*keys[a - 1].records)[p], *inner[0]);
+  const bool right = a + 2 < keys.size() && singleRay((*keys[a + 2].records)[p]) &&
+                     endAlike(*inner[1], (*keys[a + 2].records)[p]);
   const RayRecord* nodes[4];
   double s[4];
   int n = 0;
-  const int order[4] = { left ? nd.outer[0] : -1, nd.inner[0], nd.inner[1],
-                         right ? nd.outer[1] : -1 };
-  for (int k : order)
-    if (k >= 0)
-    {
-      nodes[n] = &recordOf(keys, k, p);
-      s[n++] = sOf(keys, k);
-    }
+  const std::size_t first = left ? a - 1 : a, last = right ? a + 2 : a + 1;
+  for (std::size_t k = first; k <= last; ++k)
+  {
+    nodes[n] = &(*keys[k].records)[p];
+    s[n++] = keys[k].s;
+  }
   RayRecord out = predictRecord(nodes, s, n, t);
   out.color = shadePrediction(scene, out);
-  const double sa = sOf(keys, nd.inner[0]), sb = sOf(keys, nd.inner[1]);
   if (n == 2)
   {
     // One order lower is the nearer key itself: its (u, v) shows how far the pixel moved on the
     // texture, and the keys' colour step what lies along the way.
     method = PathMethod::Linear;
-    const RayRecord& nearer = t - sa <= sb - t ? *inner[0] : *inner[1];
+    const RayRecord& nearer = t - keys[a].s <= keys[a + 1].s - t ? *inner[0] : *inner[1];
     estimate =
       std::max(colorError2(inner[0]->color, inner[1]->color), predictionError(scene, out, nearer));
     return out;
   }
   method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
   // One order lower: without the outer node farther from t (the left one on a tie).
-  const bool dropLeft =
-    left && (!right || t - sOf(keys, nd.outer[0]) >= sOf(keys, nd.outer[1]) - t);
+  const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   const int offset = dropLeft ? 1 : 0;
   const RayRecord lower = predictRecord(nodes + offset, s + offset, n - 1, t);
   estimate = predictionError(scene, out, lower);
@@ -226,27 +151,25 @@ float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, 
 /// orbit, with the edges in place) only the other side's share of its motion is left to the
 /// interpolation, not the whole of it; where the edge moves, the rest follows α as the colour
 /// itself would. The record is the centre ray's prediction, colour aside.
-RayRecord predictEdgePixel(const std::vector<PathKey>& keys, const PixelNodes& nd, std::size_t p,
-                           double t, int width, int height, const Scene& scene, PathMethod& method,
+RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                           int width, int height, const Scene& scene, PathMethod& method,
                            float& estimate)
 {
-  const RayRecord& ra = recordOf(keys, nd.inner[0], p);
-  const RayRecord& rb = recordOf(keys, nd.inner[1], p);
-  const bool left = nd.outer[0] >= 0 && endAlike(recordOf(keys, nd.outer[0], p), ra);
-  const bool right = nd.outer[1] >= 0 && endAlike(rb, recordOf(keys, nd.outer[1], p));
-  const int order[4] = { left ? nd.outer[0] : -1, nd.inner[0], nd.inner[1],
-                         right ? nd.outer[1] : -1 };
+  const RayRecord& ra = (*keys[a].records)[p];
+  const RayRecord& rb = (*keys[a + 1].records)[p];
+  const bool left = a > 0 && endAlike((*keys[a - 1].records)[p], ra);
+  const bool right = a + 2 < keys.size() && endAlike(rb, (*keys[a + 2].records)[p]);
+  const std::size_t first = left ? a - 1 : a, last = right ? a + 2 : a + 1;
   const RayRecord* nodes[4];
   double s[4], w[4];
   Color rest[4];
   int n = 0;
-  for (int k : order)
-    if (k >= 0)
-    {
-      nodes[n] = &recordOf(keys, k, p);
-      rest[n] = nodes[n]->color - shadePrediction(scene, *nodes[n]);
-      s[n++] = sOf(keys, k);
-    }
+  for (std::size_t k = first; k <= last; ++k)
+  {
+    nodes[n] = &(*keys[k].records)[p];
+    rest[n] = nodes[n]->color - shadePrediction(scene, *nodes[n]);
+    s[n++] = keys[k].s;
+  }
   // The prediction through the nodes from `offset` on, `count` of them.
   auto blend = [&](int offset, int count)
   {
@@ -258,26 +181,24 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, const PixelNodes& n
     centre.color = out.cwiseMax(0.0).cwiseMin(1.0);
     return centre;
   };
-  const int nearerKey =
-    t - sOf(keys, nd.inner[0]) <= sOf(keys, nd.inner[1]) - t ? nd.inner[0] : nd.inner[1];
-  const std::vector<RayRecord>& nearer = *keys[static_cast<std::size_t>(nearerKey)].records;
+  const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
   RayRecord out = blend(0, n);
   // The record is the centre ray's prediction at t; its rays are the nearer key's (the
   // anti-aliasing an edge pixel took).
-  out.raysPerPixel = nearer[p].raysPerPixel;
+  out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
   method = PathMethod::EdgeBlend;
   if (n == 2)
   {
-    estimate = std::max(colorError2(ra.color, rb.color), edgeContrast(nearer, p, width, height));
+    estimate = std::max(colorError2(ra.color, rb.color),
+                        edgeContrast(*keys[nearerKey].records, p, width, height));
     return out;
   }
-  const bool dropLeft =
-    left && (!right || t - sOf(keys, nd.outer[0]) >= sOf(keys, nd.outer[1]) - t);
+  const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
   // roughly: the keys' colour step bounds what the edge's motion can change in between.
   estimate = std::max(colorError2(out.color, blend(dropLeft ? 1 : 0, n - 1).color),
                       colorError2(ra.color, rb.color));
-  estimate = std::max(estimate, edgeContrast(nearer, p, width, height));
+  estimate = std::max(estimate, edgeContrast(*keys[nearerKey].records, p, width, height));
   return out;
 }
 
@@ -695,43 +616,34 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   f.height = height;
   f.t = t;
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  // The full keys' inner pair (fa, fb) brackets t; the partial keys between them serve the
-  // pixels they know as nearer nodes (nodesOf).
-  std::vector<PathKey> fullKeys;
-  std::vector<int> fullIndex;
-  for (std::size_t k = 0; k < keys.size(); ++k)
-    if (!keys[k].known)
-    {
-      fullKeys.push_back(keys[k]);
-      fullIndex.push_back(static_cast<int>(k));
-    }
+  // The inner pair (a, a + 1) brackets t.
   std::size_t a = 0;
-  while (a + 2 < fullKeys.size() && fullKeys[a + 1].s <= t)
+  while (a + 2 < keys.size() && keys[a + 1].s <= t)
     ++a;
-  const int fa = fullIndex[a], fb = fullIndex[a + 1];
   for (const std::size_t k : { a, a + 1 })
-    if (fullKeys[k].s == t)
+    if (keys[k].s == t)
     {
-      f.records = *fullKeys[k].records;
+      f.records = *keys[k].records;
       f.estimate.assign(n, 0.0f);
       f.method.assign(n, static_cast<std::uint8_t>(PathMethod::Key));
       return f;
     }
+  const std::vector<RayRecord>& ka = *keys[a].records;
+  const std::vector<RayRecord>& kb = *keys[a + 1].records;
+  const bool nearerA = t - keys[a].s <= keys[a + 1].s - t;
   std::vector<std::uint8_t> disagree(n, 0);
-  f.innerKeys[0].resize(n);
-  f.innerKeys[1].resize(n);
   for (std::size_t p = 0; p < n; ++p)
-  {
-    const PixelNodes nd = nodesOf(keys, fa, fb, p, t);
-    const RayRecord& ra = recordOf(keys, nd.inner[0], p);
-    const RayRecord& rb = recordOf(keys, nd.inner[1], p);
-    disagree[p] = !endAlike(ra, rb);
-    f.innerKeys[0][p] = surfaceOf(ra);
-    f.innerKeys[1][p] = surfaceOf(rb);
-  }
+    disagree[p] = !endAlike(ka[p], kb[p]);
   f.records.resize(n);
   f.estimate.resize(n);
   f.method.resize(n);
+  for (int k = 0; k < 2; ++k)
+  {
+    const std::vector<RayRecord>& key = k == 0 ? ka : kb;
+    f.innerKeys[k].resize(n);
+    for (std::size_t p = 0; p < n; ++p)
+      f.innerKeys[k][p] = surfaceOf(key[p]);
+  }
   // Per pixel near a disagreement that the inner keys agree on, its own prediction, which the
   // moved edge is held against (flag 1: there is one).
   std::vector<RayRecord> own;
@@ -747,9 +659,6 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
     for (int i = 0; i < width; ++i)
     {
       const std::size_t p = static_cast<std::size_t>(j) * width + i;
-      const PixelNodes nd = nodesOf(keys, fa, fb, p, t);
-      const RayRecord& ra = recordOf(keys, nd.inner[0], p);
-      const RayRecord& rb = recordOf(keys, nd.inner[1], p);
       // An edge that moved between the keys may cross the disagreeing pixels' neighbours at t.
       bool near = false;
       for (int dj = -1; dj <= 1 && !near; ++dj)
@@ -761,30 +670,27 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
         }
       if (near)
       {
-        const bool nearerA = t - sOf(keys, nd.inner[0]) <= sOf(keys, nd.inner[1]) - t;
-        f.records[p] = nearerA ? ra : rb;
+        f.records[p] = nearerA ? ka[p] : kb[p];
         f.estimate[p] = unknown;
         f.method[p] = static_cast<std::uint8_t>(PathMethod::Retrace);
-        if (options.movedEdges && !disagree[p] && singleRay(ra) && singleRay(rb))
+        if (options.movedEdges && !disagree[p] && singleRay(ka[p]) && singleRay(kb[p]))
         {
           PathMethod m;
           float e;
-          own[p] = predictPixel(keys, nd, p, t, scene, m, e);
+          own[p] = predictPixel(keys, a, p, t, scene, m, e);
           hasOwn[p] = 1;
         }
         continue;
       }
       PathMethod m;
-      if (!singleRay(ra) || !singleRay(rb))
-        f.records[p] = predictEdgePixel(keys, nd, p, t, width, height, scene, m, f.estimate[p]);
+      if (!singleRay(ka[p]) || !singleRay(kb[p]))
+        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, scene, m, f.estimate[p]);
       else
-        f.records[p] = predictPixel(keys, nd, p, t, scene, m, f.estimate[p]);
+        f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
       f.method[p] = static_cast<std::uint8_t>(m);
     }
-  // Moved edges follow the full keys' scene points.
   if (options.movedEdges)
-    predictEdges(fullKeys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
-                 f);
+    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges, f);
   return f;
 }
 

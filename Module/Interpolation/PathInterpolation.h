@@ -10,9 +10,6 @@
 //    between the keys may cross them at t): these are predicted by moving the keys' scene points
 //    across the picture (PathEdges.h, PathMethod::MovedEdge), and re-traced where no moved point
 //    covers them (or, without PathOptions::movedEdges, all re-traced).
-//  - Partial keys. A frame interpolated before knows the pixels it traced (PathKey::known); where
-//    it lies nearer t than a whole key, its records of those pixels are the nodes instead. An edge
-//    the whole keys disagree on has moved less between it and t, so fewer pixels must be traced.
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
@@ -64,11 +61,6 @@ struct PathKey
 {
   double s = 0;
   const std::vector<RayRecord>* records = nullptr;
-  /// A partial key (a frame interpolated before, with the pixels it traced): per pixel, nonzero
-  /// where its record was traced at s and so serves as a node; null for a whole key, whose every
-  /// record does. Partial keys serve as the nearest nodes of the pixels they know (an edge that
-  /// the whole keys around t disagree on may have moved less between a partial key and t).
-  const std::vector<std::uint8_t>* known = nullptr;
 };
 
 /// How a pixel of a path frame got its record.
@@ -156,10 +148,7 @@ struct PathOptions
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within
-/// [s_first, s_last], every key `width` × `height` records of the same pixels; the first and the
-/// last whole, and t no partial key's s). Per pixel, the inner pair is the nearest keys around t
-/// that know it, and the outer nodes the next ones out that know it; moved edges follow the whole
-/// keys' points. Throws
+/// [s_first, s_last], every key `width` × `height` records of the same pixels). Throws
 /// InvalidParameter naming what is wrong, also for moved edges without a point index.
 ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t,
                                                         int width, int height, const Scene& scene,

@@ -840,38 +840,11 @@ catch (...)
 }
 
 void RayStore::recordInterpolatedFrame(const SceneDescription& scene, const std::string& recipe,
-                                       const std::vector<std::int64_t>& keys,
-                                       const std::vector<std::string>& partials)
+                                       const std::vector<std::int64_t>& keys)
 {
   const storage::SceneTexts texts = storage::sceneTexts(scene);
   this->P->requireSchema();
-  storage::recordInterpolatedKeys(this->P->conn(), texts, recipe, keys, partials);
-}
-
-std::vector<std::string> RayStore::interpolatedFramePartials(const SceneDescription& scene,
-                                                             const std::string& recipe)
-try
-{
-  const storage::SceneTexts texts = storage::sceneTexts(scene);
-  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
-  this->P->requireSchema();
-  return storage::interpolatedPartials(this->P->conn(), texts, recipe);
-}
-catch (...)
-{
-  storage::rethrowReadFailure(this->P->Limits);
-}
-
-std::string RayStore::frameHash(const SceneDescription& scene)
-try
-{
-  const storage::SceneTexts texts = storage::sceneTexts(scene);
-  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
-  return storage::frameHashOf(this->P->conn(), texts);
-}
-catch (...)
-{
-  storage::rethrowReadFailure(this->P->Limits);
+  storage::recordInterpolatedKeys(this->P->conn(), texts, recipe, keys);
 }
 
 std::optional<std::vector<std::int64_t>> RayStore::interpolatedFrameKeys(

@@ -188,7 +188,7 @@ class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 9;
+  static constexpr int kSchemaVersion = 8;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
   /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5, 264
@@ -325,36 +325,25 @@ public:
   std::optional<std::int64_t> findFrame(const SceneDescription& scene);
   /// Records that the frame of `scene` (the scene at its parameters, not stored whole) was
   /// interpolated by `recipe` (a non-empty text naming how: its quality target, what it is held
-  /// to) between the complete stored frames `keys`, in order (1 to 16), and the partial keys
-  /// `partials` (0 to 16 frame hashes, frameHash(), of interpolated frames recorded with the same
-  /// recipe, whose traced pixels served as nodes); replaces an earlier record of the same frame and
-  /// recipe. Throws StoreError naming what is wrong: an empty recipe, a key count outside 1..16, a
-  /// key that is no complete frame, more than 16 partial keys, a hash that is none, or a partial
-  /// key not recorded with the recipe.
+  /// to) between the complete stored frames `keys`, in order (1 to 16); replaces an earlier record
+  /// of the same frame and recipe. Throws StoreError naming what is wrong: an empty recipe, a key
+  /// count outside 1..16, or a key that is no complete frame.
   void recordInterpolatedFrame(const SceneDescription& scene, const std::string& recipe,
-                               const std::vector<std::int64_t>& keys,
-                               const std::vector<std::string>& partials = {});
+                               const std::vector<std::int64_t>& keys);
   /// The keys recorded for the frame of `scene` and `recipe`, if any (they may have been deleted
   /// since).
   std::optional<std::vector<std::int64_t>> interpolatedFrameKeys(const SceneDescription& scene,
                                                                  const std::string& recipe);
-  /// The partial keys recorded for the frame of `scene` and `recipe` (their frame hashes, in the
-  /// order recorded): empty if none, or no record.
-  std::vector<std::string> interpolatedFramePartials(const SceneDescription& scene,
-                                                     const std::string& recipe);
-  /// The identity hash of the frame of `scene` (the scene at its parameters), as the store keys
-  /// it: SHA-256 of its identity text, 64 lowercase hex digits.
-  std::string frameHash(const SceneDescription& scene);
 
   /// The reads are upgrade(), schemaVersion(), listFrames(), frameInfo(), frameSceneText(),
-  /// findFrame(), interpolatedFrameKeys(), interpolatedFramePartials(), frameHash(),
-  /// checkFrameIdentity(), abandonedFrames(), readFrame() and readPaths(). How long each statement
-  /// of a read waits for a lock that another session holds (LOCK TABLE, a migration under way, ...)
-  /// before the read gives up: StoreError "<what failed>: the frames table is locked by another
-  /// session; gave up after 30 s" (SQLSTATE 55P03). Zero: reads wait as long as a lock is held.
-  /// Default kDefaultReadLockTimeout. Writes wait for locks as long as it takes
-  /// (FrameWriteOptions::cancelled stops them); the tidying up after others' failed or deleted
-  /// writes that reads do in passing gives way to a lock at once and is left for later.
+  /// findFrame(), interpolatedFrameKeys(), checkFrameIdentity(), abandonedFrames(), readFrame() and
+  /// readPaths(). How long each statement of a read waits for a lock that another session holds
+  /// (LOCK TABLE, a migration under way, ...) before the read gives up: StoreError "<what failed>:
+  /// the frames table is locked by another session; gave up after 30 s" (SQLSTATE 55P03). Zero:
+  /// reads wait as long as a lock is held. Default kDefaultReadLockTimeout. Writes wait for locks
+  /// as long as it takes (FrameWriteOptions::cancelled stops them); the tidying up after others'
+  /// failed or deleted writes that reads do in passing gives way to a lock at once and is left for
+  /// later.
   static constexpr std::chrono::milliseconds kDefaultReadLockTimeout{ 30000 };
   /// Throws StoreError for a negative timeout or one beyond PostgreSQL's (about 24 days).
   void setReadLockTimeout(std::chrono::milliseconds t);

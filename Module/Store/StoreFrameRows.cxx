@@ -443,81 +443,36 @@ void checkFrameSize(std::int64_t id, int width, int height, std::int64_t rayCoun
 namespace storage
 {
 void recordInterpolatedKeys(PGconn* conn, const SceneTexts& texts, const std::string& recipe,
-                            const std::vector<std::int64_t>& keys,
-                            const std::vector<std::string>& partials)
+                            const std::vector<std::int64_t>& keys)
 {
   if (recipe.empty() || keys.empty() || keys.size() > 16)
     throw StoreError("recording an interpolated frame: " +
                      (recipe.empty() ? std::string("the recipe is empty")
                                      : std::to_string(keys.size()) + " keys (1 to 16)"));
-  if (partials.size() > 16)
-    throw StoreError("recording an interpolated frame: " + std::to_string(partials.size()) +
-                     " partial keys (at most 16)");
   std::string array = "{";
   for (std::int64_t id : keys)
     array += (array.size() > 1 ? "," : "") + std::to_string(id);
   array += "}";
-  std::string hashes = "{";
-  for (const std::string& h : partials)
-  {
-    const bool hex = h.size() == 64 && h.find_first_not_of("0123456789abcdef") == std::string::npos;
-    if (!hex)
-      throw StoreError("recording an interpolated frame: partial key '" + h.substr(0, 80) +
-                       "' is no frame hash (64 lowercase hex digits)");
-    hashes += (hashes.size() > 1 ? "," : "") + h;
-  }
-  hashes += "}";
-  // Written only when every key is a complete frame and every partial key an interpolated frame
-  // recorded with the recipe: a record never names a key that is not there to make the frame from.
+  // Written only when every key is a complete frame: a record never names a key that is not
+  // there to make the frame from.
   pg::Result r =
     pg::Params()
       .bytes(texts.frame)
       .text(recipe)
       .text(array)
-      .text(hashes)
-      .exec(conn,
-            "WITH p AS (SELECT ARRAY(SELECT decode(h, 'hex') FROM unnest($4::text[]) WITH "
-            "ORDINALITY AS u (h, n) ORDER BY n) AS hashes) "
-            "INSERT INTO interpolated_frames (frame_hash, recipe, key_frame_ids, "
-            "partial_frame_hashes) SELECT sha256($1), $2, $3::bigint[], p.hashes FROM p "
-            "WHERE (SELECT count(*) FROM frames WHERE id = ANY ($3::bigint[]) AND status = "
-            "'complete') = (SELECT count(DISTINCT k) FROM unnest($3::bigint[]) k) "
-            "AND (SELECT count(*) FROM interpolated_frames f WHERE f.recipe = $2 AND "
-            "f.frame_hash = ANY (p.hashes)) = (SELECT count(DISTINCT h) FROM unnest(p.hashes) h) "
-            "ON CONFLICT (frame_hash, recipe) DO UPDATE SET key_frame_ids = "
-            "EXCLUDED.key_frame_ids, partial_frame_hashes = EXCLUDED.partial_frame_hashes, "
-            "created_at = now() RETURNING 1",
-            "recording an interpolated frame failed");
+      .exec(
+        conn,
+        "INSERT INTO interpolated_frames (frame_hash, recipe, key_frame_ids) SELECT sha256($1), "
+        "$2, "
+        "$3::bigint[] WHERE (SELECT count(*) FROM frames WHERE id = ANY ($3::bigint[]) AND status "
+        "= "
+        "'complete') = (SELECT count(DISTINCT k) FROM unnest($3::bigint[]) k) ON CONFLICT "
+        "(frame_hash, recipe) DO UPDATE SET key_frame_ids = EXCLUDED.key_frame_ids, created_at = "
+        "now() RETURNING 1",
+        "recording an interpolated frame failed");
   if (PQntuples(r.get()) == 0)
     throw StoreError("recording an interpolated frame: a key of " + array +
-                     " is no complete stored frame, or a partial key of " + hashes +
-                     " no interpolated frame recorded with the recipe");
-}
-
-std::vector<std::string> interpolatedPartials(PGconn* conn, const SceneTexts& texts,
-                                              const std::string& recipe)
-{
-  pg::Result r = pg::Params()
-                   .bytes(texts.frame)
-                   .text(recipe)
-                   .exec(conn,
-                         "SELECT encode(u.h, 'hex') FROM interpolated_frames f, "
-                         "unnest(f.partial_frame_hashes) WITH ORDINALITY AS u (h, n) "
-                         "WHERE f.frame_hash = sha256($1) AND f.recipe = $2 ORDER BY u.n",
-                         "looking for the interpolated frame's partial keys failed");
-  std::vector<std::string> hashes;
-  for (int row = 0; row < PQntuples(r.get()); ++row)
-    hashes.push_back(PQgetvalue(r.get(), row, 0));
-  return hashes;
-}
-
-std::string frameHashOf(PGconn* conn, const SceneTexts& texts)
-{
-  pg::Result r =
-    pg::Params()
-      .bytes(texts.frame)
-      .exec(conn, "SELECT encode(sha256($1), 'hex')", "hashing the frame's identity failed");
-  return PQgetvalue(r.get(), 0, 0);
+                     " is no complete stored frame");
 }
 
 std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const SceneTexts& texts,

@@ -113,19 +113,11 @@ void checkPaths(const SceneDescription& scene, const std::vector<RayPath>& paths
 void copyPaths(PGconn* conn, std::int64_t frameId, const std::vector<RayPath>& paths);
 /// The paths of frame `id`, in the order written.
 std::vector<RayPath> readPathRows(PGconn* conn, std::int64_t id);
-/// The keys and partial keys an interpolated frame was made from
-/// (RayStore::recordInterpolatedFrame): recorded, replacing an earlier record of the frame and
-/// recipe; throws StoreError for an empty recipe, a key count outside 1..16, a key that is no
-/// complete frame, more than 16 partial keys, a hash that is none, or a partial key not recorded
-/// with the recipe.
+/// The keys an interpolated frame was made from (RayStore::recordInterpolatedFrame): recorded,
+/// replacing an earlier record of the frame and recipe; throws StoreError for an empty recipe, a
+/// key count outside 1..16, or a key that is no complete frame.
 void recordInterpolatedKeys(PGconn* conn, const SceneTexts& texts, const std::string& recipe,
-                            const std::vector<std::int64_t>& keys,
-                            const std::vector<std::string>& partials);
-/// The partial keys recorded for the frame of `texts` and `recipe` (hex frame hashes), in order.
-std::vector<std::string> interpolatedPartials(PGconn* conn, const SceneTexts& texts,
-                                              const std::string& recipe);
-/// SHA-256 of the frame's identity text, as frame_hash holds it, in lowercase hex.
-std::string frameHashOf(PGconn* conn, const SceneTexts& texts);
+                            const std::vector<std::int64_t>& keys);
 /// The keys recorded for the frame of `texts` and `recipe`, in order, if any.
 std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const SceneTexts& texts,
                                                           const std::string& recipe);

@@ -664,13 +664,5 @@ CREATE TABLE interpolated_frames (
   created_at timestamptz NOT NULL DEFAULT now(),
   PRIMARY KEY (frame_hash, recipe));
 )SQL";
-const char* const SchemaV9 = R"SQL(
--- The interpolated frames (frame_hash, under the same recipe) whose traced pixels served as the
--- nearest nodes of the pixels they traced, besides the key frames. Making the frame again from
--- the same keys and the same partial keys asks for the same re-traced pixels.
-ALTER TABLE interpolated_frames
-  ADD COLUMN partial_frame_hashes bytea[] NOT NULL DEFAULT '{}'
-    CHECK (cardinality(partial_frame_hashes) <= 16);
-)SQL";
 }
 }

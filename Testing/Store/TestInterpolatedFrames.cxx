@@ -1,7 +1,6 @@
 // The record of which stored frames an interpolated frame was made from: written and read back in
 // order, replaced for the same frame and recipe, kept apart per recipe and per frame, refused for a
-// key that is no complete frame (nothing written), and created by the migration from version 7;
-// its partial keys (other interpolated frames, by frame hash) since version 9.
+// key that is no complete frame (nothing written), and created by the migration from version 7.
 #include "RayStore.h"
 #include "SharedServer.h"
 #include "StoreTestSupport.h"
@@ -100,67 +99,4 @@ TEST(InterpolatedFrames, AVersionSevenStoreGainsTheTable)
   const std::int64_t a = store.writeFrame(scene(0.1), "key", syntheticRecords(1));
   store.recordInterpolatedFrame(scene(0.2), "quality=35", { a });
   EXPECT_EQ(store.interpolatedFrameKeys(scene(0.2), "quality=35"), (Keys{ { a } }));
-}
-
-TEST(InterpolatedFrames, PartialKeysComeBackInOrderAndMustBeRecordedWithTheRecipe)
-{
-  const std::string ci = freshDatabase();
-  RayStore store(ci);
-  store.migrate();
-  Db db(ci);
-  const std::int64_t a = store.writeFrame(scene(0.1), "key", syntheticRecords(1));
-  const std::int64_t b = store.writeFrame(scene(0.3), "key", syntheticRecords(2));
-  const asrt::SceneDescription p1 = scene(0.2), p2 = scene(0.25), t = scene(0.22);
-  store.recordInterpolatedFrame(p1, "q35", { a, b });
-  store.recordInterpolatedFrame(p2, "q35", { a, b });
-  // The hash is the one the store keys the record by.
-  const std::string h1 = store.frameHash(p1), h2 = store.frameHash(p2);
-  EXPECT_EQ(h1.size(), 64u);
-  EXPECT_EQ(store.frameHash(scene(0.2)), h1);
-  EXPECT_NE(h1, h2);
-  EXPECT_EQ(db.value("SELECT string_agg(encode(frame_hash, 'hex'), ',' ORDER BY "
-                     "encode(frame_hash, 'hex')) FROM interpolated_frames"),
-            std::min(h1, h2) + "," + std::max(h1, h2));
-
-  EXPECT_TRUE(store.interpolatedFramePartials(t, "q35").empty());
-  store.recordInterpolatedFrame(t, "q35", { a, b }, { h2, h1 });
-  EXPECT_EQ(store.interpolatedFramePartials(t, "q35"), (std::vector<std::string>{ h2, h1 }));
-  EXPECT_EQ(store.interpolatedFrameKeys(t, "q35"), (Keys{ { a, b } }));
-
-  // Refused, nothing written: a partial key recorded under another recipe only, a text that is no
-  // hash, too many.
-  const std::string otherRecipe = errorOf(
-    [&] {
-      store.recordInterpolatedFrame(t, "q40", { a, b }, { h1 });
-    });
-  EXPECT_NE(otherRecipe.find("no interpolated frame recorded with the recipe"), std::string::npos)
-    << otherRecipe;
-  EXPECT_EQ(store.interpolatedFrameKeys(t, "q40"), std::nullopt);
-  const std::string notHex =
-    errorOf([&] { store.recordInterpolatedFrame(t, "q35", { a }, { "0x" + h1.substr(2) }); });
-  EXPECT_NE(notHex.find("is no frame hash"), std::string::npos) << notHex;
-  const std::string tooMany = errorOf(
-    [&] { store.recordInterpolatedFrame(t, "q35", { a }, std::vector<std::string>(17, h1)); });
-  EXPECT_NE(tooMany.find("17 partial keys (at most 16)"), std::string::npos) << tooMany;
-  EXPECT_EQ(store.interpolatedFramePartials(t, "q35"), (std::vector<std::string>{ h2, h1 }));
-
-  // Recorded again without partial keys: replaced.
-  store.recordInterpolatedFrame(t, "q35", { a, b });
-  EXPECT_TRUE(store.interpolatedFramePartials(t, "q35").empty());
-}
-
-TEST(InterpolatedFrames, AVersionEightRecordGainsNoPartialKeys)
-{
-  const std::string ci = freshDatabase();
-  RayStore store(ci);
-  store.migrate(8);
-  Db db(ci);
-  EXPECT_EQ(db.value("INSERT INTO interpolated_frames (frame_hash, recipe, key_frame_ids) VALUES "
-                     "(sha256('a frame'), 'q35', '{7,3}') RETURNING 1"),
-            "1");
-  store.migrate();
-  EXPECT_EQ(store.schemaVersion(), RayStore::kSchemaVersion);
-  EXPECT_EQ(db.value("SELECT key_frame_ids::text || ' ' || cardinality(partial_frame_hashes) FROM "
-                     "interpolated_frames WHERE frame_hash = sha256('a frame')"),
-            "{7,3} 0");
 }
