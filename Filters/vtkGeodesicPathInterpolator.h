@@ -24,11 +24,12 @@
  * time in [0, K − 1] is rendered. The image has the source's arrays ("Colors" as scalars,
  * "ObjectId", "ImageOrder", "PathLength", "Termination", "RaysPerPixel") plus "PathMethod" (0 key,
  * 1 cubic, 2 quadratic, 3 linear, 4 to be re-traced, 5 re-traced, 6 edge blend, 7 moved edge:
- * near an edge the inner keys disagree on, from the keys' scene points moved to t) and
+ * near an edge the inner keys disagree on, from the keys' scene points moved to t, 8 moved
+ * surface: the same, with no edge within a pixel of it at t) and
  * "ErrorEstimate"
  * (the estimated squared colour error, summed over the channels in levels² of 255; infinite where
  * the keys cannot vouch for the pixel, 0 where traced). Field data: "PathParameter" (its value at
- * t), "PathMethodFractions" (the eight methods' shares), "RetracedPixels", "EstimatedPsnr" and
+ * t), "PathMethodFractions" (the nine methods' shares), "RetracedPixels", "EstimatedPsnr" and
  * "SettingsPsnr" (with a target), and the parameters at t ("Mass", "Spin", "Charge",
  * "CameraPosition", "FocalPoint", "ViewUp"), those of interpolating the two keys around t as
  * vtkGeodesicFrameInterpolator does.

@@ -596,7 +596,9 @@ void runRampStudy(double tStart)
       rankings.push_back(
         { h, f.mass, spearman(est, truth),
           plainBefore.counts()[static_cast<std::size_t>(PathMethod::Retrace)] / n, must / n,
-          plain.counts()[static_cast<std::size_t>(PathMethod::MovedEdge)] / n,
+          (plain.counts()[static_cast<std::size_t>(PathMethod::MovedEdge)] +
+           plain.counts()[static_cast<std::size_t>(PathMethod::MovedSurface)]) /
+            n,
           shareFor(byEstimate, must, err2, 35), shareFor(byTruth, must, err2, 35),
           shareFor(byEstimate, must, err2, 40), shareFor(byTruth, must, err2, 40) });
       if (detailed)

@@ -312,9 +312,10 @@ constexpr double kNeighbours[8][2] = { { -1, 0 },  { 1, 0 },  { 0, -1 }, { 0, 1 
 constexpr float kEdgeShare = 0.25f;
 
 /// The mean colour of the pixel's sub-positions as one way of moving predicts it; false if a
-/// sub-position is covered by nothing.
+/// sub-position is covered by nothing. `centre` (if given) and the sub-positions' records ending
+/// alike leave `alike` (if given) true.
 bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool linear, int sides,
-                Color& out)
+                Color& out, const RayRecord* centre = nullptr, bool* alike = nullptr)
 {
   out = Color::Zero();
   for (const auto& o : kSub)
@@ -323,7 +324,10 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
     const std::int64_t k = mover.front(x, y, linear, sides);
     if (k < 0)
       return false;
-    out += shadePrediction(scene, movedRecord(mover, k, x, y, linear, 1 / 3.0)) / 9.0;
+    const RayRecord r = movedRecord(mover, k, x, y, linear, 1 / 3.0);
+    if (centre && alike && !endAlike(*centre, r))
+      *alike = false;
+    out += shadePrediction(scene, r) / 9.0;
   }
   return true;
 }
@@ -348,10 +352,14 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     const int j = pixels[static_cast<std::size_t>(q)] / width;
     Color color;
     const std::int64_t centre = mover.front(i, j, false, 3);
-    if (centre < 0 || !subsampled(mover, scene, i, j, false, 3, color))
+    if (centre < 0)
+      continue;
+    const RayRecord centreRecord = movedRecord(mover, centre, i, j, false, 1.0);
+    bool oneSurface = true;
+    if (!subsampled(mover, scene, i, j, false, 3, color, &centreRecord, &oneSurface))
       continue;
     e.covered = true;
-    e.record = movedRecord(mover, centre, i, j, false, 1.0);
+    e.record = centreRecord;
     e.record.i = i;
     e.record.j = j;
     e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
@@ -374,16 +382,22 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
       e.record.color = sum / static_cast<double>(ways);
     // An edge within a pixel of it that every prediction moves alike may still lie a fraction of
     // a pixel off, which changes the pixel by that fraction of the contrast across the edge.
+    float contrast = 0.0f;
     for (const auto& o : kNeighbours)
     {
       const double x = i + o[0], y = j + o[1];
       const std::int64_t k = mover.front(x, y, false, 3);
-      if (k >= 0)
-        e.estimate = std::max(
-          e.estimate,
-          kEdgeShare *
-            colorError2(color, shadePrediction(scene, movedRecord(mover, k, x, y, false, 1.0))));
+      if (k < 0)
+      {
+        oneSurface = false;
+        continue;
+      }
+      const RayRecord r = movedRecord(mover, k, x, y, false, 1.0);
+      oneSurface = oneSurface && endAlike(centreRecord, r);
+      contrast = std::max(contrast, kEdgeShare * colorError2(color, shadePrediction(scene, r)));
     }
+    e.oneSurface = oneSurface;
+    e.estimate = std::max(e.estimate, contrast);
     if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
     {
       e.estimate = std::max(e.estimate, colorError2(color, own->color));

@@ -26,7 +26,11 @@
 //    ways may all move an edge alike and still misplace it by a fraction of a pixel (the keys
 //    place it only to their pixels' grain), which changes the pixel by that fraction of the
 //    contrast across it: so the estimate is also at least a quarter of the squared difference
-//    to what the moved points show at the centres of the 8 neighbours.
+//    to what the moved points show at the centres of the 8 neighbours. Where every moved point
+//    within a pixel of it (its sub-positions, its 8 neighbours' centres) ends alike with its
+//    centre's, no edge lies there at t and that contrast is the texture's: such a pixel is a way
+//    of predicting of its own (PathMethod::MovedSurface), whose probes calibrate its estimate
+//    apart from the pixels an edge crosses, whose errors are rarer and larger.
 // Private to ASRT::Interpolation. Deterministic: the result does not depend on the thread count.
 #ifndef asrt_PathEdges_h
 #define asrt_PathEdges_h
@@ -44,6 +48,9 @@ struct MovedEdgePixel
   bool covered = false; ///< false: no point covers the pixel at t (it must be re-traced)
   RayRecord record;     ///< the front point's at the pixel's centre, its colour the sub-samples'
   float estimate = 0;   ///< squared colour error summed over the channels
+  /// Whether the moved points at the pixel's sub-positions and its 8 neighbours' centres all end
+  /// alike with its centre's: no edge lies within a pixel of it at t (PathMethod::MovedSurface).
+  bool oneSurface = false;
 };
 
 /// Predicts the listed pixels (indices into the frame) of the frame at t from the keys, the

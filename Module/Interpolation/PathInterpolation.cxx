@@ -493,7 +493,8 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       const std::size_t p = static_cast<std::size_t>(pixels[k]);
       f.records[p] = moved[k].record;
       f.estimate[p] = moved[k].estimate;
-      f.method[p] = static_cast<std::uint8_t>(PathMethod::MovedEdge);
+      f.method[p] = static_cast<std::uint8_t>(moved[k].oneSurface ? PathMethod::MovedSurface
+                                                                  : PathMethod::MovedEdge);
     }
 }
 }
@@ -518,6 +519,8 @@ const char* toString(PathMethod m)
       return "edge";
     case PathMethod::MovedEdge:
       return "moved";
+    case PathMethod::MovedSurface:
+      return "msurface";
   }
   return "unknown";
 }

@@ -74,9 +74,12 @@ enum class PathMethod : std::uint8_t
   Retraced = 5,  ///< traced at t
   EdgeBlend =
     6, ///< an edge pixel: its centre ray predicted, the keys' colour beyond it interpolated
-  MovedEdge = 7 ///< near an edge the inner keys disagree on: from the keys' scene points, moved
+  MovedEdge = 7, ///< near an edge the inner keys disagree on: from the keys' scene points, moved
+  /// As MovedEdge, but the moved points within a pixel of it all end alike: no edge lies there at
+  /// t (calibrated apart from the pixels an edge crosses)
+  MovedSurface = 8
 };
-constexpr int kPathMethodCount = 8;
+constexpr int kPathMethodCount = 9;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
 
 /// What a key frame shows at a pixel: the surface, and how its ray ended there.
@@ -175,7 +178,8 @@ struct PathCompletion
 enum class EstimateScaling : std::uint8_t
 {
   /// The probes' true error over their estimates (Cochran's ratio estimate) raised by two of its
-  /// standard errors; at least 1 for edge blends and moved edges, whose errors are rare and large.
+  /// standard errors; at least 1 for edge blends and moved edges across an edge, whose errors are
+  /// rare and large.
   Ratio = 0,
   /// The probes' true error over their estimates, at least 1 for every way: the estimate only
   /// ever scaled up.
@@ -191,7 +195,8 @@ struct ProbePair
 /// The scale of way `m`'s estimates from its probes. Ratio: Cochran's ratio estimate
 /// R = Σ error / Σ estimate raised by two of its standard errors,
 /// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
-/// 3rd ed., § 6.3), at least 1 for edge blends and moved edges and at least 1/1024 for the others
+/// 3rd ed., § 6.3), at least 1 for edge blends and moved edges (PathMethod::MovedEdge) and at least
+/// 1/1024 for the others
 /// (their order of re-tracing kept where every probe came out exact). AtLeastOne: R, at least 1.
 /// 1 where the probes' estimates sum to 0 (or there are none).
 ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,
@@ -201,20 +206,19 @@ ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<Pr
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
 /// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
 /// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
-/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge):
-/// per way, as `scaling` says. What the chosen pixels leave
-/// untraced is bounded per way of predicting by the larger of its calibrated estimates and its
-/// probes placed at or below them in the order (at least 16): their mean error plus two standard
-/// errors, with one more probe of the way's typical error counted in, since probes that all came
-/// out exact show only that errors are rare. The estimated PSNR is infinite only when nothing
-/// predicted is left. Re-traced records are the full frame's, bit for bit
-/// (FrameTracer::tracePixels). Where a pixel traced at t (a must-retrace pixel, a probe, or one
-/// traced for the reason that follows) shows another surface than its own prediction and than the
-/// prediction of a neighbour (8-neighbours), and neither inner key showed that pair of surfaces on
-/// that pair of pixels, the edge between them is one that neither the keys nor the prediction put
-/// there (the tip of a silhouette that sweeps across pixels both keys show behind it): the
-/// neighbour is traced too, with the pixels within two of it predicted to show what it shows, and
-/// so on until the traced edges close.
+/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge,
+/// moved surface): per way, as `scaling` says. What the chosen pixels leave untraced is bounded per
+/// way of predicting by the larger of its calibrated estimates and its probes placed at or below
+/// them in the order (at least 16): their mean error plus two standard errors, with one more probe
+/// of the way's typical error counted in, since probes that all came out exact show only that
+/// errors are rare. The estimated PSNR is infinite only when nothing predicted is left. Re-traced
+/// records are the full frame's, bit for bit (FrameTracer::tracePixels). Where a pixel traced at t
+/// (a must-retrace pixel, a probe, or one traced for the reason that follows) shows another surface
+/// than its own prediction and than the prediction of a neighbour (8-neighbours), and neither inner
+/// key showed that pair of surfaces on that pair of pixels, the edge between them is one that
+/// neither the keys nor the prediction put there (the tip of a silhouette that sweeps across pixels
+/// both keys show behind it): the neighbour is traced too, with the pixels within two of it
+/// predicted to show what it shows, and so on until the traced edges close.
 ///
 /// The target is against the converged picture when `settingsMse` is the frame traced at t's
 /// own mean squared error against it (SettingsError.h; per channel, levels² of 255): the error

@@ -22,10 +22,14 @@ TEST(EstimateScale, ErrorsProportionalToTheEstimatesGiveTheirRatio)
   EXPECT_NEAR(asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::Ratio), 0.2, 1e-12);
   EXPECT_NEAR(asrt::estimateScale(PathMethod::Quadratic, probes, EstimateScaling::Ratio), 0.2,
               1e-12);
-  // Edge blends and moved edges keep at least 1; the old scaling floors every way at 1.
+  // Edge blends and moved edges across an edge keep at least 1; the old scaling floors every way
+  // at 1.
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio), 1.0);
   EXPECT_EQ(asrt::estimateScale(PathMethod::MovedEdge, probes, EstimateScaling::Ratio), 1.0);
   EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::AtLeastOne), 1.0);
+  // Moved pixels off the edges are scaled as the per-pixel predictions are.
+  EXPECT_NEAR(asrt::estimateScale(PathMethod::MovedSurface, probes, EstimateScaling::Ratio), 0.2,
+              1e-12);
   // Errors above the estimates are scaled up either way.
   for (ProbePair& q : probes)
     q.error = 3.0 * q.estimate;

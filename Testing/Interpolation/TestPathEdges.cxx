@@ -1,8 +1,9 @@
-// Moving edges along a path (PathInterpolation.h, PathMethod::MovedEdge) in flat space, where a
-// camera sliding sideways moves a sphere across the picture at a constant speed: the edge the
-// moved scene points predict lies within a pixel of the edge in a frame the test traces at t,
-// and the frame completed to a target meets it against that frame, re-tracing fewer pixels than
-// when every pixel near the edge is re-traced.
+// Moving edges along a path (PathInterpolation.h, PathMethod::MovedEdge and MovedSurface) in flat
+// space, where a camera sliding sideways moves a sphere across the picture at a constant speed: the
+// edge the moved scene points predict lies within a pixel of the edge in a frame the test traces
+// at t, the moved pixels classed as off the edges lie off them there, and the frame completed to a
+// target meets it against that frame, re-tracing fewer pixels than when every pixel near the edge
+// is re-traced.
 #include "FrameTracer.h"
 #include "GeodesicFrameMatching.h"
 #include "PathInterpolation.h"
@@ -162,6 +163,38 @@ TEST_F(PathEdges, TheMovedEdgeLiesWithinAPixelOfTheTracedOne)
   std::printf("[ edges ] the moved-edge pixels against the traced frame: %.1f dB\n", psnr);
   EXPECT_GT(count, 50.0);
   EXPECT_GT(psnr, 35.0);
+}
+
+// The moved pixels whose moved points within a pixel all end alike (PathMethod::MovedSurface) lie
+// off the edges in the frame the test traces at t: there the pixel and its 8 neighbours end alike
+// (but where the moved edge is a pixel off), as they do not for most of the moved pixels an edge
+// crosses (PathMethod::MovedEdge).
+TEST_F(PathEdges, MovedSurfacePixelsLieOffTheEdgesOfTheTracedFrame)
+{
+  const PathFrame f = interpolated(true);
+  const std::vector<RayRecord>& t = truth();
+  double off[2] = { 0, 0 }, count[2] = { 0, 0 };
+  for (int j = 1; j + 1 < kSide; ++j)
+    for (int i = 1; i + 1 < kSide; ++i)
+    {
+      const std::size_t p = static_cast<std::size_t>(j) * kSide + i;
+      const bool surface = f.method[p] == static_cast<std::uint8_t>(PathMethod::MovedSurface);
+      if (!surface && f.method[p] != static_cast<std::uint8_t>(PathMethod::MovedEdge))
+        continue;
+      bool alike = true;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di)
+          alike = alike && endAlike(t[p], t[static_cast<std::size_t>(j + dj) * kSide + i + di]);
+      off[surface] += alike;
+      count[surface] += 1;
+    }
+  std::printf("[ edges ] off the traced edges: %.0f of %.0f moved-surface pixels, %.0f of %.0f "
+              "moved-edge pixels\n",
+              off[1], count[1], off[0], count[0]);
+  ASSERT_GT(count[1], 20.0);
+  ASSERT_GT(count[0], 20.0);
+  EXPECT_GE(off[1], 0.9 * count[1]);
+  EXPECT_LE(off[0], 0.5 * count[0]);
 }
 
 TEST_F(PathEdges, AFrameMeetsItsTargetReTracingLessThanWithoutMovedEdges)
