@@ -183,6 +183,30 @@ std::string quotedArgument(const std::string& text)
   return "'" + text.substr(0, cut) + "...' (" + std::to_string(text.size()) + " characters)";
 }
 
+std::vector<bool> parseFormatList(const std::string& list, const std::vector<std::string>& known)
+{
+  std::string names;
+  for (const std::string& k : known)
+    names += (names.empty() ? "" : ", ") + k;
+  std::vector<bool> chosen(known.size(), false);
+  std::size_t from = 0;
+  while (from <= list.size())
+  {
+    const std::size_t comma = std::min(list.find(',', from), list.size());
+    const std::string item = list.substr(from, comma - from);
+    from = comma + 1;
+    if (item.empty())
+      continue;
+    const auto at = std::find(known.begin(), known.end(), item);
+    if (at == known.end())
+      throw UsageError("--formats: unknown format " + quotedArgument(item) + " (" + names + ")");
+    chosen[static_cast<std::size_t>(at - known.begin())] = true;
+  }
+  if (std::find(chosen.begin(), chosen.end(), true) == chosen.end())
+    throw UsageError("--formats: the list is empty; name one or more of " + names);
+  return chosen;
+}
+
 double parseNumber(const std::string& option, const std::string& text)
 {
   char* end = nullptr;

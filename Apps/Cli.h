@@ -108,6 +108,10 @@ std::string quotedArgument(const std::string& text);
 /// A number as typed: the whole text a decimal number, finite, and neither overflowing nor
 /// underflowing a double (1e-400 would read as 0); UsageError naming the option otherwise.
 double parseNumber(const std::string& option, const std::string& text);
+
+/// --formats LIST: which of `known` the comma-separated list names (empty items skipped), as a
+/// flag per name of `known`; UsageError for a name not among them, or for none.
+std::vector<bool> parseFormatList(const std::string& list, const std::vector<std::string>& known);
 int parsePositiveInteger(const std::string& option, const std::string& text);
 std::vector<double> parseNumbers(const std::string& option, const std::string& text,
                                  std::size_t count, char separator);

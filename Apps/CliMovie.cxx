@@ -33,7 +33,6 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <sstream>
 
 namespace asrt
 {
@@ -220,24 +219,10 @@ struct MovieOptions
 /// --formats LIST: which of png, vti and movie to write.
 void parseMovieFormats(const std::string& list, MovieOptions& m)
 {
-  m.png = m.vti = m.movie = false;
-  std::stringstream items(list);
-  std::string item;
-  while (std::getline(items, item, ','))
-  {
-    if (item.empty())
-      continue;
-    if (item == "png")
-      m.png = true;
-    else if (item == "vti")
-      m.vti = true;
-    else if (item == "movie")
-      m.movie = true;
-    else
-      throw UsageError("--formats: unknown format " + quotedArgument(item) + " (png, vti, movie)");
-  }
-  if (!m.png && !m.vti && !m.movie)
-    throw UsageError("--formats: the list is empty; name one or more of png, vti, movie");
+  const std::vector<bool> chosen = parseFormatList(list, { "png", "vti", "movie" });
+  m.png = chosen[0];
+  m.vti = chosen[1];
+  m.movie = chosen[2];
 }
 
 MovieOptions movieOptions(const Options& options)

@@ -30,7 +30,6 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
-#include <sstream>
 
 namespace asrt
 {
@@ -211,22 +210,11 @@ constexpr long long kHitsByDefaultPixels = 1000000;
 
 Formats parseFormats(const std::string& list)
 {
+  const std::vector<bool> chosen = parseFormatList(list, { "png", "vti", "vtp" });
   Formats f;
-  std::stringstream items(list);
-  std::string item;
-  while (std::getline(items, item, ','))
-  {
-    if (item == "png")
-      f.png = true;
-    else if (item == "vti")
-      f.vti = true;
-    else if (item == "vtp")
-      f.vtp = true;
-    else
-      throw UsageError("--formats: unknown format " + quotedArgument(item) + " (png, vti, vtp)");
-  }
-  if (!f.png && !f.vti && !f.vtp)
-    throw UsageError("--formats: the list is empty; name one or more of png, vti, vtp");
+  f.png = chosen[0];
+  f.vti = chosen[1];
+  f.vtp = chosen[2];
   return f;
 }
 
