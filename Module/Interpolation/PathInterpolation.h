@@ -8,8 +8,9 @@
 //    end alike too: 4 nodes give a cubic Lagrange prediction, 3 a quadratic, 2 a linear one.
 //    Otherwise the keys cannot vouch for the pixel, nor for its 8 neighbours (an edge that moves
 //    between the keys may cross them at t): these are predicted by moving the keys' scene points
-//    across the picture (PathEdges.h, PathMethod::MovedEdge), and re-traced where no moved point
-//    covers them (or, without PathOptions::movedEdges, all re-traced).
+//    across the picture (PathEdges.h, PathMethod::MovedEdge, or MovedSurface where no edge lies
+//    within a pixel of the pixel at t), and re-traced where no moved point covers them (or,
+//    without PathOptions::movedEdges, all re-traced).
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
@@ -196,8 +197,8 @@ struct ProbePair
 /// R = Σ error / Σ estimate raised by two of its standard errors,
 /// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
 /// 3rd ed., § 6.3), at least 1 for edge blends and moved edges (PathMethod::MovedEdge) and at least
-/// 1/1024 for the others
-/// (their order of re-tracing kept where every probe came out exact). AtLeastOne: R, at least 1.
+/// 1/1024 for the others (their order of re-tracing kept where every probe came out exact).
+/// AtLeastOne: R, at least 1.
 /// 1 where the probes' estimates sum to 0 (or there are none).
 ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,
                                               EstimateScaling scaling);
