@@ -4,6 +4,7 @@
 
 #include "CameraOrbit.h"
 #include "DataFiles.h"
+#include "GeodesicMovie.h"
 #include "Progress.h"
 #include "PvdCollection.h"
 #include "RayStore.h"
@@ -144,14 +145,7 @@ std::vector<FrameSetting> sweepFrames(const std::string& spec)
   {
     const double v = n == 1 ? from : from + (to - from) * k / (n - 1);
     frames.push_back({ parameter + " = " + formatNumber(v), [parameter, v](vtkGeodesicSource* s)
-                       {
-                         if (parameter == "mass")
-                           s->SetMass(v);
-                         else if (parameter == "spin")
-                           s->SetSpin(v);
-                         else
-                           s->SetCharge(v);
-                       } });
+                       { setRampParameter(s, parameter, v); } });
   }
   return frames;
 }

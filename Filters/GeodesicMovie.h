@@ -87,6 +87,11 @@ struct MoviePath
   std::vector<std::function<void(vtkGeodesicSource*)>> apply;
 };
 
+/// Sets `parameter` ("mass", "spin" or "charge") of the source to v. Throws InvalidParameter for
+/// another parameter.
+ASRTFILTERS_EXPORT void setRampParameter(vtkGeodesicSource* source, const std::string& parameter,
+                                         double v);
+
 /// The most frames of a movie.
 constexpr int kMaxMovieFrames = 10000;
 

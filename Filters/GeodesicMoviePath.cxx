@@ -14,6 +14,18 @@
 
 namespace asrt
 {
+void setRampParameter(vtkGeodesicSource* source, const std::string& parameter, double v)
+{
+  if (parameter == "mass")
+    source->SetMass(v);
+  else if (parameter == "spin")
+    source->SetSpin(v);
+  else if (parameter == "charge")
+    source->SetCharge(v);
+  else
+    throw InvalidParameter("ramp: unknown parameter '" + parameter + "' (mass, spin or charge)");
+}
+
 CameraPose sceneCameraOfText(const std::string& sceneText)
 {
   const SceneDescription scene = parseSceneWithoutImages(sceneText);
@@ -77,16 +89,8 @@ MoviePath rampMoviePath(const std::string& parameter, double from, double to, in
     // The formula of asrt trace --sweep, so that its frames are these frames.
     const double v = from + (to - from) * k / (n - 1);
     path.s.push_back(v);
-    path.apply.push_back(
-      [parameter, v](vtkGeodesicSource* src)
-      {
-        if (parameter == "mass")
-          src->SetMass(v);
-        else if (parameter == "spin")
-          src->SetSpin(v);
-        else
-          src->SetCharge(v);
-      });
+    path.apply.push_back([parameter, v](vtkGeodesicSource* src)
+                         { setRampParameter(src, parameter, v); });
   }
   return path;
 }
