@@ -576,6 +576,19 @@ std::vector<int> openFrames(std::size_t n, const std::map<int, std::vector<int>>
       open.push_back(k);
   return open;
 }
+
+/// The open frames' path parameters and whether each is stored whole: what a plan plans over.
+void openPath(const std::vector<MovieFrame>& frames, const std::vector<int>& open,
+              std::vector<double>& s, std::vector<bool>& stored)
+{
+  s.clear();
+  stored.clear();
+  for (int k : open)
+  {
+    s.push_back(frames[static_cast<std::size_t>(k)].s);
+    stored.push_back(frames[static_cast<std::size_t>(k)].storedId.has_value());
+  }
+}
 }
 
 void MovieMaker::findRecorded()
@@ -622,11 +635,7 @@ const MoviePlan& MovieMaker::plan()
   const std::vector<int> open = openFrames(n, this->Impl->recorded);
   std::vector<double> s;
   std::vector<bool> stored;
-  for (int k : open)
-  {
-    s.push_back(this->Frames[static_cast<std::size_t>(k)].s);
-    stored.push_back(this->Frames[static_cast<std::size_t>(k)].storedId.has_value());
-  }
+  openPath(this->Frames, open, s, stored);
   const std::size_t m = open.size();
   SpacingShareModel& share = this->Impl->share;
   share.pathLength = std::abs(s.back() - s.front());
@@ -697,11 +706,7 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
     const std::vector<int> open = openFrames(this->Frames.size(), this->Impl->recorded);
     std::vector<double> s;
     std::vector<bool> stored;
-    for (int k : open)
-    {
-      s.push_back(this->Frames[static_cast<std::size_t>(k)].s);
-      stored.push_back(this->Frames[static_cast<std::size_t>(k)].storedId.has_value());
-    }
+    openPath(this->Frames, open, s, stored);
     std::vector<bool> whole = stored;
     KeyMaking keyMaking;
     keyMaking.makeWhole = [&](int i)
