@@ -66,7 +66,8 @@ the share of its pixels re-traced, and the rays traced against tracing every fra
 With --store, every frame traced whole and every set of pixels re-traced is accumulated in
 PostgreSQL, and whatever is stored already is read instead of traced (whole frames whoever stored
 them: asrt trace --store with --sweep or --orbit of the same frame count stores the same frames).
-Running the same movie again traces nothing and writes the same bytes; a movie with more frames
+Running the same movie again traces nothing and writes the same bytes, from the pictures stored
+with its frames (a frame whose keys were deleted since is made again); a movie with more frames
 on the same path (2n - 1 after n) reads every old frame and traces only the new ones' pixels.
 
 The path (one of):
@@ -255,7 +256,26 @@ MovieOptions movieOptions(const Options& options)
   return m;
 }
 
-/// Makes every frame and writes it into the set, in order; fills `reports`.
+/// The encodings of a frame's pictures stored with it, and their versions: a change to what
+/// recordsToImage or the writers make of a frame takes a new version.
+constexpr const char* kPngPicture = "png.1";
+constexpr const char* kVtiPicture = "vti.1";
+
+/// The pictures a movie's outputs are written from: the PNG for the PNG frames and the movie
+/// file, the VTI for the VTI frames.
+std::vector<std::string> pictureFormats(const MovieOptions& settings)
+{
+  std::vector<std::string> formats;
+  if (settings.png || settings.movie)
+    formats.push_back(kPngPicture);
+  if (settings.vti)
+    formats.push_back(kVtiPicture);
+  return formats;
+}
+
+/// Makes every frame and writes it into the set, in order; fills `reports`. A frame whose
+/// pictures an earlier run stored with it is written from them, nothing else of it read; the
+/// others are made, and their pictures stored.
 void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFileSet& files,
                 tools::MovieWriter* movie, const std::string& prefix,
                 std::vector<MovieFrameReport>& reports)
@@ -267,31 +287,72 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   // The plan learns as its keys are made, so their count is known only at the end.
   double steps = static_cast<double>(maker.plan().keys().size() + static_cast<std::size_t>(n));
   double done = 0;
-  maker.makeKeys(
-    [&]
-    {
-      steps = std::max(steps, ++done + n);
-      bar.update(done / steps);
-    });
-  steps = done + n;
+  bool keysMade = false;
+  const auto makeKeys = [&]
+  {
+    maker.makeKeys(
+      [&]
+      {
+        steps = std::max(steps, ++done + n);
+        bar.update(done / steps);
+      });
+    steps = done + n;
+    keysMade = true;
+  };
+  const std::vector<std::string> formats = pictureFormats(settings);
+  const auto at = [&formats](const char* format)
+  {
+    return static_cast<std::size_t>(std::find(formats.begin(), formats.end(), format) -
+                                    formats.begin());
+  };
   tools::PvdCollection series;
   reports.assign(maker.frames().size(), MovieFrameReport());
   for (int k = 0; k < n; ++k)
   {
-    const std::vector<RayRecord> records = maker.frame(k, reports[static_cast<std::size_t>(k)]);
-    vtkNew<vtkImageData> image;
-    recordsToImage(records, maker.width(), 0, maker.height(), image);
+    MovieFrameReport& report = reports[static_cast<std::size_t>(k)];
+    std::optional<std::vector<std::string>> pictures = maker.storedPictures(k, formats, report);
+    vtkSmartPointer<vtkImageData> image;
+    if (!pictures)
+    {
+      if (!keysMade)
+        makeKeys();
+      const std::vector<RayRecord> records = maker.frame(k, report);
+      image = vtkSmartPointer<vtkImageData>::New();
+      recordsToImage(records, maker.width(), 0, maker.height(), image);
+    }
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
+    std::vector<std::string> made(formats.size());
     if (settings.png)
-      tools::writePng(image, files.add(prefix + number + ".png"));
+    {
+      tools::TemporaryFile& file = files.add(prefix + number + ".png");
+      if (pictures)
+        tools::writeBytes((*pictures)[at(kPngPicture)], file);
+      else
+        tools::writePng(image, file, &made[at(kPngPicture)]);
+    }
     if (settings.vti)
     {
-      tools::writeVti(image, files.add(prefix + number + ".vti"));
+      tools::TemporaryFile& file = files.add(prefix + number + ".vti");
+      if (pictures)
+        tools::writeBytes((*pictures)[at(kVtiPicture)], file);
+      else
+        tools::writeVti(image, file, tools::kXmlCompression, &made[at(kVtiPicture)]);
       series.add(k, prefix + number + ".vti");
     }
     if (movie)
+    {
+      // The PNG's colours are the frame's: the movie is the same from either.
+      if (pictures)
+        image = tools::readPng((*pictures)[at(kPngPicture)]);
       movie->addFrame(image);
+    }
+    if (!pictures)
+    {
+      if (!settings.png) // the movie file's frames alone: their picture is stored all the same
+        made[at(kPngPicture)] = tools::encodePng(image);
+      maker.storePictures(k, formats, made, report);
+    }
     stopIfInterrupted();
     bar.update(++done / steps);
   }

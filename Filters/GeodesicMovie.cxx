@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <utility>
 
 namespace asrt
@@ -108,6 +109,11 @@ struct MovieMaker::Internals
   /// stored: each is made again between exactly those keys, whatever keys the plan has.
   std::map<int, std::vector<int>> recorded;
   bool keysMade = false; ///< makeKeys() done: the plan is final
+  /// Whole frames whose rays are counted in the maker's totals (read, traced or served as
+  /// pictures): each counted once.
+  std::set<int> wholeCounted;
+  /// The rays the records of each interpolated frame's re-traced pixels hold, read or traced.
+  std::map<int, double> heldRays;
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -260,9 +266,12 @@ struct MovieMaking
       if (maker.Store)
         in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
     }
-    maker.RaysOfMovie += rays;
-    maker.RaysOfKeys += rays;
-    ++maker.WholeCount;
+    if (in.wholeCounted.insert(k).second)
+    {
+      maker.RaysOfMovie += rays;
+      maker.RaysOfKeys += rays;
+      ++maker.WholeCount;
+    }
     in.wholeRays[k] = rays;
     return in.whole.emplace(k, std::move(records)).first->second;
   }
@@ -352,6 +361,7 @@ struct MovieMaking
                                                       subset.subset.digest);
       if (auto found = this->known(k, subset, pixels))
       {
+        in.heldRays[k] += raysOf(*found);
         report.raysReused += raysOf(*found);
         if (!storeOnly)
         {
@@ -365,6 +375,7 @@ struct MovieMaking
       if (storeOnly)
         throw NotServed();
       out = this->tracedSubset(tracer(), pixels, subset); // the tracer is this frame's alone
+      in.heldRays[k] += raysOf(out.records);
       report.raysTraced += out.rays;
       if (maker.Settings.cacheRetraced)
         in.retraced.emplace(cacheKey, out.records);
@@ -460,6 +471,7 @@ struct MovieMaking
     };
     std::vector<RayRecord> records;
     SettingsError settings;
+    in.heldRays[k] = 0;
     const PathCompletion done = this->interpolatedWith(
       k, keys, this->retracedPixels(k, tracer, report, storeOnly), records, storeOnly, settings);
     if (!storeOnly) // made while planning: recorded when frame() hands it out
@@ -493,6 +505,40 @@ struct MovieMaking
     maker.Store->recordInterpolatedFrame(maker.Frames[static_cast<std::size_t>(k)].identity,
                                          interpolationRecipe(maker.Settings), ids);
     in.recorded[k] = used;
+  }
+
+  /// The store's id of whole frame k, if it is stored.
+  std::optional<std::int64_t> storedId(int k) const
+  {
+    const auto made = in.storedIds.find(k);
+    if (made != in.storedIds.end())
+      return made->second;
+    return maker.Frames[static_cast<std::size_t>(k)].storedId;
+  }
+
+  /// What frame k's pictures are of, where the store holds it: the frame stored whole, or the
+  /// frame recorded as interpolated between stored keys by this movie's recipe.
+  std::optional<PictureOrigin> pictureOrigin(int k) const
+  {
+    if (!maker.Store)
+      return std::nullopt;
+    PictureOrigin origin;
+    const auto recorded = in.recorded.find(k);
+    if (maker.Frames[static_cast<std::size_t>(k)].storedId || recorded == in.recorded.end())
+    {
+      origin.wholeFrame = this->storedId(k);
+      return origin.wholeFrame ? std::optional<PictureOrigin>(origin) : std::nullopt;
+    }
+    origin.scene = maker.Frames[static_cast<std::size_t>(k)].identity;
+    origin.recipe = interpolationRecipe(maker.Settings);
+    for (int key : recorded->second)
+    {
+      const std::optional<std::int64_t> id = this->storedId(key);
+      if (!id)
+        return std::nullopt;
+      origin.keys.push_back(*id);
+    }
+    return origin;
   }
 
   /// Whole frame k interpolated between the whole frames `wholeFrames` around it (k not among
@@ -813,5 +859,83 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
     report.shareRetraced = 1;
   }
   return records;
+}
+
+std::optional<std::vector<std::string>> MovieMaker::storedPictures(
+  int k, const std::vector<std::string>& formats, MovieFrameReport& report)
+{
+  if (k < 0 || k >= static_cast<int>(this->Frames.size()))
+    throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
+                           std::to_string(this->Frames.size()) + " frames");
+  if (!this->Store || formats.empty())
+    return std::nullopt;
+  const MoviePlan& plan = this->plan(); // the stored and the recorded frames looked up
+  const MovieMaking making{ *this, *this->Impl };
+  const std::optional<PictureOrigin> origin = making.pictureOrigin(k);
+  if (!origin)
+    return std::nullopt;
+  std::vector<std::string> bytes;
+  FramePicture facts;
+  for (const std::string& format : formats)
+  {
+    std::optional<FramePicture> picture = this->Store->readPicture(*origin, format);
+    if (!picture)
+      return std::nullopt;
+    bytes.push_back(std::move(picture->bytes));
+    facts = std::move(*picture);
+  }
+  report = MovieFrameReport();
+  report.raysReused = facts.rays;
+  if (origin->wholeFrame)
+  {
+    report.method = plan.frames[static_cast<std::size_t>(k)].method;
+    report.settingsPsnr = report.estimatedPsnr = facts.settingsPsnr;
+    if (this->Impl->whole.count(k) == 0 && this->Impl->wholeCounted.insert(k).second)
+    {
+      this->RaysOfMovie += facts.rays;
+      this->RaysOfKeys += facts.rays;
+      ++this->WholeCount;
+    }
+  }
+  else
+  {
+    report.method = FrameMethod::Interpolated;
+    report.estimatedPsnr = facts.estimatedPsnr;
+    report.settingsPsnr = facts.settingsPsnr;
+    report.shareRetraced = facts.shareRetraced;
+    this->RaysOfMovie += facts.rays;
+  }
+  return bytes;
+}
+
+void MovieMaker::storePictures(int k, const std::vector<std::string>& formats,
+                               const std::vector<std::string>& bytes,
+                               const MovieFrameReport& report)
+{
+  if (formats.size() != bytes.size())
+    throw InvalidParameter("pictures: " + std::to_string(formats.size()) + " formats for " +
+                           std::to_string(bytes.size()) + " pictures");
+  const MovieMaking making{ *this, *this->Impl };
+  const std::optional<PictureOrigin> origin = making.pictureOrigin(k);
+  if (!origin)
+    return;
+  FramePicture picture;
+  picture.method = static_cast<int>(report.method);
+  picture.estimatedPsnr = report.estimatedPsnr;
+  picture.settingsPsnr = report.settingsPsnr;
+  picture.shareRetraced = std::min(1.0, std::max(0.0, report.shareRetraced));
+  const auto whole = this->Impl->whole.find(k);
+  const auto held = this->Impl->heldRays.find(k);
+  // The rays its records hold, as a run that reads the frame counts them.
+  picture.rays = origin->wholeFrame
+                   ? (whole != this->Impl->whole.end() ? raysOf(whole->second)
+                                                       : report.raysReused + report.raysTraced)
+                   : (held != this->Impl->heldRays.end() ? held->second : report.raysReused);
+  for (std::size_t f = 0; f < formats.size(); ++f)
+  {
+    picture.format = formats[f];
+    picture.bytes = bytes[f];
+    this->Store->storePicture(*origin, picture);
+  }
 }
 }

@@ -17,7 +17,9 @@
 // (MoviePlan.h), and a denser movie over a stored path is offered the stored frames as its only
 // keys (planBetweenStored), its old interpolated frames then served whole by the store: which of
 // them are is found by making them from the store alone before planning, and the frames so made are
-// kept (within a memory bound) for frame() to hand out rather than made again.
+// kept (within a memory bound) for frame() to hand out rather than made again. The pictures a
+// movie encodes from a frame are stored with what it was made from (storePictures), and a frame
+// whose pictures are stored is written from them, nothing of it read or made (storedPictures).
 //
 // Learning. The plan starts from a prior of the re-trace share (SpacingShareModel) and of the
 // costs, in rays integrated: a whole frame's, a re-trace's (one ray a re-traced pixel, and the
@@ -219,6 +221,22 @@ public:
   /// Key frames are traced or read once and kept; an interpolated frame's re-traced pixels are
   /// read from the store (or the memory cache) when they were traced before.
   std::vector<RayRecord> frame(int k, MovieFrameReport& report);
+
+  /// Frame k's pictures in `formats` (each an encoding and its version, e.g. "png.1"), as a movie
+  /// stored them after making the frame (storePictures): of its whole stored frame, or, for a frame
+  /// the store records as interpolated by this movie's recipe between stored frames of this movie,
+  /// made between exactly those (RayStore::readPicture). Null without a store, for a frame that is
+  /// neither, or where any format is missing: then frame() makes it. Otherwise `report` is what
+  /// frame() reported when it made the frame, its rays counted as read, and neither its keys nor
+  /// its re-traced pixels are read.
+  std::optional<std::vector<std::string>> storedPictures(int k,
+                                                         const std::vector<std::string>& formats,
+                                                         MovieFrameReport& report);
+  /// Stores frame k's pictures `bytes` in `formats`, encoded from the records frame() gave with
+  /// `report`, where the store holds what it was made from: the frame stored whole, or its keys
+  /// and its record as interpolated between them. Nothing without a store.
+  void storePictures(int k, const std::vector<std::string>& formats,
+                     const std::vector<std::string>& bytes, const MovieFrameReport& report);
 
   /// Rays integrated so far by this maker (anti-aliasing's extra rays, and the edge neighbours a
   /// re-traced subset traces and drops, counted).

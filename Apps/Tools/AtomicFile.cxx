@@ -297,9 +297,10 @@ TemporaryFile::TemporaryFile(const std::string& path,
   for (int attempt = 0; attempt < 100; ++attempt)
   {
     const std::string candidate = temporaryNameFor(this->Name);
-    // O_EXCL: a new file or nothing, never one that exists (a planted link included).
+    // O_EXCL: a new file or nothing, never one that exists (a planted link included). Readable
+    // too, as the staging memfd of a file written through is: a writer may read back its bytes.
     const int fd = openat(this->Dir->Fd, candidate.c_str(),
-                          O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+                          O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd >= 0)
     {
       this->Fd = fd;

@@ -71,7 +71,7 @@ public:
   /// A name that opens the very file created ("/proc/self/fd/N"), whatever has become of its
   /// directory entry: for writers that open files by name (VTK's).
   std::string openName() const;
-  /// The open descriptor (-1 once finish() closed it).
+  /// The open descriptor, readable and writable (-1 once finish() closed it).
   int descriptor() const { return this->Fd; }
   /// Appends `size` bytes; throws std::runtime_error with the system's reason (EFBIG, ENOSPC).
   void write(const char* data, std::size_t size);

@@ -12,6 +12,7 @@
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkNew.h"
+#include "vtkPNGReader.h"
 #include "vtkPNGWriter.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
@@ -260,10 +261,28 @@ private:
   }
 };
 
+/// The `size` bytes written to the file open at `fd` (read back from the start).
+std::string bytesOf(int fd, std::size_t size, const std::string& path)
+{
+  std::string bytes(size, '\0');
+  std::size_t done = 0;
+  while (done < size)
+  {
+    const ssize_t n = pread(fd, &bytes[done], size - done, static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      throw std::runtime_error("cannot read back \"" + path + "\": " +
+                               (n < 0 ? std::strerror(errno) : "it is shorter than written"));
+    done += static_cast<std::size_t>(n);
+  }
+  return bytes;
+}
+
 /// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
 /// its name) and checks that it wrote the whole file.
 template<class Writer>
-void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
+void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file, std::string* copy)
 {
   const std::string& path = file.path();
   if (!data)
@@ -295,6 +314,8 @@ void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file)
   struct stat st;
   if (fstat(file.descriptor(), &st) != 0 || st.st_size == 0)
     throw std::runtime_error("cannot write \"" + path + "\"");
+  if (copy)
+    *copy = bytesOf(file.descriptor(), static_cast<std::size_t>(st.st_size), path);
   file.finish();
 }
 
@@ -364,9 +385,11 @@ void writeVtp(vtkPolyData* data, const std::string& path, XmlCompression compres
   writeOne(path, [=](TemporaryFile& file) { writeVtp(data, file, compression); });
 }
 
-void writePng(vtkImageData* image, TemporaryFile& file)
+namespace
 {
-  const std::string& path = file.path();
+/// The PNG of the image's colours; errors name `path`.
+std::string pngBytes(vtkImageData* image, const std::string& path)
+{
   vtkDataArray* colors = image ? image->GetPointData()->GetArray("Colors") : nullptr;
   if (!colors && image)
     colors = image->GetPointData()->GetScalars();
@@ -378,7 +401,8 @@ void writePng(vtkImageData* image, TemporaryFile& file)
   vtkNew<vtkImageData> picture;
   picture->ShallowCopy(image);
   picture->GetPointData()->SetScalars(colors);
-  // Encoded in memory and written here: libpng would report a failed write on stderr itself.
+  // Encoded in memory and written by the caller: libpng would report a failed write on stderr
+  // itself.
   vtkNew<vtkPNGWriter> writer;
   VtkMessageCatcher messages;
   messages.watchAlgorithm(writer);
@@ -389,20 +413,60 @@ void writePng(vtkImageData* image, TemporaryFile& file)
   vtkUnsignedCharArray* bytes = writer->GetResult();
   if (!bytes || bytes->GetNumberOfValues() == 0)
     throw std::runtime_error("cannot write \"" + path + "\"");
-  file.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
-             static_cast<std::size_t>(bytes->GetNumberOfValues()));
+  return std::string(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+                     static_cast<std::size_t>(bytes->GetNumberOfValues()));
+}
+}
+
+void writePng(vtkImageData* image, TemporaryFile& file, std::string* copy)
+{
+  const std::string bytes = pngBytes(image, file.path());
+  file.write(bytes.data(), bytes.size());
+  if (copy)
+    *copy = bytes;
   file.finish();
+}
+
+std::string encodePng(vtkImageData* image)
+{
+  return pngBytes(image, "a PNG in memory");
+}
+
+void writeBytes(const std::string& bytes, TemporaryFile& file)
+{
+  file.write(bytes.data(), bytes.size());
+  file.finish();
+}
+
+vtkSmartPointer<vtkImageData> readPng(const std::string& bytes)
+{
+  vtkNew<vtkPNGReader> reader;
+  VtkMessageCatcher messages;
+  messages.watchAlgorithm(reader);
+  reader->SetMemoryBuffer(bytes.data());
+  reader->SetMemoryBufferLength(static_cast<vtkIdType>(bytes.size()));
+  reader->Update();
+  vtkSmartPointer<vtkImageData> image = reader->GetOutput();
+  vtkDataArray* scalars = image ? image->GetPointData()->GetScalars() : nullptr;
+  if (reader->GetErrorCode() != vtkErrorCode::NoError || messages.failed() || !scalars ||
+      scalars->GetDataType() != VTK_UNSIGNED_CHAR ||
+      (scalars->GetNumberOfComponents() != 3 && scalars->GetNumberOfComponents() != 4))
+    throw std::runtime_error("cannot decode a PNG picture of " + std::to_string(bytes.size()) +
+                             " bytes" +
+                             (messages.failed() ? ": " + messages.firstError() : std::string()));
+  return image;
 }
 
 // Inline binary (base64 in the XML), never VTK's default appended data: ParaView 5.11's bundled VTK
 // cannot parse appended data with the current libexpat (2.5.0-1+deb12u5 and later), so files with
 // it open with 0 points in Debian's ParaView. Inline data parses with every expat.
-void writeVti(vtkImageData* image, TemporaryFile& file, XmlCompression compression)
+void writeVti(vtkImageData* image, TemporaryFile& file, XmlCompression compression,
+              std::string* copy)
 {
   vtkNew<StreamXMLWriter<vtkXMLImageDataWriter>> writer;
   writer->SetDataModeToBinary();
   setCompression(writer, compression);
-  writeWith(writer.Get(), image, file);
+  writeWith(writer.Get(), image, file, copy);
 }
 
 void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression)
@@ -410,7 +474,7 @@ void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression
   vtkNew<StreamXMLWriter<vtkXMLPolyDataWriter>> writer;
   writer->SetDataModeToBinary();
   setCompression(writer, compression);
-  writeWith(writer.Get(), data, file);
+  writeWith(writer.Get(), data, file, nullptr);
 }
 
 std::string dataDirectory()

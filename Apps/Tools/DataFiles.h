@@ -8,6 +8,8 @@
 
 #include "AtomicFile.h"
 
+#include "vtkSmartPointer.h"
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -40,9 +42,17 @@ void writeVti(vtkImageData* image, const std::string& path,
 /// Polygonal data (hit points, ray polylines) as VTK XML poly data (inline binary, compressed).
 void writeVtp(vtkPolyData* data, const std::string& path,
               XmlCompression compression = kXmlCompression);
-void writePng(vtkImageData* image, TemporaryFile& file);
+/// `copy`, where given, gets the file's bytes.
+void writePng(vtkImageData* image, TemporaryFile& file, std::string* copy = nullptr);
 void writeVti(vtkImageData* image, TemporaryFile& file,
-              XmlCompression compression = kXmlCompression);
+              XmlCompression compression = kXmlCompression, std::string* copy = nullptr);
+/// writePng's bytes, in memory.
+std::string encodePng(vtkImageData* image);
+/// Bytes encoded before (a picture stored with its frame) as the file.
+void writeBytes(const std::string& bytes, TemporaryFile& file);
+/// A PNG's picture: its RGB(A) as the image's unsigned-char scalars. Throws std::runtime_error
+/// for bytes that are no such PNG.
+vtkSmartPointer<vtkImageData> readPng(const std::string& bytes);
 void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression = kXmlCompression);
 
 /// Runs the writes on up to two threads and rethrows the first one's exception after all have

@@ -8,6 +8,7 @@
 #include "StoreCancellation.h"
 #include "StoreFanOut.h"
 #include "StoreFrameRows.h"
+#include "StorePictures.h"
 #include "StoreReadLimits.h"
 #include "StoreRecordCodec.h"
 #include "StoreSchema.h"
@@ -855,6 +856,29 @@ try
   const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
   return storage::interpolatedKeys(this->P->conn(), texts, recipe);
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
+
+void RayStore::storePicture(const PictureOrigin& origin, const FramePicture& picture)
+{
+  const storage::SceneTexts texts =
+    origin.wholeFrame ? storage::SceneTexts() : storage::sceneTexts(origin.scene);
+  this->P->requireSchema();
+  storage::upsertPicture(this->P->conn(), origin, texts, picture);
+}
+
+std::optional<FramePicture> RayStore::readPicture(const PictureOrigin& origin,
+                                                  const std::string& format)
+try
+{
+  const storage::SceneTexts texts =
+    origin.wholeFrame ? storage::SceneTexts() : storage::sceneTexts(origin.scene);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
+  this->P->requireSchema();
+  return storage::selectPicture(this->P->conn(), origin, texts, format);
 }
 catch (...)
 {

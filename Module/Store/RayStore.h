@@ -184,11 +184,34 @@ struct FrameWriteOptions
   }
 };
 
+/// An encoded picture of a frame (a PNG, a VTI), stored with what the movie that made it reported
+/// of the frame, so that making the movie again writes its files without making the frame again.
+struct FramePicture
+{
+  std::string format; ///< the encoding and its version, e.g. "png.1": [a-z0-9.], 1 to 32
+  std::string bytes;
+  int method = 0; ///< how the frame was made, as its maker numbers ways (0 to 255)
+  double estimatedPsnr = std::numeric_limits<double>::infinity();
+  double settingsPsnr = std::numeric_limits<double>::infinity();
+  double shareRetraced = 0; ///< in [0, 1]
+  double rays = 0;          ///< the rays its records hold, >= 0
+};
+
+/// What a picture is a picture of: a whole stored frame, or a frame not stored whole that was
+/// interpolated by `recipe` between the stored frames `keys` (RayStore::recordInterpolatedFrame).
+struct PictureOrigin
+{
+  std::optional<std::int64_t> wholeFrame;
+  SceneDescription scene;
+  std::string recipe;
+  std::vector<std::int64_t> keys;
+};
+
 class ASRTSTORE_EXPORT RayStore
 {
 public:
   /// The schema version this build creates and understands.
-  static constexpr int kSchemaVersion = 8;
+  static constexpr int kSchemaVersion = 9;
   /// The role that evaluates readFrame()'s predicates (see the top of this file).
   static constexpr const char* kPredicateRole = "asrt_predicate";
   /// Bytes of one packed ray record (the fields of rays_v, big-endian; 260 before version 5, 264
@@ -335,15 +358,25 @@ public:
   std::optional<std::vector<std::int64_t>> interpolatedFrameKeys(const SceneDescription& scene,
                                                                  const std::string& recipe);
 
+  /// Stores `picture` of `origin`, replacing one of the same origin and format. A whole frame's
+  /// goes when the frame is deleted; an interpolated frame's serves only while its frame is
+  /// recorded as made between exactly `origin.keys` (recordInterpolatedFrame) and each of them is
+  /// a complete frame. Throws StoreError naming what is wrong: a format not of [a-z0-9.] (1 to 32),
+  /// a method outside 0..255, a share outside [0, 1], negative or NaN rays, a whole frame that is
+  /// not stored complete, or an interpolated frame not recorded between those keys.
+  void storePicture(const PictureOrigin& origin, const FramePicture& picture);
+  /// The picture of `origin` in `format` stored before, if it still serves (see storePicture).
+  std::optional<FramePicture> readPicture(const PictureOrigin& origin, const std::string& format);
+
   /// The reads are upgrade(), schemaVersion(), listFrames(), frameInfo(), frameSceneText(),
-  /// findFrame(), interpolatedFrameKeys(), checkFrameIdentity(), abandonedFrames(), readFrame() and
-  /// readPaths(). How long each statement of a read waits for a lock that another session holds
-  /// (LOCK TABLE, a migration under way, ...) before the read gives up: StoreError "<what failed>:
-  /// the frames table is locked by another session; gave up after 30 s" (SQLSTATE 55P03). Zero:
-  /// reads wait as long as a lock is held. Default kDefaultReadLockTimeout. Writes wait for locks
-  /// as long as it takes (FrameWriteOptions::cancelled stops them); the tidying up after others'
-  /// failed or deleted writes that reads do in passing gives way to a lock at once and is left for
-  /// later.
+  /// findFrame(), interpolatedFrameKeys(), readPicture(), checkFrameIdentity(), abandonedFrames(),
+  /// readFrame() and readPaths(). How long each statement of a read waits for a lock that another
+  /// session holds (LOCK TABLE, a migration under way, ...) before the read gives up: StoreError
+  /// "<what failed>: the frames table is locked by another session; gave up after 30 s" (SQLSTATE
+  /// 55P03). Zero: reads wait as long as a lock is held. Default kDefaultReadLockTimeout. Writes
+  /// wait for locks as long as it takes (FrameWriteOptions::cancelled stops them); the tidying up
+  /// after others' failed or deleted writes that reads do in passing gives way to a lock at once
+  /// and is left for later.
   static constexpr std::chrono::milliseconds kDefaultReadLockTimeout{ 30000 };
   /// Throws StoreError for a negative timeout or one beyond PostgreSQL's (about 24 days).
   void setReadLockTimeout(std::chrono::milliseconds t);

@@ -314,9 +314,13 @@ void runMigration(PGconn* conn, int version)
   {
     migrateToVersion7(conn, what);
   }
-  else
+  else if (version == 8)
   {
     pg::execScript(conn, SchemaV8, what);
+  }
+  else
+  {
+    pg::execScript(conn, SchemaV9, what);
   }
 }
 }

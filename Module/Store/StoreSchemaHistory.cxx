@@ -664,5 +664,35 @@ CREATE TABLE interpolated_frames (
   created_at timestamptz NOT NULL DEFAULT now(),
   PRIMARY KEY (frame_hash, recipe));
 )SQL";
+const char* const SchemaV9 = R"SQL(
+-- Encoded pictures of frames (format: the encoding and its version, e.g. png.1), so that making a
+-- movie again writes its files without making its frames again, with what their maker reported
+-- of them. A picture is of a whole stored frame (frame_id: it goes with the frame), or of an
+-- interpolated frame made by a recipe between stored key frames (frame_hash, recipe and
+-- key_frame_ids: it serves only while interpolated_frames records that frame made between exactly
+-- those keys, each of them a complete frame).
+CREATE TABLE frame_pictures (
+  id bigserial PRIMARY KEY,
+  frame_id bigint REFERENCES frames (id) ON DELETE CASCADE,
+  frame_hash bytea,
+  recipe text CHECK (recipe <> ''),
+  key_frame_ids bigint[] CHECK (cardinality(key_frame_ids) BETWEEN 1 AND 16),
+  format text NOT NULL CHECK (format ~ '^[a-z0-9.]{1,32}$'),
+  method smallint NOT NULL CHECK (method BETWEEN 0 AND 255),
+  estimated_psnr float8 NOT NULL,
+  settings_psnr float8 NOT NULL,
+  share_retraced float8 NOT NULL CHECK (share_retraced BETWEEN 0 AND 1),
+  rays float8 NOT NULL CHECK (rays >= 0),
+  bytes bytea NOT NULL,
+  created_at timestamptz NOT NULL DEFAULT now(),
+  CHECK ((frame_id IS NULL) = (frame_hash IS NOT NULL AND recipe IS NOT NULL AND key_frame_ids IS NOT NULL)),
+  CHECK (frame_id IS NULL OR (frame_hash IS NULL AND recipe IS NULL AND key_frame_ids IS NULL)));
+-- Pictures are compressed already: TOAST stores them as they are.
+ALTER TABLE frame_pictures ALTER COLUMN bytes SET STORAGE EXTERNAL;
+CREATE UNIQUE INDEX frame_pictures_whole ON frame_pictures (frame_id, format)
+  WHERE frame_id IS NOT NULL;
+CREATE UNIQUE INDEX frame_pictures_interpolated ON frame_pictures (frame_hash, recipe, format)
+  WHERE frame_id IS NULL;
+)SQL";
 }
 }

@@ -75,6 +75,9 @@ extern const char* const SelectedRaysBodyV7;
 /// Migration 8 (version 7 to 8): the table of the keys interpolated frames were made from
 /// (RayStore::recordInterpolatedFrame). A script.
 extern const char* const SchemaV8;
+/// Migration 9 (version 8 to 9): the table of frames' encoded pictures (RayStore::storePicture).
+/// A script.
+extern const char* const SchemaV9;
 }
 }
 

@@ -25,9 +25,9 @@ sql -d unrelated -c "CREATE TABLE someone_elses (x int)"
 test "$(sql -d unrelated -c "SELECT string_agg(relname, ',') FROM pg_class
   WHERE relnamespace = 'public'::regnamespace")" = someone_elses
 step "asrt db init makes the schema, once"
-"$expect" 0 "schema version 8 created; predicates run as the role asrt_predicate" -- \
+"$expect" 0 "schema version 9 created; predicates run as the role asrt_predicate" -- \
   "$asrt" db init --db "dbname=unrelated"
-"$expect" 0 "schema version 8 already in place" -- "$asrt" db init --db "dbname=unrelated"
+"$expect" 0 "schema version 9 already in place" -- "$asrt" db init --db "dbname=unrelated"
 "$expect" 0 "no frames stored yet" -- "$asrt" list --db "dbname=unrelated"
 "$expect" 2 "--db goes with init only" -- "$asrt" db status --db "dbname=unrelated"
 
@@ -102,7 +102,7 @@ sql -c "CREATE ROLE asrt_plain LOGIN" -c "CREATE DATABASE plain OWNER asrt_plain
   -- "$asrt" db init --db "dbname=plain user=asrt_plain"
 test "$(sql -d plain -c "SELECT count(*) FROM pg_class WHERE relnamespace = 'public'::regnamespace")" = 0
 sql -c "GRANT asrt_predicate TO asrt_plain"
-"$expect" 0 "schema version 8 created" -- "$asrt" db init --db "dbname=plain user=asrt_plain"
+"$expect" 0 "schema version 9 created" -- "$asrt" db init --db "dbname=plain user=asrt_plain"
 
 step "two --replace stores of one frame at once: the one that loses is told what happened"
 # A second session stands in for the winner: it holds the first frame deleted in an open transaction, the
@@ -143,6 +143,6 @@ trap '"$asrt" db --dir "$private" destroy > /dev/null 2>&1 || true; rm -rf "$pri
   unset PGHOST PGPORT PGDATABASE PGUSER
   export ASRT_DB_DIR="$private"
   "$expect" 0 "no frames stored yet" -- "$asrt" list
-  "$expect" 0 "schema version 8 already in place" -- "$asrt" db init
+  "$expect" 0 "schema version 9 already in place" -- "$asrt" db init
 )
 echo "cli-hostile-database: all steps passed"

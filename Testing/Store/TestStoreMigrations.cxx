@@ -213,6 +213,10 @@ TEST(StoreMigrations, FrozenLayoutsKeepTheirColumns)
   EXPECT_EQ(columnsOf(db, "interpolated_frames"), "frame_hash,recipe,key_frame_ids,created_at");
   EXPECT_EQ(columnsOf(db, "rays_v"),
             "frame_id,tile,block,ray,tile_ray," + fieldNames(RecordFields) + ",record_bytes");
+  store.migrate(9);
+  EXPECT_EQ(columnsOf(db, "frame_pictures"),
+            "id,frame_id,frame_hash,recipe,key_frame_ids,format,method,estimated_psnr,"
+            "settings_psnr,share_retraced,rays,bytes,created_at");
 }
 
 TEST(StoreMigrations, VersionOneRaysComeBackBitExact)
@@ -301,6 +305,8 @@ TEST(StoreMigrations, StepByStepFromVersionOneKeepsEveryRay)
   EXPECT_EQ(store.schemaVersion(), 7);
   // Version 8 adds the table of interpolated frames' keys only.
   store.migrate(8);
+  // Version 9 adds the table of frames' pictures only.
+  store.migrate(9);
   expectFramesIntact(store, db, { { a, first }, { b, second } }, { 1, 2 });
 }
 
