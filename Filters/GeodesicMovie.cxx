@@ -935,7 +935,18 @@ void MovieMaker::storePictures(int k, const std::vector<std::string>& formats,
   {
     picture.format = formats[f];
     picture.bytes = bytes[f];
-    this->Store->storePicture(*origin, picture);
+    try
+    {
+      this->Store->storePicture(*origin, picture);
+    }
+    catch (const StoreError& e)
+    {
+      // What the picture was made from changed since (another movie recorded the frame between
+      // other keys, or a key was deleted): the picture would serve nothing, and the movie stands.
+      if (!e.sqlState().empty() || std::string(e.what()).rfind(kPictureRefused, 0) != 0)
+        throw;
+      return;
+    }
   }
 }
 }

@@ -197,6 +197,10 @@ struct FramePicture
   double rays = 0;          ///< the rays its records hold, >= 0
 };
 
+/// How RayStore::storePicture's refusals of a picture whose origin is not (or no longer) stored
+/// begin.
+constexpr const char* kPictureRefused = "storing a picture: ";
+
 /// What a picture is a picture of: a whole stored frame, or a frame not stored whole that was
 /// interpolated by `recipe` between the stored frames `keys` (RayStore::recordInterpolatedFrame).
 struct PictureOrigin

@@ -93,7 +93,7 @@ void upsertPicture(PGconn* conn, const PictureOrigin& origin, const SceneTexts& 
   else
   {
     if (origin.keys.empty() || origin.keys.size() > 16)
-      throw StoreError("storing a picture: " + std::to_string(origin.keys.size()) +
+      throw StoreError("picture of an interpolated frame: " + std::to_string(origin.keys.size()) +
                        " keys (1 to 16)");
     params.bytes(texts.frame).text(origin.recipe).text(keyArray(origin.keys));
     sql = std::string("INSERT INTO frame_pictures (frame_hash, recipe, key_frame_ids, format, ") +
@@ -110,12 +110,12 @@ void upsertPicture(PGconn* conn, const PictureOrigin& origin, const SceneTexts& 
     .bytes(picture.bytes);
   pg::Result r = params.exec(conn, sql, "storing a picture failed");
   if (PQntuples(r.get()) == 0)
-    throw StoreError(origin.wholeFrame
-                       ? "storing a picture: frame " + std::to_string(*origin.wholeFrame) +
-                           " is no complete stored frame"
-                       : "storing a picture: the frame is not recorded as interpolated by \"" +
-                           origin.recipe + "\" between the complete frames " +
-                           keyArray(origin.keys));
+    throw StoreError(
+      std::string(kPictureRefused) +
+      (origin.wholeFrame
+         ? "frame " + std::to_string(*origin.wholeFrame) + " is no complete stored frame"
+         : "the frame is not recorded as interpolated by \"" + origin.recipe +
+             "\" between the complete frames " + keyArray(origin.keys)));
 }
 
 std::optional<FramePicture> selectPicture(PGconn* conn, const PictureOrigin& origin,

@@ -728,3 +728,95 @@ TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
   }
   EXPECT_EQ(again.raysTraced(), 0);
 }
+
+namespace
+{
+/// Stand-in bytes of a frame's picture: its colours, as an encoder would read them.
+std::string colourBytes(const std::vector<asrt::RayRecord>& records)
+{
+  std::string bytes;
+  for (const asrt::RayRecord& r : records)
+    bytes.append(reinterpret_cast<const char*>(&r.color), sizeof r.color);
+  return bytes;
+}
+}
+
+TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeftOut)
+{
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetResolution(48, 48);
+  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
+  asrt::MovieSettings settings;
+  settings.quality = 35;
+  settings.holdToConverged = false;
+  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  const std::vector<std::string> formats{ "test.1" };
+  asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
+  std::vector<std::string> pictures;
+  std::vector<asrt::MovieFrameReport> reports(7);
+  int interpolated = 0;
+  for (int k = 0; k < 7; ++k)
+  {
+    // Nothing stored yet: the frame must be made.
+    EXPECT_EQ(first.storedPictures(k, formats, reports[k]), std::nullopt) << "frame " << k;
+    pictures.push_back(colourBytes(first.frame(k, reports[k])));
+    first.storePictures(k, formats, { pictures.back() }, reports[k]);
+    interpolated += reports[k].method == asrt::FrameMethod::Interpolated;
+  }
+  ASSERT_GT(interpolated, 0) << "the movie interpolates no frame: nothing to check";
+
+  // The next maker of the movie is served every frame's picture, with what the first reported,
+  // and reads no key: it traces nothing and counts the rays the frames' records hold.
+  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  for (int k = 0; k < 7; ++k)
+  {
+    asrt::MovieFrameReport report;
+    const auto served = again.storedPictures(k, formats, report);
+    ASSERT_TRUE(served.has_value()) << "frame " << k;
+    EXPECT_TRUE(served->at(0) == pictures[k]) << "frame " << k;
+    EXPECT_EQ(report.raysTraced, 0) << "frame " << k;
+    if (reports[k].method == asrt::FrameMethod::Interpolated)
+    {
+      EXPECT_EQ(report.method, asrt::FrameMethod::Interpolated) << "frame " << k;
+      EXPECT_EQ(report.estimatedPsnr, reports[k].estimatedPsnr) << "frame " << k;
+      EXPECT_EQ(report.shareRetraced, reports[k].shareRetraced) << "frame " << k;
+      EXPECT_GT(report.raysReused, 0) << "frame " << k;
+    }
+    else
+      EXPECT_EQ(report.method, asrt::FrameMethod::Reused) << "frame " << k;
+  }
+  EXPECT_EQ(again.raysTraced(), 0);
+  EXPECT_EQ(again.wholeCount(), 7 - interpolated);
+  // The whole frames' rays as their stored records hold them.
+  double held = 0;
+  for (int k = 0; k < 7; ++k)
+    if (reports[k].method != asrt::FrameMethod::Interpolated)
+      for (const asrt::RayRecord& r : store.readFrame(*store.findFrame(again.frames()[k].identity)))
+        held += r.raysPerPixel;
+  EXPECT_DOUBLE_EQ(again.raysOfKeys(), held);
+
+  // A key deleted after its frame was made and before its picture is stored: the picture would
+  // serve nothing and is left out, the movie stands; the frames made from it are made again.
+  asrt::MovieMaker third(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieFrameReport report;
+  const std::vector<asrt::RayRecord> records = third.frame(0, report);
+  const auto id = store.findFrame(third.frames()[0].identity);
+  ASSERT_TRUE(id.has_value());
+  store.deleteFrame(*id);
+  EXPECT_NO_THROW(third.storePictures(0, formats, { colourBytes(records) }, report));
+  asrt::PictureOrigin origin;
+  origin.wholeFrame = *id;
+  EXPECT_EQ(store.readPicture(origin, "test.1"), std::nullopt);
+  asrt::MovieMaker fourth(asrt::movieFrames(source, path), "mass", &store, settings);
+  for (int k = 0; k < 7; ++k)
+  {
+    if (reports[k].method == asrt::FrameMethod::Interpolated &&
+        first.plan().frames[k].keyBefore == 0)
+    {
+      EXPECT_EQ(fourth.storedPictures(k, formats, report), std::nullopt) << "frame " << k;
+    }
+  }
+}
