@@ -88,6 +88,10 @@ struct NotServed
 struct MovieMaker::Internals
 {
   std::map<int, std::vector<RayRecord>> whole; ///< whole frames made, in pixel order
+  /// When each whole frame kept was last used (a count of uses): the least recent stored ones
+  /// leave memory first (MovieMaking::keepWholeWithinBudget).
+  std::map<int, std::uint64_t> lastUse;
+  std::uint64_t uses = 0;
   /// The rays each whole frame made took: integrated if traced, its records' if read.
   std::map<int, double> wholeRays;
   /// Re-traced pixels kept in memory (MovieSettings::cacheRetraced): frame, subset's count and
@@ -131,6 +135,9 @@ MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, Ra
     throw InvalidParameter("quality: the target must lie in (0, " +
                            formatParameter(kMaxQualityTargetDb) + "] dB, got " +
                            formatParameter(this->Settings.quality));
+  if (!(this->Settings.keptFrameBytes >= 0.0))
+    throw InvalidParameter("keptFrameBytes: the bytes of frames kept must be 0 or more, got " +
+                           formatParameter(this->Settings.keptFrameBytes));
   this->Width = this->Frames.front().identity.camera.width;
   this->Height = this->Frames.front().identity.camera.height;
   for (const MovieFrame& f : this->Frames)
@@ -228,24 +235,27 @@ struct MovieMaking
   /// A whole frame's records, in pixel order: kept, read from the store, or traced (and stored).
   const std::vector<RayRecord>& whole(int k)
   {
+    in.lastUse[k] = ++in.uses;
     const auto kept = in.whole.find(k);
     if (kept != in.whole.end())
       return kept->second;
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     std::vector<RayRecord> records;
     double rays = 0;
-    if (f.storedId && maker.Store)
+    // Stored before, or traced and stored by this movie and since let go (keepWholeWithinBudget).
+    const std::optional<std::int64_t> id = this->storedId(k);
+    if (id && maker.Store)
     {
-      records = maker.Store->readFrame(*f.storedId);
+      records = maker.Store->readFrame(*id);
       std::sort(records.begin(), records.end(),
                 [](const RayRecord& a, const RayRecord& b)
                 { return a.j != b.j ? a.j < b.j : a.i < b.i; });
       if (records.size() != static_cast<std::size_t>(maker.Width) * maker.Height)
-        throw StoreError("stored frame " + std::to_string(*f.storedId) + " has " +
+        throw StoreError("stored frame " + std::to_string(*id) + " has " +
                          std::to_string(records.size()) + " rays, the movie's frames " +
                          std::to_string(maker.Width * maker.Height) + " pixels");
       rays = raysOf(records);
-      in.storedIds[k] = *f.storedId;
+      in.storedIds[k] = *id;
     }
     else
     {
@@ -272,8 +282,32 @@ struct MovieMaking
       maker.RaysOfKeys += rays;
       ++maker.WholeCount;
     }
-    in.wholeRays[k] = rays;
+    in.wholeRays.emplace(k, rays); // a frame read again keeps the count it was made with
     return in.whole.emplace(k, std::move(records)).first->second;
+  }
+
+  /// Lets go of the least recently used whole frames that are stored, but not of `inUse`, until
+  /// those kept fit in MovieSettings::keptFrameBytes (a movie's keys at 1920×1080 would not fit
+  /// in memory together). Called where no reference to a kept frame is held.
+  void keepWholeWithinBudget(const std::set<int>& inUse)
+  {
+    double bytes = 0;
+    for (const auto& [k, records] : in.whole)
+      bytes += static_cast<double>(records.size() * sizeof(RayRecord));
+    const double budget =
+      maker.Settings.keptFrameBytes > 0 ? maker.Settings.keptFrameBytes : defaultMemoryLimit() / 4;
+    while (bytes > budget)
+    {
+      int oldest = -1;
+      for (const auto& [k, records] : in.whole)
+        if (!inUse.count(k) && this->storedId(k) &&
+            (oldest < 0 || in.lastUse[k] < in.lastUse[oldest]))
+          oldest = k;
+      if (oldest < 0)
+        return;
+      bytes -= static_cast<double>(in.whole[oldest].size() * sizeof(RayRecord));
+      in.whole.erase(oldest);
+    }
   }
 
   /// Records of a subset that was traced before: in memory, or in the store.
@@ -759,6 +793,7 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
     {
       whole[static_cast<std::size_t>(i)] = true;
       const int k = open[static_cast<std::size_t>(i)];
+      making.keepWholeWithinBudget({});
       making.whole(k);
       const double rays = this->Impl->wholeRays.at(k);
       if (afterEach)
@@ -778,11 +813,14 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
       planProgressively(s, stored, pixels, this->Impl->share, keyMaking, movieCostPrior(pixels));
     this->Plan = wholeMoviePlan(planned, open, this->Frames.size(), this->Impl->recorded);
   }
+  // Every key traced; those stored are read when a frame needs them.
   for (int k : this->plan().keys())
   {
-    const bool made = this->Impl->whole.count(k) > 0;
+    if (this->Impl->whole.count(k) > 0 || making.storedId(k))
+      continue;
+    making.keepWholeWithinBudget({});
     making.whole(k);
-    if (!made && afterEach)
+    if (afterEach)
       afterEach();
   }
   this->Impl->keysMade = true;
@@ -826,6 +864,14 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
   this->makeKeys(); // the plan is final once its keys are made
   const MoviePlan& plan = this->plan();
   MovieMaking making{ *this, *this->Impl };
+  {
+    const auto recorded = this->Impl->recorded.find(k);
+    const std::vector<int> around =
+      keysAround(recorded != this->Impl->recorded.end() ? recorded->second : plan.keys(), k);
+    std::set<int> inUse(around.begin(), around.end());
+    inUse.insert(k);
+    making.keepWholeWithinBudget(inUse);
+  }
   report = MovieFrameReport();
   report.method = plan.frames[static_cast<std::size_t>(k)].method;
   const auto served = report.method == FrameMethod::Interpolated ? this->Impl->served.find(k)

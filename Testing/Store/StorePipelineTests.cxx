@@ -820,3 +820,39 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
     }
   }
 }
+
+TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTheSameFrames)
+{
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetResolution(48, 48);
+  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 9);
+  asrt::MovieSettings settings;
+  settings.quality = 35;
+  settings.holdToConverged = false;
+  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  // Without a store every frame stays; with one and a budget of a byte, only the frames in use.
+  asrt::MovieMaker kept(asrt::movieFrames(source, path), "mass", nullptr, settings);
+  settings.keptFrameBytes = 1;
+  asrt::MovieMaker tight(asrt::movieFrames(source, path), "mass", &store, settings);
+  int interpolated = 0;
+  for (int k = 0; k < 9; ++k)
+  {
+    asrt::MovieFrameReport a, b;
+    const std::vector<asrt::RayRecord> x = kept.frame(k, a), y = tight.frame(k, b);
+    EXPECT_EQ(a.method, b.method) << "frame " << k;
+    interpolated += a.method == asrt::FrameMethod::Interpolated;
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t p = 0; p < x.size(); ++p)
+      ASSERT_TRUE(x[p].color == y[p].color && x[p].objectId == y[p].objectId)
+        << "frame " << k << ", pixel " << p;
+  }
+  ASSERT_GT(interpolated, 0) << "the movie interpolates no frame: nothing to check";
+  // Read again, never traced again.
+  EXPECT_EQ(tight.raysTraced(), kept.raysTraced());
+  settings.keptFrameBytes = -1;
+  EXPECT_THROW(asrt::MovieMaker(asrt::movieFrames(source, path), "mass", &store, settings),
+               asrt::InvalidParameter);
+}
