@@ -675,6 +675,19 @@ TEST(StorePipeline, AFrameRowEditedToAnImpossibleSizeIsAnErrorNotAnAllocation)
 // A movie's interpolated frame is made again between the keys it was made between, whatever
 // frames are stored since: another user storing a frame beside it whole (a key for free to any
 // later plan) changes neither its records nor its cost, nothing is traced for it.
+namespace
+{
+/// The settings of the small ramps below: 35 dB against the frames traced at their parameters.
+asrt::MovieSettings rampSettings()
+{
+  asrt::MovieSettings settings;
+  settings.quality = 35;
+  settings.holdToConverged = false;
+  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  return settings;
+}
+}
+
 TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
 {
   asrt::RayStore store(server().conninfo());
@@ -683,10 +696,7 @@ TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
   source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
   source->SetResolution(48, 48);
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 13);
-  asrt::MovieSettings settings;
-  settings.quality = 35;
-  settings.holdToConverged = false;
-  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  asrt::MovieSettings settings = rampSettings();
   settings.label = "first";
   asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
   std::vector<std::vector<asrt::RayRecord>> made;
@@ -749,10 +759,7 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
   source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
   source->SetResolution(48, 48);
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
-  asrt::MovieSettings settings;
-  settings.quality = 35;
-  settings.holdToConverged = false;
-  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  asrt::MovieSettings settings = rampSettings();
   const std::vector<std::string> formats{ "test.1" };
   asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
   std::vector<std::string> pictures;
@@ -829,10 +836,7 @@ TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTh
   source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
   source->SetResolution(48, 48);
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 9);
-  asrt::MovieSettings settings;
-  settings.quality = 35;
-  settings.holdToConverged = false;
-  settings.textureDirectory = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
+  asrt::MovieSettings settings = rampSettings();
   // Without a store every frame stays; with one and a budget of a byte, only the frames in use.
   asrt::MovieMaker kept(asrt::movieFrames(source, path), "mass", nullptr, settings);
   settings.keptFrameBytes = 1;
