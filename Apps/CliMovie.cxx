@@ -311,14 +311,18 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   {
     MovieFrameReport& report = reports[static_cast<std::size_t>(k)];
     std::optional<std::vector<std::string>> pictures = maker.storedPictures(k, formats, report);
+    if (!pictures && !keysMade)
+    {
+      makeKeys(); // then the pictures of whole frames traced are there too
+      pictures = maker.storedPictures(k, formats, report);
+    }
     vtkSmartPointer<vtkImageData> image;
     if (!pictures)
     {
-      if (!keysMade)
-        makeKeys();
-      const std::vector<RayRecord> records = maker.frame(k, report);
       image = vtkSmartPointer<vtkImageData>::New();
-      recordsToImage(records, maker.width(), 0, maker.height(), image);
+      maker.useFrame(k, report,
+                     [&](const std::vector<RayRecord>& records)
+                     { recordsToImage(records, maker.width(), 0, maker.height(), image); });
     }
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);
@@ -514,6 +518,20 @@ int runMovie(const std::vector<std::string>& args)
                  "frame " + std::to_string(k) + " (" +
                    frames[static_cast<std::size_t>(k)].describe + ")");
   };
+  if (pictureFormats(settings) == std::vector<std::string>{ kPngPicture })
+  {
+    // Each whole frame's PNG made when it is traced: its records are then let go without being
+    // read back for it. (A VTI holds most of what the records do: those frames are made later.)
+    making.pictureFormats = { kPngPicture };
+    const int width = frames.front().identity.camera.width;
+    const int height = frames.front().identity.camera.height;
+    making.encodePictures = [width, height](const std::vector<RayRecord>& records)
+    {
+      vtkNew<vtkImageData> image;
+      recordsToImage(records, width, 0, height, image);
+      return std::vector<std::string>{ tools::encodePng(image) };
+    };
+  }
   auto maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
   // A target the default rendering does not reach, when no rendering was asked for: the movie is
   // made with the accurate preset (MovieMaker::withRaisedRendering).

@@ -7,6 +7,7 @@
 #include "RayStore.h"
 #include "RecordAllocation.h"
 #include "RetraceRays.h"
+#include "RowBands.h"
 #include "SceneFile.h"
 #include "SettingsError.h"
 #include "vtkGeodesicSource.h"
@@ -118,6 +119,14 @@ struct MovieMaker::Internals
   std::set<int> wholeCounted;
   /// The rays the records of each interpolated frame's re-traced pixels hold, read or traced.
   std::map<int, double> heldRays;
+  /// The rays each whole frame's records hold (their raysPerPixel), kept or let go.
+  std::map<int, double> wholeHeldRays;
+  /// Pictures of whole frames traced by this movie, encoded when traced
+  /// (MovieSettings::encodePictures), until storedPictures() hands them out.
+  std::map<int, std::vector<std::string>> pictures;
+  /// Records of whole frames let go, their memory reused for the next frame traced: fresh memory
+  /// costs its first touch (the kernel clears every page), memory used before does not.
+  std::vector<RayRecord> spare;
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -261,7 +270,25 @@ struct MovieMaking
     {
       const FrameTracer tracer(this->withTextures(f));
       const auto t0 = std::chrono::steady_clock::now();
-      records = tracer.traceRows(0, maker.Height, this->progress());
+      // A band at a time into records faulted in at once (allocateRecords): tracing the whole
+      // frame together would allocate and clear its records several times over (the adaptive
+      // grid's, the anti-aliased ones), and clearing fresh pages was a third of what a traced
+      // frame cost beyond tracing it. The records are traceRows' bit for bit (RowBands.h).
+      const std::size_t pixels = static_cast<std::size_t>(maker.Width) * maker.Height;
+      if (in.spare.size() == pixels)
+        records = std::move(in.spare); // every record is written below
+      else
+        records = allocateRecords(pixels);
+      in.spare = std::vector<RayRecord>();
+      std::size_t filled = 0;
+      traceRowsInBands(
+        tracer, 0, maker.Height,
+        [&records, &filled](const RayRecord* band, std::size_t count)
+        {
+          std::copy(band, band + count, records.begin() + static_cast<std::ptrdiff_t>(filled));
+          filled += count;
+        },
+        this->progress());
       if (this->cancelled())
         throw MovieCancelled();
       const double seconds =
@@ -274,7 +301,11 @@ struct MovieMaking
       rays = static_cast<double>(tracer.raysIntegrated());
       maker.RaysTraced += rays;
       if (maker.Store)
+      {
         in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
+        if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty())
+          in.pictures[k] = maker.Settings.encodePictures(records);
+      }
     }
     if (in.wholeCounted.insert(k).second)
     {
@@ -283,6 +314,7 @@ struct MovieMaking
       ++maker.WholeCount;
     }
     in.wholeRays.emplace(k, rays); // a frame read again keeps the count it was made with
+    in.wholeHeldRays[k] = raysOf(records);
     return in.whole.emplace(k, std::move(records)).first->second;
   }
 
@@ -306,6 +338,7 @@ struct MovieMaking
       if (oldest < 0)
         return;
       bytes -= static_cast<double>(in.whole[oldest].size() * sizeof(RayRecord));
+      in.spare = std::move(in.whole[oldest]);
       in.whole.erase(oldest);
     }
   }
@@ -858,6 +891,23 @@ std::unique_ptr<MovieMaker> MovieMaker::withRaisedRendering(vtkGeodesicSource* s
 
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
 {
+  std::vector<RayRecord> made;
+  const std::vector<RayRecord>& records = this->madeFrame(k, report, made);
+  if (&records == &made)
+    return made;
+  return records;
+}
+
+void MovieMaker::useFrame(int k, MovieFrameReport& report,
+                          const std::function<void(const std::vector<RayRecord>&)>& use)
+{
+  std::vector<RayRecord> made;
+  use(this->madeFrame(k, report, made));
+}
+
+const std::vector<RayRecord>& MovieMaker::madeFrame(int k, MovieFrameReport& report,
+                                                    std::vector<RayRecord>& made)
+{
   if (k < 0 || k >= static_cast<int>(this->Frames.size()))
     throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
                            std::to_string(this->Frames.size()) + " frames");
@@ -884,15 +934,23 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
     this->RaysOfMovie += report.raysReused;
     this->Impl->served.erase(served);
     making.recordKeys(k, plan.keys());
-    return records;
+    made = std::move(records);
+    return made;
   }
   if (report.method == FrameMethod::Interpolated)
   {
     const auto recorded = this->Impl->recorded.find(k);
-    return making.interpolated(
+    made = making.interpolated(
       k, recorded != this->Impl->recorded.end() ? recorded->second : plan.keys(), report, false);
+    return made;
   }
   const std::vector<RayRecord>& records = making.whole(k);
+  this->reportWhole(k, report);
+  return records;
+}
+
+void MovieMaker::reportWhole(int k, MovieFrameReport& report) const
+{
   const double rays = this->Impl->wholeRays.at(k);
   const auto settings = this->Impl->settings.find(k);
   if (settings != this->Impl->settings.end())
@@ -904,7 +962,6 @@ std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
     report.raysTraced = rays;
     report.shareRetraced = 1;
   }
-  return records;
 }
 
 std::optional<std::vector<std::string>> MovieMaker::storedPictures(
@@ -916,6 +973,21 @@ std::optional<std::vector<std::string>> MovieMaker::storedPictures(
   if (!this->Store || formats.empty())
     return std::nullopt;
   const MoviePlan& plan = this->plan(); // the stored and the recorded frames looked up
+  const auto early =
+    this->Impl->keysMade ? this->Impl->pictures.find(k) : this->Impl->pictures.end();
+  if (early != this->Impl->pictures.end() && formats == this->Settings.pictureFormats &&
+      plan.frames[static_cast<std::size_t>(k)].method != FrameMethod::Interpolated)
+  {
+    // Encoded when this movie traced the frame: the report frame() gives, and stored as a frame
+    // made now is.
+    std::vector<std::string> bytes = std::move(early->second);
+    this->Impl->pictures.erase(early);
+    report = MovieFrameReport();
+    report.method = plan.frames[static_cast<std::size_t>(k)].method;
+    this->reportWhole(k, report);
+    this->storePictures(k, formats, bytes, report);
+    return bytes;
+  }
   const MovieMaking making{ *this, *this->Impl };
   const std::optional<PictureOrigin> origin = making.pictureOrigin(k);
   if (!origin)
@@ -970,13 +1042,14 @@ void MovieMaker::storePictures(int k, const std::vector<std::string>& formats,
   picture.estimatedPsnr = report.estimatedPsnr;
   picture.settingsPsnr = report.settingsPsnr;
   picture.shareRetraced = std::min(1.0, std::max(0.0, report.shareRetraced));
-  const auto whole = this->Impl->whole.find(k);
   const auto held = this->Impl->heldRays.find(k);
+  const auto wholeHeld = this->Impl->wholeHeldRays.find(k);
   // The rays its records hold, as a run that reads the frame counts them.
-  picture.rays = origin->wholeFrame
-                   ? (whole != this->Impl->whole.end() ? raysOf(whole->second)
-                                                       : report.raysReused + report.raysTraced)
-                   : (held != this->Impl->heldRays.end() ? held->second : report.raysReused);
+  picture.rays =
+    origin->wholeFrame
+      ? (wholeHeld != this->Impl->wholeHeldRays.end() ? wholeHeld->second
+                                                      : report.raysReused + report.raysTraced)
+      : (held != this->Impl->heldRays.end() ? held->second : report.raysReused);
   for (std::size_t f = 0; f < formats.size(); ++f)
   {
     picture.format = formats[f];

@@ -181,6 +181,13 @@ struct MovieSettings
   /// Called with every whole frame traced, before it is stored or used (e.g. to refuse one with
   /// too many failed rays by throwing).
   std::function<void(const std::vector<RayRecord>&, int frame)> checkTraced;
+  /// With a store: the pictures (`pictureFormats`, as storedPictures() is asked for them) of each
+  /// whole frame this movie traces, encoded as soon as it is traced. storedPictures() then hands
+  /// them out and stores them, so that the frame's records need not be kept, or read back from
+  /// the store, until the frame's turn comes (at 1920×1080 a frame's records are about 550 MB, its
+  /// PNG a few).
+  std::vector<std::string> pictureFormats;
+  std::function<std::vector<std::string>(const std::vector<RayRecord>&)> encodePictures;
 };
 
 /// One movie: its plan, made once, and its frames, each made on demand.
@@ -226,6 +233,11 @@ public:
   /// Key frames are traced or read once and kept; an interpolated frame's re-traced pixels are
   /// read from the store (or the memory cache) when they were traced before.
   std::vector<RayRecord> frame(int k, MovieFrameReport& report);
+  /// As frame(), the records handed to `use` instead of returned: a whole frame's are the kept
+  /// ones, not a copy (at 1920×1080 a copy is half a gigabyte of fresh memory). `use` must not
+  /// call back into this maker.
+  void useFrame(int k, MovieFrameReport& report,
+                const std::function<void(const std::vector<RayRecord>&)>& use);
 
   /// Frame k's pictures in `formats` (each an encoding and its version, e.g. "png.1"), as a movie
   /// stored them after making the frame (storePictures): of its whole stored frame, or, for a frame
@@ -233,7 +245,9 @@ public:
   /// made between exactly those (RayStore::readPicture). Null without a store, for a frame that is
   /// neither, or where any format is missing: then frame() makes it. Otherwise `report` is what
   /// frame() reported when it made the frame, its rays counted as read, and neither its keys nor
-  /// its re-traced pixels are read.
+  /// its re-traced pixels are read. Once the keys are made (makeKeys), the pictures a whole frame
+  /// traced by this movie got then (MovieSettings::encodePictures) are handed out, with the report
+  /// frame() gives, and stored.
   std::optional<std::vector<std::string>> storedPictures(int k,
                                                          const std::vector<std::string>& formats,
                                                          MovieFrameReport& report);
@@ -257,6 +271,11 @@ private:
   /// The frames not stored whole that the store records as interpolated, by this movie's recipe,
   /// between keys that are frames of this movie and stored (their storedId looked up).
   void findRecorded();
+  /// Frame k's records (frame()): the kept whole frame's, or `made` holding those made for it.
+  const std::vector<RayRecord>& madeFrame(int k, MovieFrameReport& report,
+                                          std::vector<RayRecord>& made);
+  /// Fills the rays, settings and share of `report` for whole frame k, made.
+  void reportWhole(int k, MovieFrameReport& report) const;
   /// What frame k's settings reach against its converged picture, as a PSNR: its own error
   /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
   /// whole and its probes, traced and stored or read, as the movie would.

@@ -860,3 +860,70 @@ TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTh
   EXPECT_THROW(asrt::MovieMaker(asrt::movieFrames(source, path), "mass", &store, settings),
                asrt::InvalidParameter);
 }
+
+TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAndStoresThem)
+{
+  asrt::RayStore store(server().conninfo());
+  store.migrate();
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetResolution(48, 48);
+  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
+  asrt::MovieSettings settings = rampSettings();
+  const std::vector<std::string> formats{ "test.1" };
+  // The truth: every frame made from its records, nothing stored, nothing encoded early.
+  asrt::MovieMaker truth(asrt::movieFrames(source, path), "mass", nullptr, settings);
+  // Encoding each whole frame as it is traced, and keeping no frame it need not (a budget of a
+  // byte): the records of a whole frame are let go once its pictures are made.
+  settings.label = "early";
+  settings.keptFrameBytes = 1;
+  settings.pictureFormats = formats;
+  int encoded = 0;
+  settings.encodePictures = [&encoded](const std::vector<asrt::RayRecord>& records)
+  {
+    ++encoded;
+    return std::vector<std::string>{ colourBytes(records) };
+  };
+  asrt::MovieMaker early(asrt::movieFrames(source, path), "mass", &store, settings);
+  early.makeKeys();
+  int whole = 0;
+  for (int k = 0; k < 7; ++k)
+  {
+    asrt::MovieFrameReport expected, report;
+    const std::string picture = colourBytes(truth.frame(k, expected));
+    std::optional<std::vector<std::string>> served = early.storedPictures(k, formats, report);
+    if (expected.method == asrt::FrameMethod::Interpolated)
+    {
+      EXPECT_FALSE(served.has_value()) << "frame " << k << " is interpolated, not traced whole";
+      EXPECT_TRUE(colourBytes(early.frame(k, report)) == picture) << "frame " << k;
+      continue;
+    }
+    ++whole;
+    ASSERT_TRUE(served.has_value()) << "whole frame " << k << ": its picture was not made";
+    EXPECT_TRUE(served->at(0) == picture) << "frame " << k;
+    EXPECT_EQ(report.method, expected.method) << "frame " << k;
+    EXPECT_EQ(report.raysTraced, expected.raysTraced) << "frame " << k;
+    EXPECT_EQ(report.shareRetraced, 1.0) << "frame " << k;
+    // Stored as they were handed out: served again, from the store.
+    served = early.storedPictures(k, formats, report);
+    EXPECT_TRUE(served.has_value() && served->at(0) == picture) << "frame " << k;
+  }
+  ASSERT_GT(whole, 1);
+  ASSERT_LT(whole, 7) << "the movie interpolates no frame: the mixture is not checked";
+  EXPECT_EQ(encoded, whole);
+  EXPECT_EQ(early.raysTraced(), truth.raysTraced());
+
+  // Stored with the frames: the next maker is served them from the store, tracing nothing.
+  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  for (int k = 0; k < 7; ++k)
+  {
+    asrt::MovieFrameReport expected, report;
+    const std::string picture = colourBytes(truth.frame(k, expected));
+    if (expected.method == asrt::FrameMethod::Interpolated)
+      continue;
+    const auto served = again.storedPictures(k, formats, report);
+    ASSERT_TRUE(served.has_value()) << "frame " << k;
+    EXPECT_TRUE(served->at(0) == picture) << "frame " << k;
+  }
+  EXPECT_EQ(again.raysTraced(), 0);
+}
