@@ -5,6 +5,7 @@
 #include "InterruptibleRead.h"
 #include "Progress.h"
 #include "Propagator.h"
+#include "RayRecord.h"
 #include "RayStore.h"
 #include "SceneFile.h"
 #include "StoreConnection.h"
@@ -425,12 +426,11 @@ std::string percent(double fraction)
 }
 }
 
-void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label)
+namespace
 {
-  vtkIdType counts[3];
-  if (!vtkGeodesicSource::CountRayEnds(frame, counts))
-    throw std::runtime_error(label + ": the traced frame has no Termination array to check");
-  const long long traced = counts[0], failed = counts[1], outOfSteps = counts[2];
+void checkRayEnds(long long traced, long long failed, long long outOfSteps, double maxShare,
+                  const std::string& label)
+{
   const double share = traced > 0 ? static_cast<double>(failed + outOfSteps) / traced : 0.0;
   std::printf("%s: %lld rays, %lld failed numerically, %lld out of steps (%s; at most %s "
               "allowed)\n",
@@ -445,6 +445,29 @@ void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label
       " --max-failed-share allows: the frame is refused, nothing of it written or stored. A "
       "smaller --step, another --method or a larger tracing.maxSteps may help; "
       "--max-failed-share 1 accepts the frame as it is");
+}
+}
+
+void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label)
+{
+  vtkIdType counts[3];
+  if (!vtkGeodesicSource::CountRayEnds(frame, counts))
+    throw std::runtime_error(label + ": the traced frame has no Termination array to check");
+  checkRayEnds(counts[0], counts[1], counts[2], maxShare, label);
+}
+
+void checkRayEnds(const std::vector<RayRecord>& frame, double maxShare, const std::string& label)
+{
+  long long traced = 0, failed = 0, outOfSteps = 0;
+  for (const RayRecord& r : frame)
+  {
+    if (r.termination == Termination::Running)
+      continue; // not traced
+    ++traced;
+    failed += r.termination == Termination::NumericalFailure;
+    outOfSteps += r.termination == Termination::StepBudget;
+  }
+  checkRayEnds(traced, failed, outOfSteps, maxShare, label);
 }
 
 const std::vector<OptionSpec>& databaseSpecs()

@@ -19,6 +19,7 @@ class vtkMultiProcessController;
 namespace asrt
 {
 class RayStore;
+struct RayRecord;
 
 namespace cli
 {
@@ -136,6 +137,9 @@ double maxFailedShare(const Options& options);
 /// numerically, B out of steps"), then throws std::runtime_error (exit 1) if (F + B)/N exceeds
 /// `maxShare`: such a frame is no picture of its scene, and must not be written or stored as one.
 void checkRayEnds(vtkImageData* frame, double maxShare, const std::string& label);
+/// As above, for a frame's records (one per pixel; those still Running were not traced), counted
+/// as vtkGeodesicSource::CountRayEnds counts an image's.
+void checkRayEnds(const std::vector<RayRecord>& frame, double maxShare, const std::string& label);
 
 /// --db, --quiet
 const std::vector<OptionSpec>& databaseSpecs();

@@ -511,10 +511,7 @@ int runMovie(const std::vector<std::string>& args)
   const double failedShare = maxFailedShare(options);
   making.checkTraced = [failedShare, &frames](const std::vector<RayRecord>& records, int k)
   {
-    vtkNew<vtkImageData> image;
-    recordsToImage(records, frames.front().identity.camera.width, 0,
-                   frames.front().identity.camera.height, image);
-    checkRayEnds(image, failedShare,
+    checkRayEnds(records, failedShare,
                  "frame " + std::to_string(k) + " (" +
                    frames[static_cast<std::size_t>(k)].describe + ")");
   };

@@ -326,8 +326,16 @@ struct MovieMaking
     double bytes = 0;
     for (const auto& [k, records] : in.whole)
       bytes += static_cast<double>(records.size() * sizeof(RayRecord));
+    // By default at most a quarter of the memory a read may take, and at most 4 frames beyond the
+    // first GiB: what a frame being made uses (its keys, the frames around a frame measured), with
+    // room to spare. More costs memory a frame is not read back for (the pictures of a whole frame
+    // are made as it is traced), and fresh memory costs its first touch.
+    const double frameBytes =
+      static_cast<double>(maker.Width) * maker.Height * static_cast<double>(sizeof(RayRecord));
     const double budget =
-      maker.Settings.keptFrameBytes > 0 ? maker.Settings.keptFrameBytes : defaultMemoryLimit() / 4;
+      maker.Settings.keptFrameBytes > 0
+        ? maker.Settings.keptFrameBytes
+        : std::min(defaultMemoryLimit() / 4, std::max(double(1 << 30), 4 * frameBytes));
     while (bytes > budget)
     {
       int oldest = -1;

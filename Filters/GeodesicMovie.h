@@ -171,8 +171,9 @@ struct MovieSettings
   bool cacheRetraced = false;
   /// The bytes of whole frames' records kept in memory beyond those a frame in the making uses;
   /// the least recently used frames that are stored leave first and are read again when needed
-  /// (at 1920×1080 a frame's records take about 600 MB). 0: a quarter of the memory a read may
-  /// take (defaultMemoryLimit). Frames not stored (no store) are always kept.
+  /// (at 1920×1080 a frame's records take about 550 MB). 0: a GiB or 4 frames, whichever is more,
+  /// and at most a quarter of the memory a read may take (defaultMemoryLimit). Frames not stored
+  /// (no store) are always kept.
   double keptFrameBytes = 0;
   /// Asked during traces: true stops the movie (MovieCancelled).
   std::function<bool()> cancelled;

@@ -185,7 +185,25 @@ JSON
   -o flight-end > /dev/null
 cmp flight/fig1-cylinders-004.png flight-end.png
 
+step "PNGs alone on an empty store: each whole frame's PNG made as it is traced, stored with it"
+small=(--ramp mass=0.65:0.8 -n 7 -r 40x40 --quality 35 --against-traced -q --formats png)
+out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" "${small[@]}" \
+  --store=png-first -o png-first/)"
+echo "$out"
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:7 -r 40x40 --formats png -q -o truth40 > /dev/null
+whole="$(awk '$1 ~ /^[0-9]+$/ && ($3 == "key" || $3 == "traced") { print $1 }' <<< "$out")"
+test -n "$whole"
+for k in $whole; do cmp "png-first/fig4-mass-start-00$k.png" "truth40-00$k.png"; done
+"$expect" 0 "rays traced: 0$" -- "$asrt" movie "$scene" "${small[@]}" --store -o png-again/ \
+  > /dev/null
+for k in 0 1 2 3 4 5 6; do
+  cmp "png-first/fig4-mass-start-00$k.png" "png-again/fig4-mass-start-00$k.png"
+done
+
 step "refusals: exit codes, one clear line, nothing written"
+"$expect" 1 "failed share is 100 % \(64 of 64 rays failed numerically.*--max-failed-share 1" -- \
+  "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 3 -r 8x8 --method DormandPrince54 --step 1e300 \
+  --store -o bad/
 for q in 0 -3 nan 101 inf; do
   "$expect" 2 "^asrt movie: --quality: " -- "$asrt" movie "$scene" "${movie[@]}" --quality "$q" \
     -o bad/
