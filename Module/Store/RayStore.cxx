@@ -395,7 +395,8 @@ private:
     {
       if (fan.failed())
       {
-        throw StoreError("writing the rays failed: another connection of the write failed");
+        throw storage::ShareStopped(
+          "writing the rays failed: another connection of the write failed");
       }
       this->produce(k, r);
     };

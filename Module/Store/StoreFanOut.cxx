@@ -84,11 +84,31 @@ void FanOut::run(const std::function<void(PGconn*, std::size_t)>& helperShare,
     this->Failed = true;
   }
   joinAll();
-  if (ownError)
+  auto stopped = [](const std::exception_ptr& e)
   {
-    std::rethrow_exception(ownError);
+    try
+    {
+      std::rethrow_exception(e);
+    }
+    catch (const ShareStopped&)
+    {
+      return true;
+    }
+    catch (...)
+    {
+      return false;
+    }
+  };
+  std::vector<std::exception_ptr> all{ ownError };
+  all.insert(all.end(), errors.begin(), errors.end());
+  for (const std::exception_ptr& e : all)
+  {
+    if (e && !stopped(e))
+    {
+      std::rethrow_exception(e);
+    }
   }
-  for (const std::exception_ptr& e : errors)
+  for (const std::exception_ptr& e : all)
   {
     if (e)
     {

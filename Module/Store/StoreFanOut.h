@@ -33,6 +33,14 @@ private:
   std::vector<pg::Connection> Conns;
 };
 
+/// Thrown by a share that stops early because another share failed (FanOut::failed()): run()
+/// reports the failure that stopped it, not this.
+class ShareStopped : public StoreError
+{
+public:
+  using StoreError::StoreError;
+};
+
 /// One share of the work for the calling thread on its own connection, and one for each helper
 /// connection on a thread of its own, all at once. A helper's share opens and ends its own
 /// transaction; if it throws, its transaction is rolled back. Once any share has failed, failed()
@@ -48,7 +56,9 @@ public:
   bool failed() const { return this->Failed.load(std::memory_order_relaxed); }
   /// Runs helperShare(connection, k) for helper k and ownShare() on the calling thread; returns
   /// once all have ended. Then rethrows the calling thread's error if it had one, else the first
-  /// helper's.
+  /// helper's, passing over a ShareStopped while another share has an error of its own (a disk
+  /// that filled up under one connection is what the caller hears of, not that the others
+  /// stopped).
   void run(const std::function<void(PGconn*, std::size_t)>& helperShare,
            const std::function<void()>& ownShare);
 
