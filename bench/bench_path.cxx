@@ -37,6 +37,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -543,8 +544,15 @@ void runRampStudy(double tStart)
     bool moved;
     double share, vsTraced, vsConverged;
   };
+  struct PlainError
+  {
+    double h, mass, psnr;
+    std::array<double, kPathMethodCount> pixels{}, error{}; ///< shares of all
+    double movedOtherSurface = 0, movedOtherError = 0;      ///< shares of the moved edges'
+  };
   std::vector<Ranking> rankings;
   std::vector<Outcome> outcomes;
+  std::vector<PlainError> plainErrors;
   for (double h : spacings)
   {
     const int K = static_cast<int>(std::lround(1.1 / h)) + 1;
@@ -586,6 +594,35 @@ void runRampStudy(double tStart)
         }
         est.push_back(plain.estimate[p]);
         truth.push_back(err2[p]);
+      }
+      {
+        // Where the plain frame's error lies: each way of predicting, its share of the pixels and
+        // of the squared error against the traced frame; for moved edges also the pixels whose
+        // centre shows another surface than the traced frame's.
+        PlainError e{ h, f.mass, psnrOf(plainRgb, f.tracedRgb) };
+        double total = 0, movedError = 0, otherSurface = 0, otherError = 0;
+        const auto moved = static_cast<std::uint8_t>(PathMethod::MovedEdge);
+        for (std::size_t p = 0; p < err2.size(); ++p)
+        {
+          e.pixels[plain.method[p]] += 1.0 / static_cast<double>(err2.size());
+          e.error[plain.method[p]] += err2[p];
+          total += err2[p];
+          if (plain.method[p] != moved)
+            continue;
+          movedError += err2[p];
+          const RayRecord &a = plain.records[p], &b = f.traced[p];
+          if (a.objectId != b.objectId || a.termination != b.termination)
+          {
+            otherSurface += 1;
+            otherError += err2[p];
+          }
+        }
+        for (double& x : e.error)
+          x = total > 0 ? x / total : 0.0;
+        const double movedPixels = e.pixels[moved] * static_cast<double>(err2.size());
+        e.movedOtherSurface = movedPixels > 0 ? otherSurface / movedPixels : 0.0;
+        e.movedOtherError = movedError > 0 ? otherError / movedError : 0.0;
+        plainErrors.push_back(e);
       }
       const std::vector<std::int32_t> byEstimate32 = retraceOrder(plain.estimate);
       std::vector<std::size_t> byEstimate(byEstimate32.begin(), byEstimate32.end());
@@ -698,6 +735,29 @@ void runRampStudy(double tStart)
                   pct(mean.moved / count).c_str(), pct(mean.must / count).c_str(),
                   pct(mean.estimate35 / count).c_str(), pct(mean.oracle35 / count).c_str(),
                   pct(mean.estimate40 / count).c_str(), pct(mean.oracle40 / count).c_str());
+  }
+  std::printf("\n**Where the plain frame's error lies** (against the traced frame): each way of "
+              "predicting, its share of the pixels / of the squared error; for moved edges also "
+              "the share of them whose centre shows another surface (object or ending) than the "
+              "traced frame's, and their share of the moved edges' error:\n\n| h | M | plain vs "
+              "traced |");
+  const PathMethod shown[] = { PathMethod::Cubic,       PathMethod::Quadratic,
+                               PathMethod::Linear,      PathMethod::Retrace,
+                               PathMethod::EdgeBlend,   PathMethod::MovedEdge,
+                               PathMethod::MovedSurface };
+  for (PathMethod m : shown)
+    std::printf(" %s |", toString(m));
+  std::printf(" moved: another surface |\n|---|---|---|");
+  for (std::size_t k = 0; k <= std::size(shown); ++k)
+    std::printf("---|");
+  std::printf("\n");
+  for (const PlainError& e : plainErrors)
+  {
+    std::printf("| %g | %.4f | %.1f dB |", e.h, e.mass, e.psnr);
+    for (PathMethod m : shown)
+      std::printf(" %s / %s |", pct(e.pixels[static_cast<std::size_t>(m)]).c_str(),
+                  pct(e.error[static_cast<std::size_t>(m)]).c_str());
+    std::printf(" %s / %s |\n", pct(e.movedOtherSurface).c_str(), pct(e.movedOtherError).c_str());
   }
 }
 }
