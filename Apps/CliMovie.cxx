@@ -515,18 +515,22 @@ int runMovie(const std::vector<std::string>& args)
                  "frame " + std::to_string(k) + " (" +
                    frames[static_cast<std::size_t>(k)].describe + ")");
   };
-  if (pictureFormats(settings) == std::vector<std::string>{ kPngPicture })
   {
-    // Each whole frame's PNG made when it is traced: its records are then let go without being
-    // read back for it. (A VTI holds most of what the records do: those frames are made later.)
-    making.pictureFormats = { kPngPicture };
+    // Each whole frame's pictures made when it is traced: its records are then let go without
+    // being read back for them.
+    making.pictureFormats = pictureFormats(settings);
     const int width = frames.front().identity.camera.width;
     const int height = frames.front().identity.camera.height;
-    making.encodePictures = [width, height](const std::vector<RayRecord>& records)
+    making.encodePictures =
+      [width, height, formats = making.pictureFormats](const std::vector<RayRecord>& records)
     {
       vtkNew<vtkImageData> image;
       recordsToImage(records, width, 0, height, image);
-      return std::vector<std::string>{ tools::encodePng(image) };
+      std::vector<std::string> bytes;
+      for (const std::string& format : formats)
+        bytes.push_back(format == kVtiPicture ? tools::encodeVti(image, tools::kXmlCompression)
+                                              : tools::encodePng(image));
+      return bytes;
     };
   }
   auto maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <map>
 #include <set>
 #include <utility>
@@ -124,6 +125,7 @@ struct MovieMaker::Internals
   /// Pictures of whole frames traced by this movie, encoded when traced
   /// (MovieSettings::encodePictures), until storedPictures() hands them out.
   std::map<int, std::vector<std::string>> pictures;
+  std::deque<int> pictureOrder; ///< the frames of `pictures`, as they were traced
   /// Records of whole frames let go, their memory reused for the next frame traced: fresh memory
   /// costs its first touch (the kernel clears every page), memory used before does not.
   std::vector<RayRecord> spare;
@@ -304,7 +306,7 @@ struct MovieMaking
       {
         in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
         if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty())
-          in.pictures[k] = maker.Settings.encodePictures(records);
+          this->keepPictures(k, maker.Settings.encodePictures(records));
       }
     }
     if (in.wholeCounted.insert(k).second)
@@ -316,6 +318,31 @@ struct MovieMaking
     in.wholeRays.emplace(k, rays); // a frame read again keeps the count it was made with
     in.wholeHeldRays[k] = raysOf(records);
     return in.whole.emplace(k, std::move(records)).first->second;
+  }
+
+  /// Keeps frame k's pictures until storedPictures() hands them out, those of the frames traced
+  /// earliest let go beyond a quarter of the memory a read may take (their frames are then made
+  /// from their records at their turn, read back from the store).
+  void keepPictures(int k, std::vector<std::string> bytes)
+  {
+    double kept = 0;
+    for (const std::string& b : bytes)
+      kept += static_cast<double>(b.size());
+    for (const auto& [frame, pictures] : in.pictures)
+      for (const std::string& b : pictures)
+        kept += static_cast<double>(b.size());
+    while (kept > defaultMemoryLimit() / 4 && !in.pictureOrder.empty())
+    {
+      const auto oldest = in.pictures.find(in.pictureOrder.front());
+      in.pictureOrder.pop_front();
+      if (oldest == in.pictures.end())
+        continue;
+      for (const std::string& b : oldest->second)
+        kept -= static_cast<double>(b.size());
+      in.pictures.erase(oldest);
+    }
+    in.pictures[k] = std::move(bytes);
+    in.pictureOrder.push_back(k);
   }
 
   /// Lets go of the least recently used whole frames that are stored, but not of `inUse`, until

@@ -186,7 +186,8 @@ struct MovieSettings
   /// whole frame this movie traces, encoded as soon as it is traced. storedPictures() then hands
   /// them out and stores them, so that the frame's records need not be kept, or read back from
   /// the store, until the frame's turn comes (at 1920×1080 a frame's records are about 550 MB, its
-  /// PNG a few).
+  /// PNG under 1 MB, its VTI about 25 MB). Pictures kept beyond a quarter of the memory a read may
+  /// take are let go, the earliest first: those frames are made from their records again.
   std::vector<std::string> pictureFormats;
   std::function<std::vector<std::string>(const std::vector<RayRecord>&)> encodePictures;
 };

@@ -30,6 +30,7 @@
 #include <exception>
 #include <filesystem>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 #include <streambuf>
 #include <vector>
@@ -279,22 +280,13 @@ std::string bytesOf(int fd, std::size_t size, const std::string& path)
   return bytes;
 }
 
-/// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
-/// its name) and checks that it wrote the whole file.
+/// Runs a VTK XML writer of `data` into `stream`; `name` only satisfies the writer's check that
+/// it has somewhere to write.
 template<class Writer>
-void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file, std::string* copy)
+void writeInto(Writer* writer, vtkDataObject* data, const std::string& name, std::ostream& stream)
 {
-  const std::string& path = file.path();
-  if (!data)
-    throw std::runtime_error("cannot write \"" + path + "\": no data");
-  VtkMessageCatcher messages;
-  messages.watchAlgorithm(writer);
   writer->SetInputData(data);
-  const std::string name = file.openName();
-  // The name satisfies the writer's check that it has somewhere to write; the stream is used.
   writer->SetFileName(name.c_str());
-  TemporaryFileBuffer buffer(file);
-  std::ostream stream(&buffer);
   writer->SetOutputStream(&stream);
   // VTK's XML writers cache each array's range in its information, and write an array with
   // information keys in a longer form (the same data, other bytes): the arrays leave as they came,
@@ -307,6 +299,22 @@ void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file, std::st
     if (a->HasInformation())
       a->GetInformation()->Clear();
   writer->SetFileName(nullptr);
+}
+
+/// Runs a VTK writer into the file's temporary (through the descriptor created for it, never by
+/// its name) and checks that it wrote the whole file.
+template<class Writer>
+void writeWith(Writer* writer, vtkDataObject* data, TemporaryFile& file, std::string* copy)
+{
+  const std::string& path = file.path();
+  if (!data)
+    throw std::runtime_error("cannot write \"" + path + "\": no data");
+  VtkMessageCatcher messages;
+  messages.watchAlgorithm(writer);
+  const std::string name = file.openName();
+  TemporaryFileBuffer buffer(file);
+  std::ostream stream(&buffer);
+  writeInto(writer, data, name, stream);
   const std::string error = buffer.finish();
   if (!error.empty())
     throw std::runtime_error(error);
@@ -467,6 +475,25 @@ void writeVti(vtkImageData* image, TemporaryFile& file, XmlCompression compressi
   writer->SetDataModeToBinary();
   setCompression(writer, compression);
   writeWith(writer.Get(), image, file, copy);
+}
+
+std::string encodeVti(vtkImageData* image, XmlCompression compression)
+{
+  const std::string name = "a VTI in memory";
+  if (!image)
+    throw std::runtime_error("cannot write " + name + ": no data");
+  vtkNew<StreamXMLWriter<vtkXMLImageDataWriter>> writer;
+  writer->SetDataModeToBinary();
+  setCompression(writer, compression);
+  VtkMessageCatcher messages;
+  messages.watchAlgorithm(writer);
+  std::ostringstream stream;
+  writeInto(writer.Get(), image, name, stream);
+  checkWriter(writer->GetErrorCode(), messages, name, name);
+  std::string bytes = stream.str();
+  if (!stream || bytes.empty())
+    throw std::runtime_error("cannot write " + name);
+  return bytes;
 }
 
 void writeVtp(vtkPolyData* data, TemporaryFile& file, XmlCompression compression)

@@ -48,6 +48,8 @@ void writeVti(vtkImageData* image, TemporaryFile& file,
               XmlCompression compression = kXmlCompression, std::string* copy = nullptr);
 /// writePng's bytes, in memory.
 std::string encodePng(vtkImageData* image);
+/// writeVti's bytes, in memory.
+std::string encodeVti(vtkImageData* image, XmlCompression compression = kXmlCompression);
 /// Bytes encoded before (a picture stored with its frame) as the file.
 void writeBytes(const std::string& bytes, TemporaryFile& file);
 /// A PNG's picture: its RGB(A) as the image's unsigned-char scalars. Throws std::runtime_error

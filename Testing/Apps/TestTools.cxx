@@ -255,6 +255,12 @@ TEST(DataFiles, SideBySideWritesAreTheFilesWrittenAlone)
   };
   EXPECT_EQ(bytes(dir + "/both.png"), bytes(dir + "/alone.png"));
   EXPECT_EQ(bytes(dir + "/both.vti"), bytes(dir + "/alone.vti"));
+  // Encoded in memory: the bytes of the files (a movie stores them with the frame).
+  EXPECT_TRUE(encodePng(image) == bytes(dir + "/alone.png"));
+  const std::string vti = encodeVti(image);
+  EXPECT_GT(vti.size(), 1000u);
+  EXPECT_TRUE(vti == bytes(dir + "/alone.vti"));
+  EXPECT_THROW(encodeVti(nullptr), std::runtime_error);
 
   const std::string failing = scratch("side-fail");
   vtkNew<vtkImageData> grey; // no colours: its PNG cannot be written
