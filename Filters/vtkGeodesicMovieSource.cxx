@@ -257,11 +257,15 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     const int k = static_cast<int>(std::lround(std::clamp(time, 0.0, n - 1.0)));
     this->UpdateProgress(0.05);
     asrt::MovieFrameReport report;
-    std::vector<asrt::RayRecord> records;
     try
     {
       this->JudgeRendering();
-      records = in.Maker->frame(k, report);
+      image->Initialize();
+      // A whole frame's records are handed over, not copied (half a gigabyte at 1920×1080).
+      const int width = in.Maker->width(), height = in.Maker->height();
+      in.Maker->useFrame(k, report,
+                         [width, height, image](const std::vector<asrt::RayRecord>& records)
+                         { asrt::recordsToImage(records, width, 0, height, image); });
     }
     catch (const asrt::MovieCancelled&)
     {
@@ -271,8 +275,6 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
       return 1;
     }
     this->RaysTraced = in.ChoosingRays + in.Maker->raysTraced();
-    image->Initialize();
-    asrt::recordsToImage(records, in.Maker->width(), 0, in.Maker->height(), image);
     vtkFieldData* fd = image->GetFieldData();
     vtkNew<vtkStringArray> method;
     method->SetName("FrameMethod");
