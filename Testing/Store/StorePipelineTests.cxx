@@ -22,6 +22,7 @@
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <gtest/gtest.h>
@@ -678,6 +679,15 @@ TEST(StorePipeline, AFrameRowEditedToAnImpossibleSizeIsAnErrorNotAnAllocation)
 namespace
 {
 /// The settings of the small ramps below: 35 dB against the frames traced at their parameters.
+/// The mass ramp's scene (Figs. 4-5) at 48x48: the small movies' source.
+vtkSmartPointer<vtkGeodesicSource> smallRampSource()
+{
+  auto source = vtkSmartPointer<vtkGeodesicSource>::New();
+  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetResolution(48, 48);
+  return source;
+}
+
 asrt::MovieSettings rampSettings()
 {
   asrt::MovieSettings settings;
@@ -692,9 +702,7 @@ TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
 {
   asrt::RayStore store(server().conninfo());
   store.migrate();
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
-  source->SetResolution(48, 48);
+  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 13);
   asrt::MovieSettings settings = rampSettings();
   settings.label = "first";
@@ -755,9 +763,7 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
 {
   asrt::RayStore store(server().conninfo());
   store.migrate();
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
-  source->SetResolution(48, 48);
+  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
   asrt::MovieSettings settings = rampSettings();
   const std::vector<std::string> formats{ "test.1" };
@@ -832,9 +838,7 @@ TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTh
 {
   asrt::RayStore store(server().conninfo());
   store.migrate();
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
-  source->SetResolution(48, 48);
+  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 9);
   asrt::MovieSettings settings = rampSettings();
   // Without a store every frame stays; with one and a budget of a byte, only the frames in use.
@@ -865,9 +869,7 @@ TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAn
 {
   asrt::RayStore store(server().conninfo());
   store.migrate();
-  vtkNew<vtkGeodesicSource> source;
-  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
-  source->SetResolution(48, 48);
+  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
   const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
   asrt::MovieSettings settings = rampSettings();
   const std::vector<std::string> formats{ "test.1" };
