@@ -393,6 +393,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     const asrt::CameraParameters& cam = in.Scenes[0].camera;
     asrt::PathOptions options;
     options.pointIndex = asrt::vtkPointIndexFactory();
+    options.hedgeNearShadow = !(this->QualityTarget > 0.0); // the plain preview
     asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
                                                    *in.Shading.scene, options);
     this->UpdateProgress(0.3);

@@ -294,8 +294,13 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
                  n;
   const PathFrame plain = interpolateAlongPath(around, r.s, kSide, kSide, shading, with);
   const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
-  r.plainVsConverged = psnrOf(plainRgb, reference);
-  r.plainVsTraced = psnrOf(plainRgb, traced);
+  // The plain preview: the frame shown as predicted, the shadow's rim hedged.
+  PathOptions preview = with;
+  preview.hedgeNearShadow = true;
+  const std::vector<std::uint8_t> previewRgb =
+    rgbOf(interpolateAlongPath(around, r.s, kSide, kSide, shading, preview).records);
+  r.plainVsConverged = psnrOf(previewRgb, reference);
+  r.plainVsTraced = psnrOf(previewRgb, traced);
   std::vector<double> est, truth;
   for (std::size_t p = 0; p < plain.records.size(); ++p)
     if (plain.method[p] != static_cast<std::uint8_t>(PathMethod::Retrace))
@@ -546,7 +551,7 @@ void runRampStudy(double tStart)
   };
   struct PlainError
   {
-    double h, mass, psnr;
+    double h, mass, psnr, previewPsnr;
     std::array<double, kPathMethodCount> pixels{}, error{}; ///< shares of all
     double movedOtherSurface = 0, movedOtherError = 0;      ///< shares of the moved edges'
   };
@@ -580,6 +585,12 @@ void runRampStudy(double tStart)
       const double plainSeconds = now() - tPlain;
       const PathFrame plainBefore =
         interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, without);
+      // The plain preview: the frame shown as predicted, the shadow's rim hedged; the frames
+      // completed to a target start from `plain`.
+      PathOptions preview = with;
+      preview.hedgeNearShadow = true;
+      const std::vector<std::uint8_t> previewRgb =
+        rgbOf(interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, preview).records);
       // The plain frame, the estimate's ranking against the truth, and the oracle.
       const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
       std::vector<double> err2(plain.records.size()), est, truth;
@@ -599,7 +610,7 @@ void runRampStudy(double tStart)
         // Where the plain frame's error lies: each way of predicting, its share of the pixels and
         // of the squared error against the traced frame; for moved edges also the pixels whose
         // centre shows another surface than the traced frame's.
-        PlainError e{ h, f.mass, psnrOf(plainRgb, f.tracedRgb) };
+        PlainError e{ h, f.mass, psnrOf(plainRgb, f.tracedRgb), psnrOf(previewRgb, f.tracedRgb) };
         double total = 0, movedError = 0, otherSurface = 0, otherError = 0;
         const auto moved = static_cast<std::uint8_t>(PathMethod::MovedEdge);
         for (std::size_t p = 0; p < err2.size(); ++p)
@@ -640,8 +651,8 @@ void runRampStudy(double tStart)
           shareFor(byEstimate, must, err2, 40), shareFor(byTruth, must, err2, 40) });
       if (detailed)
         std::printf("| %g | %.4f | %s | plain (nothing re-traced) | 0 | %s | %s | %.2f |\n", h,
-                    f.mass, dbs(tracedVsRef).c_str(), dbs(psnrOf(plainRgb, f.tracedRgb)).c_str(),
-                    dbs(psnrOf(plainRgb, f.reference)).c_str(), plainSeconds / f.traceSeconds);
+                    f.mass, dbs(tracedVsRef).c_str(), dbs(psnrOf(previewRgb, f.tracedRgb)).c_str(),
+                    dbs(psnrOf(previewRgb, f.reference)).c_str(), plainSeconds / f.traceSeconds);
       const SceneDescription atT = rampScene(f.mass);
       const FrameTracer tracer(atT);
       for (double target : targets)
@@ -739,21 +750,22 @@ void runRampStudy(double tStart)
   std::printf("\n**Where the plain frame's error lies** (against the traced frame): each way of "
               "predicting, its share of the pixels / of the squared error; for moved edges also "
               "the share of them whose centre shows another surface (object or ending) than the "
-              "traced frame's, and their share of the moved edges' error:\n\n| h | M | plain vs "
-              "traced |");
+              "traced frame's, and their share of the moved edges' error; all of the frame a "
+              "target is completed from (the preview hedges the shadow's rim):\n\n| h | M | "
+              "preview vs traced | plain vs traced |");
   const PathMethod shown[] = { PathMethod::Cubic,       PathMethod::Quadratic,
                                PathMethod::Linear,      PathMethod::Retrace,
                                PathMethod::EdgeBlend,   PathMethod::MovedEdge,
                                PathMethod::MovedSurface };
   for (PathMethod m : shown)
     std::printf(" %s |", toString(m));
-  std::printf(" moved: another surface |\n|---|---|---|");
+  std::printf(" moved: another surface |\n|---|---|---|---|");
   for (std::size_t k = 0; k <= std::size(shown); ++k)
     std::printf("---|");
   std::printf("\n");
   for (const PlainError& e : plainErrors)
   {
-    std::printf("| %g | %.4f | %.1f dB |", e.h, e.mass, e.psnr);
+    std::printf("| %g | %.4f | %.1f dB | %.1f dB |", e.h, e.mass, e.previewPsnr, e.psnr);
     for (PathMethod m : shown)
       std::printf(" %s / %s |", pct(e.pixels[static_cast<std::size_t>(m)]).c_str(),
                   pct(e.error[static_cast<std::size_t>(m)]).c_str());

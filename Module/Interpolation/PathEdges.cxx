@@ -211,6 +211,33 @@ public:
     return best >= 0 ? best : nearest;
   }
 
+  /// A mover of a ray the hole captured that covers spot (x, y) at t, −1 if none.
+  std::int64_t capturedCovering(double x, double y, bool linear, int sides) const
+  {
+    const Grid& g = linear ? linear_ : full_;
+    const int ci = static_cast<int>(std::floor(x + 0.5)),
+              cj = static_cast<int>(std::floor(y + 0.5));
+    for (int dj = -kReach; dj <= kReach; ++dj)
+      for (int di = -kReach; di <= kReach; ++di)
+      {
+        const int cell = g.cell(ci + di, cj + dj);
+        if (cell < 0)
+          continue;
+        for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
+        {
+          const std::int64_t k = g.entries[static_cast<std::size_t>(e)];
+          const Mover& m = movers_[static_cast<std::size_t>(k)];
+          if (!((sides >> m.side) & 1) || m.record->termination != Termination::Captured)
+            continue;
+          double d[2];
+          this->offset(m, x, y, linear, d);
+          if (std::max(std::abs(d[0]), std::abs(d[1])) - 0.5 <= kSeam)
+            return k;
+        }
+      }
+    return -1;
+  }
+
   const Mover& mover(std::int64_t k) const
   {
     return movers_[static_cast<std::size_t>(k)];
@@ -315,9 +342,11 @@ constexpr float kEdgeShare = 0.25f;
 /// sub-position is covered by nothing. `centre` (if given) and the sub-positions' records ending
 /// alike leave `alike` (if given) true.
 bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool linear, int sides,
-                Color& out, const RayRecord* centre = nullptr, bool* alike = nullptr)
+                Color& out, const RayRecord* centre = nullptr, bool* alike = nullptr,
+                float* nearShadow = nullptr, bool hedgeNearShadow = false)
 {
   out = Color::Zero();
+  Color halfContrast = Color::Zero();
   for (const auto& o : kSub)
   {
     const double x = i + o[0], y = j + o[1];
@@ -327,8 +356,22 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
     const RayRecord r = movedRecord(mover, k, x, y, linear, 1 / 3.0);
     if (centre && alike && !endAlike(*centre, r))
       *alike = false;
-    out += shadePrediction(scene, r) / 9.0;
+    Color c = shadePrediction(scene, r);
+    // The shadow's rim (PathEdges.h): the mean of the two, half the contrast off whichever shows.
+    if (hedgeNearShadow && r.termination != Termination::Captured)
+    {
+      const std::int64_t h = mover.capturedCovering(x, y, linear, sides);
+      if (h >= 0)
+      {
+        const Color shadow = shadePrediction(scene, *mover.mover(h).record);
+        halfContrast += 0.5 * (c - shadow) / 9.0;
+        c = 0.5 * (c + shadow);
+      }
+    }
+    out += c / 9.0;
   }
+  if (nearShadow) // the error of the mean where the other is right
+    *nearShadow = colorError2(halfContrast, Color::Zero());
   return true;
 }
 }
@@ -338,7 +381,7 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
                                               const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
                                               const std::vector<const RayRecord*>& perPixel,
-                                              bool hedged)
+                                              bool hedged, bool hedgeNearShadow)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
@@ -356,7 +399,9 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
       continue;
     const RayRecord centreRecord = movedRecord(mover, centre, i, j, false, 1.0);
     bool oneSurface = true;
-    if (!subsampled(mover, scene, i, j, false, 3, color, &centreRecord, &oneSurface))
+    float nearShadow = 0.0f;
+    if (!subsampled(mover, scene, i, j, false, 3, color, &centreRecord, &oneSurface, &nearShadow,
+                    hedgeNearShadow))
       continue;
     e.covered = true;
     e.record = centreRecord;
@@ -367,12 +412,13 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     // The other ways of predicting the pixel: the disagreement of each with this one.
     Color other, sum = color;
     int ways = 1;
-    if (subsampled(mover, scene, i, j, true, 3, other))
+    if (subsampled(mover, scene, i, j, true, 3, other, nullptr, nullptr, nullptr, hedgeNearShadow))
       e.estimate = std::max(e.estimate, colorError2(color, other));
     else
       e.estimate = std::numeric_limits<float>::infinity();
     for (int side : { 1, 2 })
-      if (subsampled(mover, scene, i, j, false, side, other))
+      if (subsampled(mover, scene, i, j, false, side, other, nullptr, nullptr, nullptr,
+                     hedgeNearShadow))
       {
         e.estimate = std::max(e.estimate, colorError2(color, other));
         sum += other;
@@ -397,7 +443,7 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
       contrast = std::max(contrast, kEdgeShare * colorError2(color, shadePrediction(scene, r)));
     }
     e.oneSurface = oneSurface;
-    e.estimate = std::max(e.estimate, contrast);
+    e.estimate = std::max({ e.estimate, contrast, nearShadow });
     if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
     {
       e.estimate = std::max(e.estimate, colorError2(color, own->color));

@@ -475,7 +475,8 @@ std::vector<std::int32_t> contradictedNeighbours(const PathFrame& frame,
 /// the ways of predicting them give a finite estimate (PathEdges.h).
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
                   const PointIndexFactory& index, const std::vector<RayRecord>& own,
-                  const std::vector<std::uint8_t>& hasOwn, bool hedged, PathFrame& f)
+                  const std::vector<std::uint8_t>& hasOwn, bool hedged, bool hedgeNearShadow,
+                  PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -485,8 +486,8 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       pixels.push_back(static_cast<std::int32_t>(p));
       perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
     }
-  const std::vector<MovedEdgePixel> moved =
-    predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged);
+  const std::vector<MovedEdgePixel> moved = predictMovedEdges(
+    keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged, hedgeNearShadow);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -693,7 +694,8 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       f.method[p] = static_cast<std::uint8_t>(m);
     }
   if (options.movedEdges)
-    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges, f);
+    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
+                 options.hedgeNearShadow, f);
   return f;
 }
 

@@ -438,6 +438,47 @@ TEST(PathInterpolationMovedEdges, HedgingTheWaysOfMovingComesCloserToTheTracedFr
   EXPECT_LT(errorHedged, 0.9 * errorSingle);
 }
 
+// The mass ramp, keys 0.11 M apart, where the shadow grows between them and swallows the images
+// near its rim: moved points of a surface and of the hole both cover spots there, and the frame
+// shown as predicted (hedgeNearShadow) takes the mean of the two. It comes closer to the frame the
+// test traces at t, and only moved-edge pixels change.
+TEST(PathInterpolationMovedEdges, HedgingTheShadowsRimComesCloserToTheTracedFrame)
+{
+  constexpr int side = 96;
+  constexpr double t = 0.6225;
+  std::vector<std::vector<RayRecord>> records;
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    records.push_back(traceFrame(rampScene(0.45 + 0.11 * k, side)));
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.45 + 0.11 * k, &records[static_cast<std::size_t>(k)] });
+  const SceneDescription atT = rampScene(t, side);
+  const std::vector<RayRecord> truth = traceFrame(atT);
+  PathOptions hedged = withMovedEdges();
+  hedged.hedgeNearShadow = true;
+  const PathFrame a = interpolateAlongPath(path, t, side, side, *atT.scene, hedged);
+  const PathFrame b = interpolateAlongPath(path, t, side, side, *atT.scene, withMovedEdges());
+  double errorHedged = 0, errorPlain = 0;
+  std::size_t changed = 0;
+  for (std::size_t p = 0; p < truth.size(); ++p)
+  {
+    ASSERT_EQ(a.method[p], b.method[p]) << p;
+    errorHedged += error2(a.records[p], truth[p]);
+    errorPlain += error2(b.records[p], truth[p]);
+    if (a.records[p].color == b.records[p].color)
+      continue;
+    ++changed;
+    EXPECT_TRUE(a.method[p] == static_cast<std::uint8_t>(PathMethod::MovedEdge) ||
+                a.method[p] == static_cast<std::uint8_t>(PathMethod::MovedSurface))
+      << p;
+  }
+  std::printf("[ path ] the shadow's rim at M = %.4f, keys 0.11 apart: %zu pixels hedged; squared "
+              "error %.0f hedged, %.0f not\n",
+              t, changed, errorHedged, errorPlain);
+  EXPECT_GT(changed, 20u);
+  EXPECT_LT(errorHedged, 0.8 * errorPlain);
+}
+
 // The whole mass ramp with key frames a quarter of it apart, where the orders of prediction
 // disagree little while the texture under a pixel changes a lot between keys: every frame between
 // them, completed to a target, meets it within 1 dB against the frame the test traces there, and
