@@ -320,9 +320,10 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
     if (!pictures)
     {
       image = vtkSmartPointer<vtkImageData>::New();
+      const int width = maker.width(), height = maker.height();
       maker.useFrame(k, report,
-                     [&](const std::vector<RayRecord>& records)
-                     { recordsToImage(records, maker.width(), 0, maker.height(), image); });
+                     [width, height, &image](const std::vector<RayRecord>& records)
+                     { recordsToImage(records, width, 0, height, image); });
     }
     char number[32];
     std::snprintf(number, sizeof number, "-%03d", k);

@@ -252,7 +252,7 @@ struct MovieMaking
       return kept->second;
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     std::vector<RayRecord> records;
-    double rays = 0;
+    double rays = 0, held = 0; // rays integrated; rays the records hold (raysOf)
     // Stored before, or traced and stored by this movie and since let go (keepWholeWithinBudget).
     const std::optional<std::int64_t> id = this->storedId(k);
     if (id && maker.Store)
@@ -265,7 +265,7 @@ struct MovieMaking
         throw StoreError("stored frame " + std::to_string(*id) + " has " +
                          std::to_string(records.size()) + " rays, the movie's frames " +
                          std::to_string(maker.Width * maker.Height) + " pixels");
-      rays = raysOf(records);
+      rays = held = raysOf(records);
       in.storedIds[k] = *id;
     }
     else
@@ -301,6 +301,7 @@ struct MovieMaking
       // The tracer's count: on the adaptive grid the records leave out border rays a block traced
       // for a pixel that the block owning it filled (FrameTracer::raysIntegrated).
       rays = static_cast<double>(tracer.raysIntegrated());
+      held = raysOf(records);
       maker.RaysTraced += rays;
       if (maker.Store)
       {
@@ -316,7 +317,7 @@ struct MovieMaking
       ++maker.WholeCount;
     }
     in.wholeRays.emplace(k, rays); // a frame read again keeps the count it was made with
-    in.wholeHeldRays[k] = raysOf(records);
+    in.wholeHeldRays[k] = held;
     return in.whole.emplace(k, std::move(records)).first->second;
   }
 

@@ -171,71 +171,47 @@ public:
   /// a's, bit 1: key a + 1's).
   std::int64_t front(double x, double y, bool linear, int sides) const
   {
-    const Grid& g = linear ? linear_ : full_;
-    const int ci = static_cast<int>(std::floor(x + 0.5)),
-              cj = static_cast<int>(std::floor(y + 0.5));
     std::int64_t best = -1, nearest = -1;
     double bestLength = 0, nearestGap = kGap;
-    for (int dj = -kReach; dj <= kReach; ++dj)
-      for (int di = -kReach; di <= kReach; ++di)
+    this->visitNear(
+      x, y, linear, sides,
+      [&](std::int64_t k, const Mover& m, const double* d)
       {
-        const int cell = g.cell(ci + di, cj + dj);
-        if (cell < 0)
-          continue;
-        for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
+        if (!onSurface(m, d))
+          return false;
+        const double out = std::max(std::abs(d[0]), std::abs(d[1])) - 0.5;
+        if (out <= kSeam)
         {
-          const std::int64_t k = g.entries[static_cast<std::size_t>(e)];
-          const Mover& m = movers_[static_cast<std::size_t>(k)];
-          if (!((sides >> m.side) & 1))
-            continue;
-          double d[2];
-          this->offset(m, x, y, linear, d);
-          if (!onSurface(m, d))
-            continue;
-          const double out = std::max(std::abs(d[0]), std::abs(d[1])) - 0.5;
-          if (out <= kSeam)
+          if (best < 0 || m.length < bestLength || (m.length == bestLength && k < best))
           {
-            if (best < 0 || m.length < bestLength || (m.length == bestLength && k < best))
-            {
-              best = k;
-              bestLength = m.length;
-            }
-          }
-          else if (out < nearestGap || (out == nearestGap && nearest >= 0 && k < nearest))
-          {
-            nearest = k;
-            nearestGap = out;
+            best = k;
+            bestLength = m.length;
           }
         }
-      }
+        else if (out < nearestGap || (out == nearestGap && nearest >= 0 && k < nearest))
+        {
+          nearest = k;
+          nearestGap = out;
+        }
+        return false;
+      });
     return best >= 0 ? best : nearest;
   }
 
   /// A mover of a ray the hole captured that covers spot (x, y) at t, −1 if none.
   std::int64_t capturedCovering(double x, double y, bool linear, int sides) const
   {
-    const Grid& g = linear ? linear_ : full_;
-    const int ci = static_cast<int>(std::floor(x + 0.5)),
-              cj = static_cast<int>(std::floor(y + 0.5));
-    for (int dj = -kReach; dj <= kReach; ++dj)
-      for (int di = -kReach; di <= kReach; ++di)
-      {
-        const int cell = g.cell(ci + di, cj + dj);
-        if (cell < 0)
-          continue;
-        for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
-        {
-          const std::int64_t k = g.entries[static_cast<std::size_t>(e)];
-          const Mover& m = movers_[static_cast<std::size_t>(k)];
-          if (!((sides >> m.side) & 1) || m.record->termination != Termination::Captured)
-            continue;
-          double d[2];
-          this->offset(m, x, y, linear, d);
-          if (std::max(std::abs(d[0]), std::abs(d[1])) - 0.5 <= kSeam)
-            return k;
-        }
-      }
-    return -1;
+    std::int64_t found = -1;
+    this->visitNear(x, y, linear, sides,
+                    [&](std::int64_t k, const Mover& m, const double* d)
+                    {
+                      if (m.record->termination != Termination::Captured ||
+                          std::max(std::abs(d[0]), std::abs(d[1])) - 0.5 > kSeam)
+                        return false;
+                      found = k;
+                      return true;
+                    });
+    return found;
   }
 
   const Mover& mover(std::int64_t k) const
@@ -253,6 +229,35 @@ public:
   }
 
 private:
+  /// Calls visit(k, mover, d) for each usable mover of the sides in `sides` bucketed within
+  /// kReach of spot (x, y) (through every matched key or, `linear`, the inner pair alone), d the
+  /// spot in its source pixel's coordinates; stops once visit returns true.
+  template<typename Visit>
+  void visitNear(double x, double y, bool linear, int sides, Visit&& visit) const
+  {
+    const Grid& g = linear ? linear_ : full_;
+    const int ci = static_cast<int>(std::floor(x + 0.5)),
+              cj = static_cast<int>(std::floor(y + 0.5));
+    for (int dj = -kReach; dj <= kReach; ++dj)
+      for (int di = -kReach; di <= kReach; ++di)
+      {
+        const int cell = g.cell(ci + di, cj + dj);
+        if (cell < 0)
+          continue;
+        for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
+        {
+          const std::int64_t k = g.entries[static_cast<std::size_t>(e)];
+          const Mover& m = movers_[static_cast<std::size_t>(k)];
+          if (!((sides >> m.side) & 1))
+            continue;
+          double d[2];
+          this->offset(m, x, y, linear, d);
+          if (visit(k, m, d))
+            return;
+        }
+      }
+  }
+
   /// The usable movers by the pixel their position at t rounds to, in a grid widened by kReach.
   struct Grid
   {

@@ -96,8 +96,8 @@ std::vector<RayRecord> traceFrame(const SceneDescription& d)
   return FrameTracer(d).traceRows(0, d.camera.height);
 }
 
-/// Key frames of an orbit at the given angles, traced.
-struct OrbitKeys
+/// Key frames along a path, traced: their parameters and records.
+struct TracedKeys
 {
   std::vector<double> s;
   std::vector<std::vector<RayRecord>> records;
@@ -110,12 +110,24 @@ struct OrbitKeys
   }
 };
 
-OrbitKeys orbitKeys(const SceneDescription& start, int side, std::vector<double> degrees)
+TracedKeys orbitKeys(const SceneDescription& start, int side, std::vector<double> degrees)
 {
-  OrbitKeys keys;
+  TracedKeys keys;
   keys.s = std::move(degrees);
   for (double d : keys.s)
     keys.records.push_back(traceFrame(orbitScene(start, side, d)));
+  return keys;
+}
+
+/// Four key frames of the mass ramp, `spacing` apart from `first`, traced.
+TracedKeys rampKeys(int side, double first, double spacing)
+{
+  TracedKeys keys;
+  for (int k = 0; k < 4; ++k)
+  {
+    keys.s.push_back(first + spacing * k);
+    keys.records.push_back(traceFrame(rampScene(keys.s.back(), side)));
+  }
   return keys;
 }
 
@@ -405,12 +417,8 @@ TEST(PathInterpolationMovedEdges, HedgingTheWaysOfMovingComesCloserToTheTracedFr
 {
   constexpr int side = 96;
   constexpr double t = 0.76;
-  std::vector<std::vector<RayRecord>> records;
-  std::vector<PathKey> path;
-  for (int k = 0; k < 4; ++k)
-    records.push_back(traceFrame(rampScene(0.595 + 0.11 * k, side)));
-  for (int k = 0; k < 4; ++k)
-    path.push_back({ 0.595 + 0.11 * k, &records[static_cast<std::size_t>(k)] });
+  const TracedKeys keys = rampKeys(side, 0.595, 0.11);
+  const std::vector<PathKey> path = keys.path();
   const SceneDescription atT = rampScene(t, side);
   const std::vector<RayRecord> truth = traceFrame(atT);
   PathOptions hedged = withMovedEdges(), single = withMovedEdges();
@@ -446,12 +454,8 @@ TEST(PathInterpolationMovedEdges, HedgingTheShadowsRimComesCloserToTheTracedFram
 {
   constexpr int side = 96;
   constexpr double t = 0.6225;
-  std::vector<std::vector<RayRecord>> records;
-  std::vector<PathKey> path;
-  for (int k = 0; k < 4; ++k)
-    records.push_back(traceFrame(rampScene(0.45 + 0.11 * k, side)));
-  for (int k = 0; k < 4; ++k)
-    path.push_back({ 0.45 + 0.11 * k, &records[static_cast<std::size_t>(k)] });
+  const TracedKeys keys = rampKeys(side, 0.45, 0.11);
+  const std::vector<PathKey> path = keys.path();
   const SceneDescription atT = rampScene(t, side);
   const std::vector<RayRecord> truth = traceFrame(atT);
   PathOptions hedged = withMovedEdges();
@@ -531,7 +535,7 @@ TEST(PathInterpolationOrbit, ASilhouetteSweepingAcrossPixelsTheKeysAgreeOnIsTrac
   constexpr double target = 35.0;
   const SceneDescription start = sceneFile("fig1-cylinders.json");
   auto sceneAt = [&start](double degrees) { return orbitScene(start, side, degrees); };
-  const OrbitKeys keys = orbitKeys(start, side, { 66.0, 72.0, 78.0, 84.0 });
+  const TracedKeys keys = orbitKeys(start, side, { 66.0, 72.0, 78.0, 84.0 });
   const std::vector<PathKey> path = keys.path();
   const std::vector<std::vector<RayRecord>>& records = keys.records;
   PathOptions options;
@@ -576,7 +580,7 @@ TEST(PathInterpolationOrbit, EdgePixelsFollowATextureTurningUnderEdgesThatStay)
   constexpr int side = 96;
   const SceneDescription start = sceneFile("kerr-disk.json");
   auto sceneAt = [&start](double degrees) { return orbitScene(start, side, degrees); };
-  const OrbitKeys keys = orbitKeys(start, side, { 20.0, 30.0, 40.0, 50.0 });
+  const TracedKeys keys = orbitKeys(start, side, { 20.0, 30.0, 40.0, 50.0 });
   const std::vector<PathKey> path = keys.path();
   const std::vector<double>& s = keys.s;
   const std::vector<std::vector<RayRecord>>& records = keys.records;

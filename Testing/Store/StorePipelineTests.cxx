@@ -688,6 +688,26 @@ vtkSmartPointer<vtkGeodesicSource> smallRampSource()
   return source;
 }
 
+/// The small ramp's movie of `frames` frames, M = 0.65 to 0.8 (smallRampSource), and a migrated
+/// store on the shared server to accumulate it in.
+struct RampMovies
+{
+  explicit RampMovies(int frames)
+    : path(asrt::rampMoviePath("mass", 0.65, 0.8, frames))
+  {
+    this->store.migrate();
+  }
+  /// A maker of the movie with `settings`, accumulating in the store unless `stored` is false.
+  asrt::MovieMaker movie(const asrt::MovieSettings& settings, bool stored = true)
+  {
+    return asrt::MovieMaker(asrt::movieFrames(this->source, this->path), "mass",
+                            stored ? &this->store : nullptr, settings);
+  }
+  asrt::RayStore store{ server().conninfo() };
+  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
+  asrt::MoviePath path;
+};
+
 asrt::MovieSettings rampSettings()
 {
   asrt::MovieSettings settings;
@@ -700,13 +720,11 @@ asrt::MovieSettings rampSettings()
 
 TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
 {
-  asrt::RayStore store(server().conninfo());
-  store.migrate();
-  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
-  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 13);
+  RampMovies ramp(13);
+  asrt::RayStore& store = ramp.store;
   asrt::MovieSettings settings = rampSettings();
   settings.label = "first";
-  asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker first = ramp.movie(settings);
   std::vector<std::vector<asrt::RayRecord>> made;
   for (int k = 0; k < 13; ++k)
   {
@@ -728,7 +746,7 @@ TEST(StorePipeline, ARecordedMovieFrameIsMadeAgainBetweenItsOwnKeys)
                    asrt::FrameTracer(whole).traceRows(0, whole.camera.height));
 
   settings.label = "again";
-  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker again = ramp.movie(settings);
   EXPECT_EQ(again.plan().frames[other].method, asrt::FrameMethod::Reused);
   for (int k = 0; k < 13; ++k)
   {
@@ -761,13 +779,11 @@ std::string colourBytes(const std::vector<asrt::RayRecord>& records)
 
 TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeftOut)
 {
-  asrt::RayStore store(server().conninfo());
-  store.migrate();
-  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
-  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
+  RampMovies ramp(7);
+  asrt::RayStore& store = ramp.store;
   asrt::MovieSettings settings = rampSettings();
   const std::vector<std::string> formats{ "test.1" };
-  asrt::MovieMaker first(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker first = ramp.movie(settings);
   std::vector<std::string> pictures;
   std::vector<asrt::MovieFrameReport> reports(7);
   int interpolated = 0;
@@ -783,7 +799,7 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
 
   // The next maker of the movie is served every frame's picture, with what the first reported,
   // and reads no key: it traces nothing and counts the rays the frames' records hold.
-  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker again = ramp.movie(settings);
   for (int k = 0; k < 7; ++k)
   {
     asrt::MovieFrameReport report;
@@ -813,7 +829,7 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
 
   // A key deleted after its frame was made and before its picture is stored: the picture would
   // serve nothing and is left out, the movie stands; the frames made from it are made again.
-  asrt::MovieMaker third(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker third = ramp.movie(settings);
   asrt::MovieFrameReport report;
   const std::vector<asrt::RayRecord> records = third.frame(0, report);
   const auto id = store.findFrame(third.frames()[0].identity);
@@ -823,7 +839,7 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
   asrt::PictureOrigin origin;
   origin.wholeFrame = *id;
   EXPECT_EQ(store.readPicture(origin, "test.1"), std::nullopt);
-  asrt::MovieMaker fourth(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker fourth = ramp.movie(settings);
   for (int k = 0; k < 7; ++k)
   {
     if (reports[k].method == asrt::FrameMethod::Interpolated &&
@@ -836,15 +852,12 @@ TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeft
 
 TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTheSameFrames)
 {
-  asrt::RayStore store(server().conninfo());
-  store.migrate();
-  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
-  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 9);
+  RampMovies ramp(9);
   asrt::MovieSettings settings = rampSettings();
   // Without a store every frame stays; with one and a budget of a byte, only the frames in use.
-  asrt::MovieMaker kept(asrt::movieFrames(source, path), "mass", nullptr, settings);
+  asrt::MovieMaker kept = ramp.movie(settings, false);
   settings.keptFrameBytes = 1;
-  asrt::MovieMaker tight(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker tight = ramp.movie(settings);
   int interpolated = 0;
   for (int k = 0; k < 9; ++k)
   {
@@ -861,20 +874,16 @@ TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTh
   // Read again, never traced again.
   EXPECT_EQ(tight.raysTraced(), kept.raysTraced());
   settings.keptFrameBytes = -1;
-  EXPECT_THROW(asrt::MovieMaker(asrt::movieFrames(source, path), "mass", &store, settings),
-               asrt::InvalidParameter);
+  EXPECT_THROW(ramp.movie(settings), asrt::InvalidParameter);
 }
 
 TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAndStoresThem)
 {
-  asrt::RayStore store(server().conninfo());
-  store.migrate();
-  vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
-  const asrt::MoviePath path = asrt::rampMoviePath("mass", 0.65, 0.8, 7);
+  RampMovies ramp(7);
   asrt::MovieSettings settings = rampSettings();
   const std::vector<std::string> formats{ "test.1" };
   // The truth: every frame made from its records, nothing stored, nothing encoded early.
-  asrt::MovieMaker truth(asrt::movieFrames(source, path), "mass", nullptr, settings);
+  asrt::MovieMaker truth = ramp.movie(settings, false);
   // Encoding each whole frame as it is traced, and keeping no frame it need not (a budget of a
   // byte): the records of a whole frame are let go once its pictures are made.
   settings.label = "early";
@@ -886,7 +895,7 @@ TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAn
     ++encoded;
     return std::vector<std::string>{ colourBytes(records) };
   };
-  asrt::MovieMaker early(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker early = ramp.movie(settings);
   early.makeKeys();
   int whole = 0;
   for (int k = 0; k < 7; ++k)
@@ -916,7 +925,7 @@ TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAn
   EXPECT_EQ(early.raysTraced(), truth.raysTraced());
 
   // Stored with the frames: the next maker is served them from the store, tracing nothing.
-  asrt::MovieMaker again(asrt::movieFrames(source, path), "mass", &store, settings);
+  asrt::MovieMaker again = ramp.movie(settings);
   for (int k = 0; k < 7; ++k)
   {
     asrt::MovieFrameReport expected, report;
