@@ -13,7 +13,9 @@
 // movie along the ramp, those that are not keys), ASRT_BENCH_PATH_SPACINGS (key spacings,
 // "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (samples a
 // side of the converged frames, 8: point samples in the study, filtered ones in the paths table),
-// ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above).
+// ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above), ASRT_BENCH_PATH_DUMP (a
+// directory: each study frame's pixels, their way of predicting, estimate, true error and
+// surfaces, as CSV).
 // Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
@@ -541,7 +543,8 @@ void runRampStudy(double tStart)
                 "time (× trace) |\n|---|---|---|---|---|---|---|---|\n");
   struct Ranking
   {
-    double h, mass, spearman, mustBefore, must, moved, estimate35, oracle35, estimate40, oracle40;
+    double h, mass, spearman, spearmanUnrounded, mustBefore, must, moved, estimate35, oracle35,
+      estimate40, oracle40;
   };
   struct Outcome
   {
@@ -593,7 +596,7 @@ void runRampStudy(double tStart)
         rgbOf(interpolateAlongPath(path, f.mass, kSide, kSide, *shading.scene, preview).records);
       // The plain frame, the estimate's ranking against the truth, and the oracle.
       const std::vector<std::uint8_t> plainRgb = rgbOf(plain.records);
-      std::vector<double> err2(plain.records.size()), est, truth;
+      std::vector<double> err2(plain.records.size()), est, truth, truthUnrounded;
       std::size_t must = 0;
       for (std::size_t p = 0; p < err2.size(); ++p)
       {
@@ -605,6 +608,7 @@ void runRampStudy(double tStart)
         }
         est.push_back(plain.estimate[p]);
         truth.push_back(err2[p]);
+        truthUnrounded.push_back(colorError2(plain.records[p].color, f.traced[p].color));
       }
       {
         // Where the plain frame's error lies: each way of predicting, its share of the pixels and
@@ -635,6 +639,22 @@ void runRampStudy(double tStart)
         e.movedOtherError = movedError > 0 ? otherError / movedError : 0.0;
         plainErrors.push_back(e);
       }
+      if (const char* dump = std::getenv("ASRT_BENCH_PATH_DUMP"))
+      {
+        char name[512];
+        std::snprintf(name, sizeof name, "%s/h%g-M%.4f.csv", dump, h, f.mass);
+        if (FILE* out = std::fopen(name, "w"))
+        {
+          std::fprintf(out, "p,method,estimate,err8,errf,obj,objt,term,termt\n");
+          for (std::size_t p = 0; p < err2.size(); ++p)
+            std::fprintf(out, "%zu,%d,%.9g,%.9g,%.9g,%d,%d,%d,%d\n", p, int(plain.method[p]),
+                         double(plain.estimate[p]), err2[p],
+                         double(colorError2(plain.records[p].color, f.traced[p].color)),
+                         plain.records[p].objectId, f.traced[p].objectId,
+                         int(plain.records[p].termination), int(f.traced[p].termination));
+          std::fclose(out);
+        }
+      }
       const std::vector<std::int32_t> byEstimate32 = retraceOrder(plain.estimate);
       std::vector<std::size_t> byEstimate(byEstimate32.begin(), byEstimate32.end());
       std::vector<std::size_t> byTruth = byEstimate;
@@ -642,7 +662,7 @@ void runRampStudy(double tStart)
                        [&](std::size_t a, std::size_t b) { return err2[a] > err2[b]; });
       const double n = static_cast<double>(err2.size());
       rankings.push_back(
-        { h, f.mass, spearman(est, truth),
+        { h, f.mass, spearman(est, truth), spearman(est, truthUnrounded),
           plainBefore.counts()[static_cast<std::size_t>(PathMethod::Retrace)] / n, must / n,
           (plain.counts()[static_cast<std::size_t>(PathMethod::MovedEdge)] +
            plain.counts()[static_cast<std::size_t>(PathMethod::MovedSurface)]) /
@@ -710,28 +730,31 @@ void runRampStudy(double tStart)
       }
   std::printf(
     "\n**The estimate against the truth** (the plain frame's pixels that the keys vouch "
-    "for, moved edges included; the share re-traced in all, the must-re-trace pixels first, for "
+    "for, moved edges included; Spearman against the error of the frame's 8-bit colours, where "
+    "most pixels tie at 0, and against the error of its colours before rounding; the share "
+    "re-traced in all, the must-re-trace pixels first, for "
     "the frame to reach 35 or 40 dB against the traced frame when pixels are re-traced in the "
     "estimate's order and in the true error's, the oracle; must re-trace before: without moved "
     "edges):\n\n");
-  std::printf("| h | M | Spearman | must re-trace before | moved edges | must re-trace | 35 dB: "
-              "estimate | 35 dB: oracle | 40 dB: estimate | 40 dB: oracle "
-              "|\n|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| h | M | Spearman | Spearman (unrounded) | must re-trace before | moved edges | "
+              "must re-trace | 35 dB: estimate | 35 dB: oracle | 40 dB: estimate | 40 dB: oracle "
+              "|\n|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double h : spacings)
   {
-    Ranking mean{ h, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+    Ranking mean{ h, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
     double count = 0;
     for (const Ranking& r : rankings)
     {
       if (r.h != h)
         continue;
       if (detailed)
-        std::printf("| %g | %.4f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", r.h, r.mass,
-                    r.spearman, pct(r.mustBefore).c_str(), pct(r.moved).c_str(),
-                    pct(r.must).c_str(), pct(r.estimate35).c_str(), pct(r.oracle35).c_str(),
-                    pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
+        std::printf("| %g | %.4f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", r.h, r.mass,
+                    r.spearman, r.spearmanUnrounded, pct(r.mustBefore).c_str(),
+                    pct(r.moved).c_str(), pct(r.must).c_str(), pct(r.estimate35).c_str(),
+                    pct(r.oracle35).c_str(), pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
       count += 1;
       mean.spearman += r.spearman;
+      mean.spearmanUnrounded += r.spearmanUnrounded;
       mean.mustBefore += r.mustBefore;
       mean.moved += r.moved;
       mean.must += r.must;
@@ -741,11 +764,12 @@ void runRampStudy(double tStart)
       mean.oracle40 += r.oracle40;
     }
     if (!detailed && count > 0)
-      std::printf("| %g | mean of %.0f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", h, count,
-                  mean.spearman / count, pct(mean.mustBefore / count).c_str(),
-                  pct(mean.moved / count).c_str(), pct(mean.must / count).c_str(),
-                  pct(mean.estimate35 / count).c_str(), pct(mean.oracle35 / count).c_str(),
-                  pct(mean.estimate40 / count).c_str(), pct(mean.oracle40 / count).c_str());
+      std::printf("| %g | mean of %.0f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", h,
+                  count, mean.spearman / count, mean.spearmanUnrounded / count,
+                  pct(mean.mustBefore / count).c_str(), pct(mean.moved / count).c_str(),
+                  pct(mean.must / count).c_str(), pct(mean.estimate35 / count).c_str(),
+                  pct(mean.oracle35 / count).c_str(), pct(mean.estimate40 / count).c_str(),
+                  pct(mean.oracle40 / count).c_str());
   }
   std::printf("\n**Where the plain frame's error lies** (against the traced frame): each way of "
               "predicting, its share of the pixels / of the squared error; for moved edges also "

@@ -342,6 +342,22 @@ constexpr double kNeighbours[8][2] = { { -1, 0 },  { 1, 0 },  { 0, -1 }, { 0, 1 
 /// The squared share of the contrast with a neighbour that an edge misplaced by about half a
 /// pixel leaves in the pixel's colour.
 constexpr float kEdgeShare = 0.25f;
+/// The same where every way of moving shows the pixel's centre alike: the edge then lies within
+/// about a quarter of a pixel of where they put it (PathEdges.h, Estimate).
+constexpr float kAgreedEdgeShare = 0.0625f;
+
+/// Whether the ways of moving dispute what the centre of pixel (i, j) shows (`centre`, the front
+/// point through every matched key): the inner pair alone, or either inner key's points alone,
+/// show another surface there or nothing, or, where it shows a surface, the hole's moved rays
+/// cover it too (the shadow's rim).
+bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre)
+{
+  for (const std::int64_t k :
+       { mover.front(i, j, true, 3), mover.front(i, j, false, 1), mover.front(i, j, false, 2) })
+    if (k < 0 || !endAlike(centre, *mover.mover(k).record))
+      return true;
+  return centre.termination != Termination::Captured && mover.capturedCovering(i, j, false, 3) >= 0;
+}
 
 /// The mean colour of the pixel's sub-positions as one way of moving predicts it; false if a
 /// sub-position is covered by nothing. `centre` (if given) and the sub-positions' records ending
@@ -415,6 +431,7 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
     e.record.color = color;
     // The other ways of predicting the pixel: the disagreement of each with this one.
+    const bool isDisputed = disputed(mover, i, j, centreRecord);
     Color other, sum = color;
     int ways = 1;
     if (subsampled(mover, scene, i, j, true, 3, other, nullptr, nullptr, nullptr, hedgeNearShadow))
@@ -434,6 +451,7 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     // An edge within a pixel of it that every prediction moves alike may still lie a fraction of
     // a pixel off, which changes the pixel by that fraction of the contrast across the edge.
     float contrast = 0.0f;
+    const float share = isDisputed ? kEdgeShare : kAgreedEdgeShare;
     for (const auto& o : kNeighbours)
     {
       const double x = i + o[0], y = j + o[1];
@@ -445,9 +463,11 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
       }
       const RayRecord r = movedRecord(mover, k, x, y, false, 1.0);
       oneSurface = oneSurface && endAlike(centreRecord, r);
-      contrast = std::max(contrast, kEdgeShare * colorError2(color, shadePrediction(scene, r)));
+      contrast = std::max(contrast, colorError2(color, shadePrediction(scene, r)));
     }
     e.oneSurface = oneSurface;
+    // Within one surface the contrast is the texture's, as the pixel moves by a fraction of itself.
+    contrast *= oneSurface ? kEdgeShare : share;
     e.estimate = std::max({ e.estimate, contrast, nearShadow });
     if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
     {

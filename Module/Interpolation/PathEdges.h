@@ -37,7 +37,13 @@
 //    within a pixel of it (its sub-positions, its 8 neighbours' centres) ends alike with its
 //    centre's, no edge lies there at t and that contrast is the texture's: such a pixel is a way
 //    of predicting of its own (PathMethod::MovedSurface), whose probes calibrate its estimate
-//    apart from the pixels an edge crosses, whose errors are rarer and larger.
+//    apart from the pixels an edge crosses, whose errors are rarer and larger. Across an edge
+//    the quarter holds where the ways dispute what the pixel's centre shows (another surface or
+//    none through the inner pair alone or either key's points alone, or the hole's moved rays
+//    covering a surface shown there): on the mass ramp, keys 0.11 and 0.055 M apart, 19–39 % of
+//    such pixels showed another surface than traced at their centre, against 0.3–2.4 % of the
+//    others. Where every way shows the centre alike, the edge lies within about a quarter of a
+//    pixel of where they put it, and a sixteenth of the contrast counts.
 // Private to ASRT::Interpolation. Deterministic: the result does not depend on the thread count.
 #ifndef asrt_PathEdges_h
 #define asrt_PathEdges_h

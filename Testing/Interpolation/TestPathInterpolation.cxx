@@ -483,6 +483,51 @@ TEST(PathInterpolationMovedEdges, HedgingTheShadowsRimComesCloserToTheTracedFram
   EXPECT_LT(errorHedged, 0.8 * errorPlain);
 }
 
+// The mass ramp, keys 0.11 M apart: among the moved-edge pixels, those whose centre shows
+// another surface than the frame the test traces at t (the errors of a whole contrast) rank above
+// the others by the estimate. An edge that every way of moving puts in the same place counts a
+// sixteenth of the contrast across it, one the ways dispute a quarter (PathEdges.h).
+TEST(PathInterpolationMovedEdges, PixelsShowingAnotherSurfaceRankAboveTheOtherMovedEdges)
+{
+  constexpr int side = 96;
+  const TracedKeys keys = rampKeys(side, 0.45, 0.11);
+  const std::vector<PathKey> path = keys.path();
+  for (const double t : { 0.5875, 0.6225 })
+  {
+    const SceneDescription atT = rampScene(t, side);
+    const std::vector<RayRecord> truth = traceFrame(atT);
+    const PathFrame f = interpolateAlongPath(path, t, side, side, *atT.scene, withMovedEdges());
+    std::vector<std::pair<float, bool>> moved; // estimate, shows another surface
+    for (std::size_t p = 0; p < truth.size(); ++p)
+      if (f.method[p] == static_cast<std::uint8_t>(PathMethod::MovedEdge))
+        moved.emplace_back(f.estimate[p], f.records[p].objectId != truth[p].objectId ||
+                                            f.records[p].termination != truth[p].termination);
+    // Mean rank (average ranks for ties, scaled to (0, 1]) of the pixels showing another surface.
+    std::sort(moved.begin(), moved.end());
+    double rankSum = 0;
+    std::size_t another = 0;
+    for (std::size_t k = 0; k < moved.size();)
+    {
+      std::size_t end = k;
+      while (end < moved.size() && moved[end].first == moved[k].first)
+        ++end;
+      const double rank = 0.5 * static_cast<double>(k + 1 + end) / moved.size();
+      for (; k < end; ++k)
+        if (moved[k].second)
+        {
+          rankSum += rank;
+          ++another;
+        }
+    }
+    const double meanRank = another > 0 ? rankSum / another : 0.0;
+    std::printf("[ path ] moved edges at M = %.4f: %zu pixels, %zu showing another surface, their "
+                "mean rank by the estimate %.2f\n",
+                t, moved.size(), another, meanRank);
+    EXPECT_GT(another, 10u);
+    EXPECT_GT(meanRank, 0.65);
+  }
+}
+
 // The whole mass ramp with key frames a quarter of it apart, where the orders of prediction
 // disagree little while the texture under a pixel changes a lot between keys: every frame between
 // them, completed to a target, meets it within 1 dB against the frame the test traces there, and
