@@ -324,60 +324,6 @@ struct PlacedProbe
   double error = 0;
 };
 
-/// What the probes of each way of predicting say of the pixels they stand for.
-struct WayProbes
-{
-  /// The typical error of each way where it errs (else the frame's, else a level a channel):
-  /// what a probe that the sample happened to miss would have shown.
-  double missed[kPathMethodCount] = {};
-  /// Each way's kTailProbes probes placed last in the order (its lowest calibrated estimates).
-  ProbeSample lowest[kPathMethodCount];
-};
-
-/// The probes summed per way of predicting; `probes` sorted by decreasing place in the order.
-WayProbes wayProbes(const std::vector<PlacedProbe>& probes)
-{
-  constexpr int M = kPathMethodCount;
-  WayProbes w;
-  ProbeSample erring[M], erringAll;
-  for (const PlacedProbe& q : probes)
-  {
-    if (q.error > 0)
-    {
-      erring[q.method].add(q.error);
-      erringAll.add(q.error);
-    }
-    if (w.lowest[q.method].count < kTailProbes)
-      w.lowest[q.method].add(q.error);
-  }
-  for (int m = 0; m < M; ++m)
-    w.missed[m] = erring[m].count > 0   ? erring[m].sum / erring[m].count
-                  : erringAll.count > 0 ? erringAll.sum / erringAll.count
-                                        : 3.0;
-  return w;
-}
-
-void sortByPlaceDescending(std::vector<PlacedProbe>& probes)
-{
-  std::stable_sort(probes.begin(), probes.end(),
-                   [](const PlacedProbe& a, const PlacedProbe& b) { return a.at > b.at; });
-}
-
-/// Per way of predicting, the bound its probes set on the mean error of an untraced pixel once
-/// few of its pixels are left (remainingError's bound from its lowest-ranked probes); 0 for a
-/// way without probes. The probes' places need only keep each way's pixels in the order of their
-/// calibrated estimates.
-std::vector<double> probeFloors(std::vector<PlacedProbe> probes)
-{
-  sortByPlaceDescending(probes);
-  const WayProbes w = wayProbes(probes);
-  std::vector<double> floors(kPathMethodCount, 0.0);
-  for (int m = 0; m < kPathMethodCount; ++m)
-    if (w.lowest[m].count > 0)
-      floors[static_cast<std::size_t>(m)] = w.lowest[m].meanBound(w.missed[m]);
-  return floors;
-}
-
 /// What re-tracing the first k of `rest` (the order of re-tracing) leaves, for every k: per way of
 /// predicting, the larger of its calibrated estimates' sum and its probes' bound times its
 /// untraced pixels, summed. The probes placed at or after k stand for those pixels; where fewer
@@ -389,10 +335,26 @@ std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
                                    std::vector<PlacedProbe> probes)
 {
   constexpr int M = kPathMethodCount;
-  sortByPlaceDescending(probes);
-  const WayProbes w = wayProbes(probes);
-  const ProbeSample* lowest = w.lowest;
-  const double* missed = w.missed;
+  std::stable_sort(probes.begin(), probes.end(),
+                   [](const PlacedProbe& a, const PlacedProbe& b) { return a.at > b.at; });
+  // The typical error of each way of predicting where it errs (else the frame's, else a level a
+  // channel): what a probe that the sample happened to miss would have shown.
+  ProbeSample erring[M], erringAll, lowest[M];
+  for (const PlacedProbe& q : probes)
+  {
+    if (q.error > 0)
+    {
+      erring[q.method].add(q.error);
+      erringAll.add(q.error);
+    }
+    if (lowest[q.method].count < kTailProbes)
+      lowest[q.method].add(q.error);
+  }
+  double missed[M];
+  for (int m = 0; m < M; ++m)
+    missed[m] = erring[m].count > 0   ? erring[m].sum / erring[m].count
+                : erringAll.count > 0 ? erringAll.sum / erringAll.count
+                                      : 3.0;
   std::vector<double> remaining(rest.size() + 1, 0.0);
   double count[M] = {}, left[M] = {};
   ProbeSample tail[M];
@@ -869,37 +831,18 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
   for (std::size_t p = 0; p < n; ++p)
     if (!traced[p] && methods[p] != static_cast<std::uint8_t>(PathMethod::Key))
       rest.push_back(static_cast<std::int32_t>(p));
+  std::sort(rest.begin(), rest.end(), worse);
   // What re-tracing the first k of `rest` leaves is bounded twice, per way of predicting: by the
   // calibrated estimates, and by the probes' own errors (each probe stands for the untraced pixels
   // about its place in the order), with a confidence margin, so that a sample that happened to
   // miss a way's rare large errors does not pass for a clean one.
-  auto place = [&](const auto& before)
-  {
-    std::sort(rest.begin(), rest.end(), before);
-    std::vector<PlacedProbe> placed;
-    for (std::size_t q = 0; q < probes.size(); ++q)
-      if (probeError[q] >= 0)
-        placed.push_back(
-          { static_cast<std::size_t>(std::lower_bound(rest.begin(), rest.end(), probes[q], before) -
-                                     rest.begin()),
-            methods[static_cast<std::size_t>(probes[q])], probeError[q] });
-    return placed;
-  };
-  // Where a way's probes bound its untraced pixels' error above what their estimates say (its
-  // estimates miss its errors: a linear prediction's, or an edge's rare wrong surface), tracing
-  // any of them lowers the bound by that much, whatever its estimate: each pixel is worth the
-  // larger of the two, and the order follows its worth (within a way, still its estimate).
-  const std::vector<double> floors = probeFloors(place(worse));
-  std::vector<double> worth(n, 0.0);
-  for (std::size_t p = 0; p < n; ++p)
-    worth[p] = std::max(calibrated[p], floors[methods[p]]);
-  auto before = [&](std::int32_t a, std::int32_t b)
-  {
-    const double wa = worth[static_cast<std::size_t>(a)];
-    const double wb = worth[static_cast<std::size_t>(b)];
-    return wa != wb ? wa > wb : worse(a, b);
-  };
-  const std::vector<PlacedProbe> placed = place(before);
+  std::vector<PlacedProbe> placed;
+  for (std::size_t q = 0; q < probes.size(); ++q)
+    if (probeError[q] >= 0)
+      placed.push_back(
+        { static_cast<std::size_t>(std::lower_bound(rest.begin(), rest.end(), probes[q], worse) -
+                                   rest.begin()),
+          methods[static_cast<std::size_t>(probes[q])], probeError[q] });
   const std::vector<double> left = remainingError(rest, calibrated, methods, placed);
   auto remaining = [&](std::size_t k) { return left[k] / (3.0 * static_cast<double>(n)); };
   // The frame's error against the converged picture is what the prediction leaves against the
