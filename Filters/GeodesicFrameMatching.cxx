@@ -3,53 +3,13 @@
 #include "GeodesicRecordArrays.h"
 
 #include "vtkDataArray.h"
-#include "vtkIdList.h"
 #include "vtkPointData.h"
-#include "vtkPoints.h"
 #include "vtkPolyData.h"
-#include "vtkSmartPointer.h"
-#include "vtkStaticPointLocator.h"
 
 namespace asrt
 {
 namespace
 {
-class LocatorIndex final : public PointIndex
-{
-public:
-  explicit LocatorIndex(const std::vector<Vec3>& points)
-  {
-    auto pts = vtkSmartPointer<vtkPoints>::New();
-    pts->SetDataTypeToDouble();
-    pts->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
-    for (std::size_t k = 0; k < points.size(); ++k)
-      pts->SetPoint(static_cast<vtkIdType>(k), points[k].data());
-    this->Data->SetPoints(pts);
-    this->Locator->SetDataSet(this->Data);
-    this->Locator->BuildLocator();
-  }
-
-  std::int64_t nearestWithin(const Vec3& x, double radius) const override
-  {
-    double dist2 = 0;
-    return this->Locator->FindClosestPointWithinRadius(radius, x.data(), dist2);
-  }
-
-  void within(const Vec3& x, double radius, std::vector<std::int64_t>& out) const override
-  {
-    // One id list per thread: the queries themselves are thread-safe, the list is not.
-    thread_local vtkSmartPointer<vtkIdList> ids = vtkSmartPointer<vtkIdList>::New();
-    this->Locator->FindPointsWithinRadius(radius, x.data(), ids);
-    out.resize(static_cast<std::size_t>(ids->GetNumberOfIds()));
-    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
-      out[static_cast<std::size_t>(k)] = ids->GetId(k);
-  }
-
-private:
-  vtkSmartPointer<vtkPolyData> Data = vtkSmartPointer<vtkPolyData>::New();
-  vtkSmartPointer<vtkStaticPointLocator> Locator = vtkSmartPointer<vtkStaticPointLocator>::New();
-};
-
 vtkDataArray* pointArray(vtkPolyData* hits, const char* name, int components,
                          const std::string& which)
 {
@@ -62,12 +22,6 @@ vtkDataArray* pointArray(vtkPolyData* hits, const char* name, int components,
     throw InvalidParameter(which + ": the " + e.what());
   }
 }
-}
-
-PointIndexFactory vtkPointIndexFactory()
-{
-  return [](const std::vector<Vec3>& points) -> std::unique_ptr<PointIndex>
-  { return std::make_unique<LocatorIndex>(points); };
 }
 
 FrameSamples frameSamplesFromHits(vtkPolyData* hits, const SceneDescription& scene,

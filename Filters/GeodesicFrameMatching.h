@@ -1,6 +1,6 @@
-// The VTK side of frame matching: VTK's static point locator as the search that asrt::matchFrames
-// needs, and a frame's samples read straight from the hit-point arrays of vtkGeodesicSource or
-// vtkGeodesicPostgreSQLReader (port 1), without building whole ray records.
+// The VTK side of frame matching: a frame's samples read straight from the hit-point arrays of
+// vtkGeodesicSource or vtkGeodesicPostgreSQLReader (port 1), without building whole ray records.
+// The searches matchFrames needs are the k-d tree's (KdTreeIndex.h).
 #ifndef asrt_GeodesicFrameMatching_h
 #define asrt_GeodesicFrameMatching_h
 
@@ -13,9 +13,6 @@ class vtkPolyData;
 
 namespace asrt
 {
-/// Point indices on vtkStaticPointLocator (queries are thread-safe once it is built).
-ASRTFILTERS_EXPORT PointIndexFactory vtkPointIndexFactory();
-
 /// The samples of a whole frame from its hit points; `scene` is the frame's description (its
 /// resolution and view angle are used). Throws InvalidParameter, naming `which` frame, for a
 /// missing or malformed array, a frame that is not whole, or non-finite values.

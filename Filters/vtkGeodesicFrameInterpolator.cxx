@@ -7,6 +7,7 @@
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
 #include "InterpolatorPipeline.h"
+#include "KdTreeIndex.h"
 #include "RayStore.h"
 #include "SceneFile.h"
 #include "StoreConnection.h"
@@ -202,7 +203,7 @@ struct vtkGeodesicFrameInterpolator::Internals
     asrt::MatchOptions match;
     match.tolerance = self->MatchTolerance;
     const asrt::Correspondence c =
-      asrt::matchFrames(a, b, asrt::vtkPointIndexFactory(), match,
+      asrt::matchFrames(a, b, asrt::kdTreeIndexFactory(), match,
                         [self](double f) { self->UpdateProgress(0.1 + 0.5 * f); });
     asrt::InterpolationOptions opt;
     opt.maxMagnification = static_cast<float>(self->MaxMagnification);

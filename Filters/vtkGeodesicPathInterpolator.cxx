@@ -5,10 +5,10 @@
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
-#include "GeodesicFrameMatching.h"
 #include "GeodesicRecordArrays.h"
 #include "GeodesicSceneLoading.h"
 #include "InterpolatorPipeline.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 #include "SettingsError.h"
@@ -392,7 +392,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       keys.push_back({ in.Direction * in.S[k], &in.Records[static_cast<std::size_t>(k)] });
     const asrt::CameraParameters& cam = in.Scenes[0].camera;
     asrt::PathOptions options;
-    options.pointIndex = asrt::vtkPointIndexFactory();
+    options.pointIndex = asrt::kdTreeIndexFactory();
     options.hedgeNearShadow = !(this->QualityTarget > 0.0); // the plain preview
     asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
                                                    *in.Shading.scene, options);

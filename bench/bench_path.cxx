@@ -28,10 +28,10 @@
 #include "ErrorEstimate.h"
 #include "FrameMatching.h"
 #include "FrameTracer.h"
-#include "GeodesicFrameMatching.h"
 #include "GeodesicMovie.h"
 #include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "SettingsError.h"
 
@@ -288,7 +288,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
     rgbOf(FrameTracer(pathScene(path, r.s, &converged)).traceRows(0, kSide));
   r.tracedVsConverged = psnrOf(traced, reference);
   PathOptions with, without;
-  with.pointIndex = vtkPointIndexFactory();
+  with.pointIndex = kdTreeIndexFactory();
   without.movedEdges = false;
   const double n = double(kSide) * kSide;
   r.mustBefore = interpolateAlongPath(around, r.s, kSide, kSide, shading, without)
@@ -332,7 +332,7 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
   std::printf("\n**Four paths** at one key spacing each (h: the must-re-trace share without moved "
               "edges lands near 10–20 %%), %d frames each midway between keys, spread along the "
               "path; 4 keys around each (`interpolateAlongPath` with moved edges, matched over "
-              "`vtkPointIndexFactory()`); converged: %d×%d filtered samples a pixel, every centre "
+              "`kdTreeIndexFactory()`); converged: %d×%d filtered samples a pixel, every centre "
               "ray traced (`convergedRendering`); keys and frames traced at s with %s. "
               "**Plain**: nothing re-traced. **--quality T**: "
               "`completePathFrame` held to the converged picture: the inner keys' own error "
@@ -580,7 +580,7 @@ void runRampStudy(double tStart)
         path.push_back({ s[k], &keys[k] });
       const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
       PathOptions with, without;
-      with.pointIndex = vtkPointIndexFactory();
+      with.pointIndex = kdTreeIndexFactory();
       without.movedEdges = false;
       const double tPlain = now();
       const PathFrame plain =

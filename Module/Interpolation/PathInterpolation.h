@@ -143,7 +143,7 @@ struct PathOptions
   /// points (PathMethod::MovedEdge), instead of leaving them all to be re-traced.
   bool movedEdges = true;
   /// The nearest-point search that matches the keys' scene points (matchFrames) for the moved
-  /// edges: the caller's, as for matchFrames (the filters pass asrt::vtkPointIndexFactory()).
+  /// edges: the caller's, as for matchFrames (the filters pass asrt::kdTreeIndexFactory()).
   /// Required when movedEdges is set.
   PointIndexFactory pointIndex;
   /// A moved edge's colour is the mean of the ways of moving the keys' points that cover the

@@ -8,6 +8,7 @@
 #include "FrameInterpolation.h"
 #include "FrameTracer.h"
 #include "GeodesicFrameMatching.h"
+#include "KdTreeIndex.h"
 #include "SceneFile.h"
 
 #include "vtkCommand.h"
@@ -375,7 +376,7 @@ TEST(FrameInterpolator, NestedImagesMatchTheirOwnImages)
   const asrt::SceneDescription sceneB = sceneOf(b.hits);
   const asrt::FrameSamples sa = asrt::frameSamplesFromHits(a.hits, sceneOf(a.hits), "frame A");
   const asrt::FrameSamples sb = asrt::frameSamplesFromHits(b.hits, sceneB, "frame B");
-  const asrt::Correspondence c = asrt::matchFrames(sa, sb, asrt::vtkPointIndexFactory());
+  const asrt::Correspondence c = asrt::matchFrames(sa, sb, asrt::kdTreeIndexFactory());
   const asrt::FrameTracer tracerB(sceneB);
   const int W = sa.width;
   int seen[2] = { 0, 0 }, matched[2] = { 0, 0 }, located[2] = { 0, 0 }, close[2] = { 0, 0 };

@@ -5,7 +5,7 @@
 // target meets it against that frame, re-tracing fewer pixels than when every pixel near the edge
 // is re-traced.
 #include "FrameTracer.h"
-#include "GeodesicFrameMatching.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 
@@ -114,7 +114,7 @@ protected:
       path.push_back({ keyS()[k], &keys()[k] });
     PathOptions options;
     options.movedEdges = movedEdges;
-    options.pointIndex = vtkPointIndexFactory();
+    options.pointIndex = kdTreeIndexFactory();
     return interpolateAlongPath(path, T, kSide, kSide, *slidingScene(T).scene, options);
   }
 };

@@ -2,8 +2,8 @@
 // polynomials the Lagrange weights must reproduce, synthetic records that are known cubics of s,
 // and frames the test traces itself at the interpolated parameter.
 #include "FrameTracer.h"
-#include "GeodesicFrameMatching.h"
 #include "GeodesicMovie.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "RampScene.h"
 #include "SceneFile.h"
@@ -24,11 +24,11 @@ using asrt::testing::rampScene;
 
 namespace
 {
-/// The options the filters interpolate with: moved edges, matched over VTK's point locator.
+/// The options the filters interpolate with: moved edges, matched over the k-d tree.
 PathOptions withMovedEdges()
 {
   PathOptions options;
-  options.pointIndex = vtkPointIndexFactory();
+  options.pointIndex = kdTreeIndexFactory();
   return options;
 }
 

@@ -3,7 +3,7 @@
 // frames the tests trace themselves.
 #include "ErrorEstimate.h"
 #include "FrameTracer.h"
-#include "GeodesicFrameMatching.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "RampScene.h"
 #include "SettingsError.h"
@@ -130,7 +130,7 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
   const SettingsError settings = pooled(measured(1), measured(2));
   const std::vector<PathKey> path = keyPath();
   PathOptions options;
-  options.pointIndex = vtkPointIndexFactory();
+  options.pointIndex = kdTreeIndexFactory();
   const SceneDescription atT = rampScene(T, Side);
   const FrameTracer tracer(atT);
   const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), Truth));
