@@ -69,6 +69,9 @@ struct vtkGeodesicPathInterpolator::Internals
   /// Each key's own error against its converged picture, once measured (reset when it is read
   /// again).
   std::vector<std::optional<asrt::SettingsError>> KeyError;
+  /// The moved edges' correspondences between keys, kept across time steps: every frame between
+  /// two keys matches the same pairs (kept by the records' content, so keys read again are safe).
+  std::shared_ptr<asrt::PathMatchCache> Matches = std::make_shared<asrt::PathMatchCache>();
 
   /// The keys' scenes, checked against each other, and the path parameter.
   void Validate(vtkGeodesicPathInterpolator* self, const std::vector<vtkPolyData*>& hits)
@@ -393,6 +396,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     const asrt::CameraParameters& cam = in.Scenes[0].camera;
     asrt::PathOptions options;
     options.pointIndex = asrt::kdTreeIndexFactory();
+    options.matchCache = in.Matches;
     options.hedgeNearShadow = !(this->QualityTarget > 0.0); // the plain preview
     asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
                                                    *in.Shading.scene, options);

@@ -798,6 +798,55 @@ void runRampStudy(double tStart)
 }
 }
 
+/// A plain preview sequence, as `asrt interpolate --method path -n N` makes it: N frames between
+/// two keys of the mass ramp (keys h = 0.11 apart, 4 around), with the moved edges'
+/// correspondences matched afresh for each frame and kept between frames (PathMatchCache); the
+/// two are timed in turn, the fastest of 3 each, and their frames compared.
+void runPreviewSequence()
+{
+  constexpr int kFrames = 8;
+  constexpr double h = 0.11, first = 0.45;
+  std::vector<std::vector<RayRecord>> records;
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    records.push_back(FrameTracer(rampScene(first + k * h)).traceRows(0, kSide));
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ first + k * h, &records[static_cast<std::size_t>(k)] });
+  const SceneDescription shading = rampScene(first + 1.5 * h);
+  double fastest[2] = { 1e300, 1e300 };
+  bool same = true;
+  std::size_t made = 0;
+  for (int repetition = 0; repetition < 3; ++repetition)
+  {
+    std::vector<PathFrame> frames[2];
+    for (int kept = 0; kept < 2; ++kept)
+    {
+      PathOptions options;
+      options.pointIndex = kdTreeIndexFactory();
+      options.hedgeNearShadow = true;
+      if (kept)
+        options.matchCache = std::make_shared<PathMatchCache>();
+      const double t0 = now();
+      for (int f = 1; f <= kFrames; ++f)
+        frames[kept].push_back(interpolateAlongPath(path, first + h + h * f / (kFrames + 1.0),
+                                                    kSide, kSide, *shading.scene, options));
+      fastest[kept] = std::min(fastest[kept], now() - t0);
+      if (kept)
+        made = options.matchCache->made();
+    }
+    for (int f = 0; f < kFrames; ++f)
+      same = same && frames[0][f].estimate == frames[1][f].estimate &&
+             frames[0][f].method == frames[1][f].method;
+  }
+  std::printf("\n**A preview sequence** (`runPreviewSequence`): %d frames between the keys M = "
+              "%.2f and %.2f of the ramp (keys %.2f apart, 4 around), the plain preview: %.2f s "
+              "a frame matching the keys afresh for each, %.2f s with the correspondences kept "
+              "between frames (%zu matched in all, against %d), %.1f× faster; %s.\n",
+              kFrames, first + h, first + 2 * h, h, fastest[0] / kFrames, fastest[1] / kFrames,
+              made, 3 * kFrames, fastest[0] / fastest[1],
+              same ? "the same frames" : "**the frames differ**");
+}
+
 int main()
 {
   double load[3] = { 0, 0, 0 };
@@ -816,7 +865,10 @@ int main()
   std::printf("- **Regenerate:** `bench/run` (`ASRT_BENCH_ONLY=path`); it runs "
               "`build-bench/bin/asrt_bench_path` from the repository root.\n");
   if (envNumber("ASRT_BENCH_PATH_STUDY", 1) != 0)
+  {
     runRampStudy(tStart);
+    runPreviewSequence();
+  }
   if (!paths.empty())
     printPaths(paths, static_cast<int>(envNumber("ASRT_BENCH_PATH_PATH_FRAMES", 4)),
                envList("ASRT_BENCH_PATH_PATH_TARGETS", { 30, 35, 40 }));

@@ -73,25 +73,30 @@ class EdgeMover
 {
 public:
   EdgeMover(const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height,
-            const PointIndexFactory& index)
+            const PointIndexFactory& index, PathMatchCache* cache)
     : width_(width)
     , height_(height)
   {
     const double va = viewAngleOf(*keys[a].records, width, height);
     auto samples = [&](std::size_t k)
     { return samplesFromRecords(*keys[k].records, width, height, va, "key " + std::to_string(k)); };
-    const FrameSamples sa = samples(a), sb = samples(a + 1);
-    const Correspondence inner = matchFrames(sa, sb, index);
-    Correspondence left, right;
+    auto match = [&](std::size_t from, std::size_t to)
+    {
+      auto make = [&] { return matchFrames(samples(from), samples(to), index); };
+      return cache ? cache->matches(*keys[from].records, *keys[to].records, make)
+                   : std::make_shared<const Correspondence>(make());
+    };
+    const std::shared_ptr<const Correspondence> inner = match(a, a + 1);
+    std::shared_ptr<const Correspondence> left, right;
     const bool hasLeft = a > 0, hasRight = a + 2 < keys.size();
     if (hasLeft)
-      left = matchFrames(samples(a - 1), sa, index);
+      left = match(a - 1, a);
     if (hasRight)
-      right = matchFrames(sb, samples(a + 2), index);
+      right = match(a + 1, a + 2);
     // Per inner key: its map to the other inner key, and to its own outer neighbour.
-    const std::vector<PixelMatch>* toOther[2] = { &inner.aToB, &inner.bToA };
-    const std::vector<PixelMatch>* toOuter[2] = { hasLeft ? &left.bToA : nullptr,
-                                                  hasRight ? &right.aToB : nullptr };
+    const std::vector<PixelMatch>* toOther[2] = { &inner->aToB, &inner->bToA };
+    const std::vector<PixelMatch>* toOuter[2] = { hasLeft ? &left->bToA : nullptr,
+                                                  hasRight ? &right->aToB : nullptr };
     const double sInner[2] = { keys[a].s, keys[a + 1].s };
     const double sOuter[2] = { hasLeft ? keys[a - 1].s : 0.0, hasRight ? keys[a + 2].s : 0.0 };
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
@@ -402,12 +407,13 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
                                               const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
                                               const std::vector<const RayRecord*>& perPixel,
-                                              bool hedged, bool hedgeNearShadow)
+                                              bool hedged, bool hedgeNearShadow,
+                                              PathMatchCache* cache)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
     return out;
-  const EdgeMover mover(keys, a, t, width, height, index);
+  const EdgeMover mover(keys, a, t, width, height, index, cache);
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::int64_t q = 0; q < static_cast<std::int64_t>(pixels.size()); ++q)
   {

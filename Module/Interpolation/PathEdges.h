@@ -71,12 +71,14 @@ struct MovedEdgePixel
 /// makes. `perPixel[k]` is the per-pixel prediction of pixel `pixels[k]`, or null where the inner
 /// pair disagree on it. `hedged`: the colour is the mean of the ways of moving (Hedging above),
 /// else that of both inner keys' points. `hedgeNearShadow`: the shadow's rim hedged (above).
+/// `cache` (if given) keeps the keys' correspondences between calls.
 std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
                                               double t, int width, int height, const Scene& scene,
                                               const PointIndexFactory& index,
                                               const std::vector<std::int32_t>& pixels,
                                               const std::vector<const RayRecord*>& perPixel,
-                                              bool hedged, bool hedgeNearShadow);
+                                              bool hedged, bool hedgeNearShadow,
+                                              PathMatchCache* cache);
 }
 
 #endif

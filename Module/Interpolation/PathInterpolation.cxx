@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -476,7 +477,7 @@ std::vector<std::int32_t> contradictedNeighbours(const PathFrame& frame,
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
                   const PointIndexFactory& index, const std::vector<RayRecord>& own,
                   const std::vector<std::uint8_t>& hasOwn, bool hedged, bool hedgeNearShadow,
-                  PathFrame& f)
+                  PathMatchCache* cache, PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -487,7 +488,7 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
     }
   const std::vector<MovedEdgePixel> moved = predictMovedEdges(
-    keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged, hedgeNearShadow);
+    keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged, hedgeNearShadow, cache);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -498,6 +499,81 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
                                                                   : PathMethod::MovedEdge);
     }
 }
+}
+
+namespace
+{
+/// Mixes a 64-bit word into a running hash (the multiply-xorshift step of MurmurHash3's
+/// finalizer, applied per word).
+std::uint64_t mixWord(std::uint64_t h, std::uint64_t w)
+{
+  w *= 0xff51afd7ed558ccdULL;
+  w ^= w >> 33;
+  h ^= w;
+  h *= 0xc4ceb9fe1a85ec53ULL;
+  return h ^ (h >> 29);
+}
+
+std::uint64_t bitsOf(double x)
+{
+  std::uint64_t w = 0;
+  std::memcpy(&w, &x, sizeof w);
+  return w;
+}
+}
+
+std::uint64_t matchingFingerprint(const std::vector<RayRecord>& records)
+{
+  std::uint64_t h = mixWord(0x9e3779b97f4a7c15ULL, records.size());
+  for (const RayRecord& r : records)
+  {
+    h = mixWord(h, (static_cast<std::uint64_t>(static_cast<std::uint32_t>(r.i)) << 32) |
+                     static_cast<std::uint32_t>(r.j));
+    h = mixWord(h, (static_cast<std::uint64_t>(static_cast<std::uint32_t>(r.objectId)) << 32) |
+                     (static_cast<std::uint64_t>(static_cast<std::uint32_t>(r.imageOrder)) << 8) |
+                     static_cast<std::uint64_t>(r.termination));
+    for (double x : { r.hitPoint.x(), r.hitPoint.y(), r.hitPoint.z(), r.u, r.v, r.dudi, r.dudj,
+                      r.dvdi, r.dvdj, r.affineLength, r.color.x(), r.color.y(), r.color.z(),
+                      r.direction.x(), r.direction.y(), r.direction.z() })
+      h = mixWord(h, bitsOf(x));
+  }
+  return h;
+}
+
+PathMatchCache::PathMatchCache(std::size_t capacity)
+  : Capacity(std::max<std::size_t>(capacity, 1))
+{
+}
+
+std::shared_ptr<const Correspondence> PathMatchCache::matches(
+  const std::vector<RayRecord>& a, const std::vector<RayRecord>& b,
+  const std::function<Correspondence()>& match)
+{
+  const std::uint64_t fa = matchingFingerprint(a), fb = matchingFingerprint(b);
+  {
+    std::lock_guard<std::mutex> lock(this->Mutex);
+    for (auto e = this->Entries.begin(); e != this->Entries.end(); ++e)
+      if (e->a == fa && e->b == fb)
+      {
+        this->Entries.splice(this->Entries.begin(), this->Entries, e);
+        return this->Entries.front().matches;
+      }
+  }
+  // Matched outside the lock: another thread may match the same pair meanwhile, to the same
+  // correspondence.
+  auto made = std::make_shared<const Correspondence>(match());
+  std::lock_guard<std::mutex> lock(this->Mutex);
+  ++this->Made;
+  this->Entries.push_front({ fa, fb, made });
+  while (this->Entries.size() > this->Capacity)
+    this->Entries.pop_back();
+  return made;
+}
+
+std::size_t PathMatchCache::made() const
+{
+  std::lock_guard<std::mutex> lock(this->Mutex);
+  return this->Made;
 }
 
 const char* toString(PathMethod m)
@@ -695,7 +771,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
     }
   if (options.movedEdges)
     predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
-                 options.hedgeNearShadow, f);
+                 options.hedgeNearShadow, options.matchCache.get(), f);
   return f;
 }
 

@@ -46,6 +46,9 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <list>
+#include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -136,6 +139,41 @@ ASRTINTERPOLATION_EXPORT RayRecord predictRecord(const RayRecord* const* nodes, 
 /// horizon's, the background's or the failure colour.
 ASRTINTERPOLATION_EXPORT Color shadePrediction(const Scene& scene, const RayRecord& r);
 
+/// The correspondences between key frames that the moved edges match (the inner pair, and each
+/// inner key with its outer neighbour), kept for the frames that follow: every frame between the
+/// same keys, and the next pair's frames, match the same pairs again. Kept by the content of the
+/// keys' records (a fingerprint of every field the matching reads), so that a key read again, or
+/// a buffer reused for another frame, is never taken for another. At most `capacity` are kept
+/// (each 2 × 28 bytes a pixel: 116 MB at 1920×1080), the least recently used going first.
+/// Thread-safe.
+class ASRTINTERPOLATION_EXPORT PathMatchCache
+{
+public:
+  explicit PathMatchCache(std::size_t capacity = 3);
+  /// The correspondence of the frames with records `a` and `b`, `match()` where none is kept.
+  std::shared_ptr<const Correspondence> matches(const std::vector<RayRecord>& a,
+                                                const std::vector<RayRecord>& b,
+                                                const std::function<Correspondence()>& match);
+  /// How many correspondences `matches` made (rather than found kept) so far.
+  std::size_t made() const;
+
+private:
+  struct Entry
+  {
+    std::uint64_t a = 0, b = 0;
+    std::shared_ptr<const Correspondence> matches;
+  };
+  mutable std::mutex Mutex;
+  std::list<Entry> Entries; ///< most recently used first
+  std::size_t Capacity = 3, Made = 0;
+};
+
+/// A fingerprint of the fields of a frame's records that its matching reads (pixel, hit point,
+/// surface coordinates and their Jacobian, path length, object, image order, termination, colour,
+/// direction): equal records, equal fingerprints; different ones, different fingerprints but for
+/// a collision of 64-bit hashes.
+ASRTINTERPOLATION_EXPORT std::uint64_t matchingFingerprint(const std::vector<RayRecord>& records);
+
 /// How interpolateAlongPath predicts.
 struct PathOptions
 {
@@ -155,6 +193,9 @@ struct PathOptions
   /// 0.11 M apart, a frame completed to 35 dB from it scored 33.4 dB against the traced frame
   /// (39.9 without), its estimate missing what the mean leaves.
   bool hedgeNearShadow = false;
+  /// Where the moved edges' correspondences are kept between frames (null: each frame matches
+  /// its keys afresh). The frames are the same either way.
+  std::shared_ptr<PathMatchCache> matchCache;
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within

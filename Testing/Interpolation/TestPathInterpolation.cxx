@@ -334,6 +334,37 @@ TEST_F(PathInterpolationRamp, KeysAreReturnedAsTheyAre)
   EXPECT_EQ(f.counts()[static_cast<int>(PathMethod::Key)], f.records.size());
 }
 
+// Frames along the ramp with the moved edges' correspondences kept between them (PathMatchCache):
+// the same frames, bit for bit, as matching afresh each time, and each pair of keys matched once:
+// three frames between the middle keys match keys 0-1, 1-2 and 2-3, and the frames of the pairs
+// either side need no other pair. A key whose records change is matched again.
+TEST_F(PathInterpolationRamp, KeptCorrespondencesGiveTheSameFramesMatchingEachPairOnce)
+{
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
+  PathOptions kept = withMovedEdges();
+  kept.matchCache = std::make_shared<PathMatchCache>();
+  const SceneDescription shading = rampScene(T, Side);
+  const asrt::Scene& scene = *shading.scene;
+  for (const double t : { 0.71, 0.72, 0.74, 0.78, 0.66 })
+  {
+    const PathFrame a = interpolateAlongPath(path, t, Side, Side, scene, kept);
+    const PathFrame b = interpolateAlongPath(path, t, Side, Side, scene, withMovedEdges());
+    ASSERT_EQ(a.method, b.method) << "t = " << t;
+    ASSERT_EQ(a.estimate, b.estimate) << "t = " << t;
+    for (std::size_t p = 0; p < a.records.size(); ++p)
+      ASSERT_EQ(a.records[p].color, b.records[p].color) << "t = " << t << ", pixel " << p;
+  }
+  EXPECT_EQ(kept.matchCache->made(), 3u);
+  // Another key 2 (one surface coordinate a little off): the pairs it is in are matched again.
+  std::vector<RayRecord> changed = keys()[2];
+  changed[changed.size() / 2].u = std::nextafter(changed[changed.size() / 2].u, 2.0);
+  path[2].records = &changed;
+  interpolateAlongPath(path, 0.72, Side, Side, scene, kept);
+  EXPECT_EQ(kept.matchCache->made(), 5u);
+}
+
 TEST_F(PathInterpolationRamp, PredictedPixelsAreCloseAndTheEstimateFindsTheWorst)
 {
   const PathFrame f = interpolated();
