@@ -1,8 +1,8 @@
 // A nearest-point search for matchFrames (FrameMatching.h, PointIndex) over a k-d tree: nanoflann's
 // KDTreeSingleIndexAdaptor (Blanco and Rai, https://github.com/jlblancoc/nanoflann), built once
-// over the fixed points, its queries const and so thread-safe. Plain C++, for callers without a
-// VTK locator at hand, and for the matching of the moved edges along a path (PathEdges.h), where
-// the searches are most of the work.
+// over the fixed points, its queries const and so thread-safe. What the filters, the CLI and the
+// benches match frames with: on two 1920×1080 frames of the mass ramp it finds the same matches as
+// VTK's static point locator in a third of the time (bench/REPORT.md, the interpolation section).
 #ifndef asrt_KdTreeIndex_h
 #define asrt_KdTreeIndex_h
 

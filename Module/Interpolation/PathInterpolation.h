@@ -144,7 +144,7 @@ ASRTINTERPOLATION_EXPORT Color shadePrediction(const Scene& scene, const RayReco
 /// same keys, and the next pair's frames, match the same pairs again. Kept by the content of the
 /// keys' records (a fingerprint of every field the matching reads), so that a key read again, or
 /// a buffer reused for another frame, is never taken for another. At most `capacity` are kept
-/// (each 2 × 28 bytes a pixel: 116 MB at 1920×1080), the least recently used going first.
+/// (each 2 × 32 bytes a pixel: 133 MB at 1920×1080), the least recently used going first.
 /// Thread-safe.
 class ASRTINTERPOLATION_EXPORT PathMatchCache
 {
