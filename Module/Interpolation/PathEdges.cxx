@@ -42,6 +42,7 @@ struct Mover
   double lin[2] = { 0, 0 };       ///< at t, through the inner pair alone
   double inv[4] = { 1, 0, 0, 1 }; ///< inverse of its pixel's map to t, row-major
   double length = 0;              ///< path length: the shorter covers the longer
+  std::uint8_t reach = 0;         ///< cells from its own that the spots it covers lie within
   const RayRecord* record = nullptr;
   std::uint8_t side = 0; ///< 0: key a's, 1: key a + 1's
   bool usable = false;
@@ -165,6 +166,11 @@ public:
       m.inv[1] = -M[1] / det;
       m.inv[2] = -M[2] / det;
       m.inv[3] = M[0] / det;
+      // It covers spots (or lies within kGap of them) only where its offset d, x − c = M·d, has
+      // |d|∞ ≤ ½ + kGap: within (1 + 2 kGap)·h of its centre along each axis, so within the
+      // ceiling of that many cells of the spot's (at most kReach: no further is searched).
+      m.reach = static_cast<std::uint8_t>(std::min(
+        kReach, static_cast<int>(std::ceil((1.0 + 2.0 * kGap) * std::max(hx, hy) + 1e-6))));
       m.usable = true;
     }
     bucket(false, full_);
@@ -247,7 +253,10 @@ private:
       for (int di = -kReach; di <= kReach; ++di)
       {
         const int cell = g.cell(ci + di, cj + dj);
-        if (cell < 0)
+        // Cells whose movers all reach less far cannot cover the spot: the same movers are found,
+        // in the same order, as by searching every cell.
+        if (cell < 0 ||
+            g.reach[static_cast<std::size_t>(cell)] < std::max(std::abs(di), std::abs(dj)))
           continue;
         for (std::int64_t e = g.start[cell]; e < g.start[cell + 1]; ++e)
         {
@@ -268,6 +277,7 @@ private:
   {
     int w = 0, h = 0;
     std::vector<std::int64_t> start, entries;
+    std::vector<std::uint8_t> reach; ///< per cell, the farthest its movers reach (Mover::reach)
     int cell(int i, int j) const
     {
       i += kReach;
@@ -282,6 +292,7 @@ private:
     g.h = height_ + 2 * kReach;
     std::vector<int> cellOf(movers_.size(), -1);
     g.start.assign(static_cast<std::size_t>(g.w) * g.h + 1, 0);
+    g.reach.assign(static_cast<std::size_t>(g.w) * g.h, 0);
     for (std::size_t k = 0; k < movers_.size(); ++k)
     {
       if (!movers_[k].usable)
@@ -292,7 +303,11 @@ private:
       cellOf[k] =
         g.cell(static_cast<int>(std::floor(c[0] + 0.5)), static_cast<int>(std::floor(c[1] + 0.5)));
       if (cellOf[k] >= 0)
+      {
         ++g.start[static_cast<std::size_t>(cellOf[k]) + 1];
+        std::uint8_t& r = g.reach[static_cast<std::size_t>(cellOf[k])];
+        r = std::max(r, movers_[k].reach);
+      }
     }
     std::partial_sum(g.start.begin(), g.start.end(), g.start.begin());
     g.entries.resize(static_cast<std::size_t>(g.start.back()));
