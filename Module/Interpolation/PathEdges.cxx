@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <numeric>
 
 namespace asrt
@@ -79,8 +80,18 @@ public:
     , height_(height)
   {
     const double va = viewAngleOf(*keys[a].records, width, height);
-    auto samples = [&](std::size_t k)
-    { return samplesFromRecords(*keys[k].records, width, height, va, "key " + std::to_string(k)); };
+    // Each key's samples made once, and only for the pairs that are matched here.
+    std::map<std::size_t, FrameSamples> made;
+    auto samples = [&](std::size_t k) -> const FrameSamples&
+    {
+      auto found = made.find(k);
+      if (found == made.end())
+        found = made
+                  .emplace(k, samplesFromRecords(*keys[k].records, width, height, va,
+                                                 "key " + std::to_string(k)))
+                  .first;
+      return found->second;
+    };
     auto match = [&](std::size_t from, std::size_t to)
     {
       auto make = [&] { return matchFrames(samples(from), samples(to), index); };
