@@ -377,25 +377,38 @@ constexpr float kEdgeShare = 0.25f;
 /// about a quarter of a pixel of where they put it (PathEdges.h, Estimate).
 constexpr float kAgreedEdgeShare = 0.0625f;
 
+/// A front mover not searched for yet (front() returns −1 where none covers a spot).
+constexpr std::int64_t kNotSearched = -2;
+
 /// Whether the ways of moving dispute what the centre of pixel (i, j) shows (`centre`, the front
 /// point through every matched key): the inner pair alone, or either inner key's points alone,
 /// show another surface there or nothing, or, where it shows a surface, the hole's moved rays
 /// cover it too (the shadow's rim).
-bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre)
+/// `fronts` holds those ways' front movers at the centre where subsampled() found them already
+/// (kNotSearched where it stopped before the centre).
+bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre,
+              const std::int64_t (&fronts)[3])
 {
-  for (const std::int64_t k :
-       { mover.front(i, j, true, 3), mover.front(i, j, false, 1), mover.front(i, j, false, 2) })
+  const bool linear[3] = { true, false, false };
+  const int sides[3] = { 3, 1, 2 };
+  for (int w = 0; w < 3; ++w)
+  {
+    const std::int64_t k =
+      fronts[w] != kNotSearched ? fronts[w] : mover.front(i, j, linear[w], sides[w]);
     if (k < 0 || !endAlike(centre, *mover.mover(k).record))
       return true;
+  }
   return centre.termination != Termination::Captured && mover.capturedCovering(i, j, false, 3) >= 0;
 }
 
 /// The mean colour of the pixel's sub-positions as one way of moving predicts it; false if a
 /// sub-position is covered by nothing. `centre` (if given) and the sub-positions' records ending
-/// alike leave `alike` (if given) true.
+/// alike leave `alike` (if given) true. `centreFront` (if given) gets the front mover at the
+/// pixel's centre, if the search got that far.
 bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool linear, int sides,
                 Color& out, const RayRecord* centre = nullptr, bool* alike = nullptr,
-                float* nearShadow = nullptr, bool hedgeNearShadow = false)
+                float* nearShadow = nullptr, bool hedgeNearShadow = false,
+                std::int64_t* centreFront = nullptr)
 {
   out = Color::Zero();
   Color halfContrast = Color::Zero();
@@ -403,6 +416,8 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
   {
     const double x = i + o[0], y = j + o[1];
     const std::int64_t k = mover.front(x, y, linear, sides);
+    if (centreFront && o[0] == 0 && o[1] == 0)
+      *centreFront = k;
     if (k < 0)
       return false;
     const RayRecord r = movedRecord(mover, k, x, y, linear, 1 / 3.0);
@@ -463,21 +478,23 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
     e.record.raysPerPixel = static_cast<std::int32_t>(std::size(kSub));
     e.record.color = color;
     // The other ways of predicting the pixel: the disagreement of each with this one.
-    const bool isDisputed = disputed(mover, i, j, centreRecord);
     Color other, sum = color;
     int ways = 1;
-    if (subsampled(mover, scene, i, j, true, 3, other, nullptr, nullptr, nullptr, hedgeNearShadow))
+    std::int64_t fronts[3] = { kNotSearched, kNotSearched, kNotSearched };
+    if (subsampled(mover, scene, i, j, true, 3, other, nullptr, nullptr, nullptr, hedgeNearShadow,
+                   &fronts[0]))
       e.estimate = std::max(e.estimate, colorError2(color, other));
     else
       e.estimate = std::numeric_limits<float>::infinity();
     for (int side : { 1, 2 })
       if (subsampled(mover, scene, i, j, false, side, other, nullptr, nullptr, nullptr,
-                     hedgeNearShadow))
+                     hedgeNearShadow, &fronts[side]))
       {
         e.estimate = std::max(e.estimate, colorError2(color, other));
         sum += other;
         ++ways;
       }
+    const bool isDisputed = disputed(mover, i, j, centreRecord, fronts);
     if (hedged)
       e.record.color = sum / static_cast<double>(ways);
     // An edge within a pixel of it that every prediction moves alike may still lie a fraction of

@@ -131,6 +131,27 @@ TracedKeys rampKeys(int side, double first, double spacing)
   return keys;
 }
 
+/// The mass ramp's frame at t traced (the truth a frame interpolated there is held to), and the
+/// frame interpolated there from `keys` with `options`.
+struct RampFrameAt
+{
+  double t;
+  int side;
+  SceneDescription scene;
+  std::vector<RayRecord> truth;
+  RampFrameAt(double t, int side)
+    : t(t)
+    , side(side)
+    , scene(rampScene(t, side))
+    , truth(traceFrame(scene))
+  {
+  }
+  PathFrame interpolated(const TracedKeys& keys, const PathOptions& options) const
+  {
+    return interpolateAlongPath(keys.path(), t, side, side, *scene.scene, options);
+  }
+};
+
 /// Squared colour error summed over the channels, levels² of 255.
 double error2(const RayRecord& a, const RayRecord& b)
 {
@@ -449,13 +470,12 @@ TEST(PathInterpolationMovedEdges, HedgingTheWaysOfMovingComesCloserToTheTracedFr
   constexpr int side = 96;
   constexpr double t = 0.76;
   const TracedKeys keys = rampKeys(side, 0.595, 0.11);
-  const std::vector<PathKey> path = keys.path();
-  const SceneDescription atT = rampScene(t, side);
-  const std::vector<RayRecord> truth = traceFrame(atT);
-  PathOptions hedged = withMovedEdges(), single = withMovedEdges();
+  const RampFrameAt at(t, side);
+  const std::vector<RayRecord>& truth = at.truth;
+  PathOptions single = withMovedEdges();
   single.hedgeMovedEdges = false;
-  const PathFrame a = interpolateAlongPath(path, t, side, side, *atT.scene, hedged);
-  const PathFrame b = interpolateAlongPath(path, t, side, side, *atT.scene, single);
+  const PathFrame a = at.interpolated(keys, withMovedEdges());
+  const PathFrame b = at.interpolated(keys, single);
   double errorHedged = 0, errorSingle = 0;
   std::size_t moved = 0, changed = 0;
   for (std::size_t p = 0; p < truth.size(); ++p)
@@ -486,13 +506,12 @@ TEST(PathInterpolationMovedEdges, HedgingTheShadowsRimComesCloserToTheTracedFram
   constexpr int side = 96;
   constexpr double t = 0.6225;
   const TracedKeys keys = rampKeys(side, 0.45, 0.11);
-  const std::vector<PathKey> path = keys.path();
-  const SceneDescription atT = rampScene(t, side);
-  const std::vector<RayRecord> truth = traceFrame(atT);
+  const RampFrameAt at(t, side);
+  const std::vector<RayRecord>& truth = at.truth;
   PathOptions hedged = withMovedEdges();
   hedged.hedgeNearShadow = true;
-  const PathFrame a = interpolateAlongPath(path, t, side, side, *atT.scene, hedged);
-  const PathFrame b = interpolateAlongPath(path, t, side, side, *atT.scene, withMovedEdges());
+  const PathFrame a = at.interpolated(keys, hedged);
+  const PathFrame b = at.interpolated(keys, withMovedEdges());
   double errorHedged = 0, errorPlain = 0;
   std::size_t changed = 0;
   for (std::size_t p = 0; p < truth.size(); ++p)
@@ -522,12 +541,11 @@ TEST(PathInterpolationMovedEdges, PixelsShowingAnotherSurfaceRankAboveTheOtherMo
 {
   constexpr int side = 96;
   const TracedKeys keys = rampKeys(side, 0.45, 0.11);
-  const std::vector<PathKey> path = keys.path();
   for (const double t : { 0.5875, 0.6225 })
   {
-    const SceneDescription atT = rampScene(t, side);
-    const std::vector<RayRecord> truth = traceFrame(atT);
-    const PathFrame f = interpolateAlongPath(path, t, side, side, *atT.scene, withMovedEdges());
+    const RampFrameAt at(t, side);
+    const std::vector<RayRecord>& truth = at.truth;
+    const PathFrame f = at.interpolated(keys, withMovedEdges());
     std::vector<std::pair<float, bool>> moved; // estimate, shows another surface
     for (std::size_t p = 0; p < truth.size(); ++p)
       if (f.method[p] == static_cast<std::uint8_t>(PathMethod::MovedEdge))
