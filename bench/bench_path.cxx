@@ -464,6 +464,7 @@ struct Frame
   double mass = 0;
   std::vector<RayRecord> traced; ///< same settings as the keys
   double traceSeconds = 0;
+  double rays = 0; ///< every ray integrated to trace it (FrameTracer::raysIntegrated)
   std::vector<std::uint8_t> tracedRgb, reference;
 };
 }
@@ -504,8 +505,10 @@ void runRampStudy(double tStart)
     f.mass = m;
     const SceneDescription d = rampScene(m);
     const double t0 = now();
-    f.traced = FrameTracer(d).traceRows(0, kSide);
+    const FrameTracer tracer(d);
+    f.traced = tracer.traceRows(0, kSide);
     f.traceSeconds = now() - t0;
+    f.rays = static_cast<double>(tracer.raysIntegrated());
     f.tracedRgb = rgbOf(f.traced);
     const double t1 = now();
     f.reference = rgbOf(FrameTracer(rampScene(m, &referenceRendering)).traceRows(0, kSide));
@@ -543,8 +546,8 @@ void runRampStudy(double tStart)
                 "time (× trace) |\n|---|---|---|---|---|---|---|---|\n");
   struct Ranking
   {
-    double h, mass, spearman, spearmanUnrounded, mustBefore, must, moved, estimate35, oracle35,
-      estimate40, oracle40;
+    double h, mass, spearman, spearmanUnrounded, ceiling, mustBefore, must, moved, estimate35,
+      oracle35, estimate40, oracle40;
   };
   struct Outcome
   {
@@ -557,6 +560,9 @@ void runRampStudy(double tStart)
     double h, mass, psnr, previewPsnr;
     std::array<double, kPathMethodCount> pixels{}, error{}; ///< shares of all
     double movedOtherSurface = 0, movedOtherError = 0;      ///< shares of the moved edges'
+    /// Spearman of the estimate against the error before rounding within each way (NaN: fewer
+    /// than 16 pixels).
+    std::array<double, kPathMethodCount> rank{};
   };
   std::vector<Ranking> rankings;
   std::vector<Outcome> outcomes;
@@ -634,6 +640,18 @@ void runRampStudy(double tStart)
         }
         for (double& x : e.error)
           x = total > 0 ? x / total : 0.0;
+        for (int m = 0; m < kPathMethodCount; ++m)
+        {
+          std::vector<double> wayEstimate, wayError;
+          for (std::size_t p = 0; p < err2.size(); ++p)
+            if (plain.method[p] == m)
+            {
+              wayEstimate.push_back(plain.estimate[p]);
+              wayError.push_back(colorError2(plain.records[p].color, f.traced[p].color));
+            }
+          e.rank[static_cast<std::size_t>(m)] =
+            wayEstimate.size() >= 16 ? spearman(wayEstimate, wayError) : std::nan("");
+        }
         const double movedPixels = e.pixels[moved] * static_cast<double>(err2.size());
         e.movedOtherSurface = movedPixels > 0 ? otherSurface / movedPixels : 0.0;
         e.movedOtherError = movedError > 0 ? otherError / movedError : 0.0;
@@ -663,6 +681,7 @@ void runRampStudy(double tStart)
       const double n = static_cast<double>(err2.size());
       rankings.push_back(
         { h, f.mass, spearman(est, truth), spearman(est, truthUnrounded),
+          spearman(truthUnrounded, truth),
           plainBefore.counts()[static_cast<std::size_t>(PathMethod::Retrace)] / n, must / n,
           (plain.counts()[static_cast<std::size_t>(PathMethod::MovedEdge)] +
            plain.counts()[static_cast<std::size_t>(PathMethod::MovedSurface)]) /
@@ -731,30 +750,33 @@ void runRampStudy(double tStart)
   std::printf(
     "\n**The estimate against the truth** (the plain frame's pixels that the keys vouch "
     "for, moved edges included; Spearman against the error of the frame's 8-bit colours, where "
-    "most pixels tie at 0, and against the error of its colours before rounding; the share "
-    "re-traced in all, the must-re-trace pixels first, for "
+    "most pixels tie at 0, and against the error of its colours before rounding; *ceiling*: "
+    "the error before rounding itself against the 8-bit error, what an estimate that knew the "
+    "true error exactly would score against the rounded one; "
+    "the share re-traced in all, the must-re-trace pixels first, for "
     "the frame to reach 35 or 40 dB against the traced frame when pixels are re-traced in the "
     "estimate's order and in the true error's, the oracle; must re-trace before: without moved "
     "edges):\n\n");
-  std::printf("| h | M | Spearman | Spearman (unrounded) | must re-trace before | moved edges | "
-              "must re-trace | 35 dB: estimate | 35 dB: oracle | 40 dB: estimate | 40 dB: oracle "
-              "|\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| h | M | Spearman | Spearman (unrounded) | ceiling | must re-trace before | moved "
+              "edges | must re-trace | 35 dB: estimate | 35 dB: oracle | 40 dB: estimate | 40 dB: "
+              "oracle |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double h : spacings)
   {
-    Ranking mean{ h, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+    Ranking mean{ h, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
     double count = 0;
     for (const Ranking& r : rankings)
     {
       if (r.h != h)
         continue;
       if (detailed)
-        std::printf("| %g | %.4f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", r.h, r.mass,
-                    r.spearman, r.spearmanUnrounded, pct(r.mustBefore).c_str(),
+        std::printf("| %g | %.4f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", r.h,
+                    r.mass, r.spearman, r.spearmanUnrounded, r.ceiling, pct(r.mustBefore).c_str(),
                     pct(r.moved).c_str(), pct(r.must).c_str(), pct(r.estimate35).c_str(),
                     pct(r.oracle35).c_str(), pct(r.estimate40).c_str(), pct(r.oracle40).c_str());
       count += 1;
       mean.spearman += r.spearman;
       mean.spearmanUnrounded += r.spearmanUnrounded;
+      mean.ceiling += r.ceiling;
       mean.mustBefore += r.mustBefore;
       mean.moved += r.moved;
       mean.must += r.must;
@@ -764,12 +786,12 @@ void runRampStudy(double tStart)
       mean.oracle40 += r.oracle40;
     }
     if (!detailed && count > 0)
-      std::printf("| %g | mean of %.0f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n", h,
-                  count, mean.spearman / count, mean.spearmanUnrounded / count,
-                  pct(mean.mustBefore / count).c_str(), pct(mean.moved / count).c_str(),
-                  pct(mean.must / count).c_str(), pct(mean.estimate35 / count).c_str(),
-                  pct(mean.oracle35 / count).c_str(), pct(mean.estimate40 / count).c_str(),
-                  pct(mean.oracle40 / count).c_str());
+      std::printf("| %g | mean of %.0f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n",
+                  h, count, mean.spearman / count, mean.spearmanUnrounded / count,
+                  mean.ceiling / count, pct(mean.mustBefore / count).c_str(),
+                  pct(mean.moved / count).c_str(), pct(mean.must / count).c_str(),
+                  pct(mean.estimate35 / count).c_str(), pct(mean.oracle35 / count).c_str(),
+                  pct(mean.estimate40 / count).c_str(), pct(mean.oracle40 / count).c_str());
   }
   std::printf("\n**Where the plain frame's error lies** (against the traced frame): each way of "
               "predicting, its share of the pixels / of the squared error; for moved edges also "
@@ -794,6 +816,51 @@ void runRampStudy(double tStart)
       std::printf(" %s / %s |", pct(e.pixels[static_cast<std::size_t>(m)]).c_str(),
                   pct(e.error[static_cast<std::size_t>(m)]).c_str());
     std::printf(" %s / %s |\n", pct(e.movedOtherSurface).c_str(), pct(e.movedOtherError).c_str());
+  }
+  std::printf(
+    "\n**The estimate's ranking within each way of predicting** (Spearman of the estimate "
+    "against the error before rounding, against the traced frame, over the way's "
+    "pixels; – where it has fewer than 16):\n\n| h | M |");
+  const PathMethod ranked[] = { PathMethod::Cubic,     PathMethod::Quadratic,
+                                PathMethod::Linear,    PathMethod::EdgeBlend,
+                                PathMethod::MovedEdge, PathMethod::MovedSurface };
+  for (PathMethod m : ranked)
+    std::printf(" %s |", toString(m));
+  std::printf("\n|---|---|");
+  for (std::size_t k = 0; k < std::size(ranked); ++k)
+    std::printf("---|");
+  std::printf("\n");
+  for (const PlainError& e : plainErrors)
+  {
+    std::printf("| %g | %.4f |", e.h, e.mass);
+    for (PathMethod m : ranked)
+    {
+      const double r = e.rank[static_cast<std::size_t>(m)];
+      if (std::isnan(r))
+        std::printf(" – |");
+      else
+        std::printf(" %.2f |", r);
+    }
+    std::printf("\n");
+  }
+  // Where the traced frames spend their rays: a whole frame's anti-aliasing is spent on the pixels
+  // its edges cross, and an interpolated frame whose edges all moved must trace those again.
+  std::printf("\n**Where a traced frame's rays go** (the frames traced at each M with the keys' "
+              "settings): the pixels anti-aliased (more than their centre ray), and the rays "
+              "charged to them against every ray the frame integrated:\n\n| M | rays | "
+              "anti-aliased pixels | their rays |\n|---|---|---|---|\n");
+  for (const Frame& f : frames)
+  {
+    double pixels = 0, rays = 0;
+    for (const RayRecord& r : f.traced)
+      if (r.raysPerPixel > 1)
+      {
+        pixels += 1;
+        rays += r.raysPerPixel;
+      }
+    std::printf("| %.4f | %.0f | %s | %s |\n", f.mass, f.rays,
+                pct(pixels / static_cast<double>(f.traced.size())).c_str(),
+                pct(f.rays > 0 ? rays / f.rays : 0.0).c_str());
   }
 }
 }
