@@ -429,12 +429,13 @@ struct MovieMaking
   /// and drops, FrameTracer::raysIntegrated), counted as the movie's.
   TracedPixels tracedSubset(const FrameTracer& tracer,
                             const std::vector<std::pair<int, int>>& pixels,
-                            const SceneDescription& subset)
+                            const SceneDescription& subset, CentreRays* kept = nullptr)
   {
     const auto t0 = std::chrono::steady_clock::now();
     const std::int64_t before = tracer.raysIntegrated();
     TracedPixels out;
-    out.records = tracer.tracePixels(pixels, this->progress());
+    out.records = kept ? tracer.tracePixels(pixels, *kept, this->progress())
+                       : tracer.tracePixels(pixels, this->progress());
     out.rays = static_cast<double>(tracer.raysIntegrated() - before);
     if (this->cancelled())
       throw MovieCancelled();
@@ -452,7 +453,10 @@ struct MovieMaking
   PixelTracer retracedPixels(int k, const std::function<const FrameTracer&()>& tracer,
                              MovieFrameReport& report, bool storeOnly)
   {
-    return [this, k, &tracer, &report, storeOnly](const std::vector<std::pair<int, int>>& pixels)
+    // The frame's lists border each other: their centre rays are traced once (CentreRays).
+    auto kept = std::make_shared<CentreRays>();
+    return
+      [this, k, &tracer, &report, storeOnly, kept](const std::vector<std::pair<int, int>>& pixels)
     {
       TracedPixels out;
       if (pixels.empty())
@@ -477,7 +481,7 @@ struct MovieMaking
       }
       if (storeOnly)
         throw NotServed();
-      out = this->tracedSubset(tracer(), pixels, subset); // the tracer is this frame's alone
+      out = this->tracedSubset(tracer(), pixels, subset, kept.get()); // this frame's tracer alone
       in.heldRays[k] += raysOf(out.records);
       report.raysTraced += out.rays;
       if (maker.Settings.cacheRetraced)

@@ -789,11 +789,14 @@ PathCompletion completePathFrame(PathFrame& frame, const FrameTracer& tracer, do
 
 PixelTracer pixelTracerOf(const FrameTracer& tracer)
 {
-  return [&tracer](const std::vector<std::pair<int, int>>& ij)
+  // The lists of one frame border each other (a list's edge neighbours are often asked for
+  // later): their centre rays are traced once.
+  auto kept = std::make_shared<CentreRays>();
+  return [&tracer, kept](const std::vector<std::pair<int, int>>& ij)
   {
     const std::int64_t before = tracer.raysIntegrated();
     TracedPixels out;
-    out.records = tracer.tracePixels(ij);
+    out.records = tracer.tracePixels(ij, *kept);
     out.rays = static_cast<double>(tracer.raysIntegrated() - before);
     return out;
   };

@@ -293,7 +293,9 @@ using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, 
 
 /// The pixel tracer of a frame tracer (which must outlive it): FrameTracer::tracePixels, and the
 /// rays it integrated read around each call (FrameTracer::raysIntegrated; the records'
-/// raysPerPixel leave out the edge neighbours it traces and drops).
+/// raysPerPixel leave out the edge neighbours it traces and drops). The centre rays it traced are
+/// kept between its calls (CentreRays): a pixel or neighbour traced for one list is not traced
+/// again for a later one, and the records are the same.
 ASRTINTERPOLATION_EXPORT PixelTracer pixelTracerOf(const FrameTracer& tracer);
 
 /// As above, the pixels got from `trace` (called with the must-retrace pixels and the probes,

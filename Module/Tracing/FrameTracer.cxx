@@ -169,6 +169,17 @@ std::vector<std::pair<int, int>> edgeNeighbours(const std::vector<std::pair<int,
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
+                                                CentreRays& kept,
+                                                const std::function<bool(double)>& progress) const
+{
+  std::vector<std::pair<int, int>> all = pixels;
+  const std::vector<std::pair<int, int>> halo =
+    edgeNeighbours(pixels, this->Desc.camera.width, this->Desc.camera.height);
+  all.insert(all.end(), halo.begin(), halo.end());
+  return this->traceKeeping(all, pixels.size(), progress, &kept);
+}
+
+std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
 {
   // The pixels' edge neighbours that are not among them are traced too, as the halo rows of a
@@ -183,7 +194,8 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
 
 std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int, int>>& pixels,
                                                  std::size_t keep,
-                                                 const std::function<bool(double)>& progress) const
+                                                 const std::function<bool(double)>& progress,
+                                                 CentreRays* kept) const
 {
   // The centre rays take the first share of the progress; anti-aliasing reports the rest.
   const bool extra =
@@ -195,7 +207,7 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
     centreProgress = [&](double f) { return progress(share * f); };
     restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
   }
-  std::vector<RayRecord> out = this->traceCentres(pixels, centreProgress);
+  std::vector<RayRecord> out = this->traceCentresKept(pixels, centreProgress, kept);
   std::vector<JacobianSample> halo;
   for (std::size_t k = keep; k < out.size(); ++k)
     halo.push_back(jacobianSample(out[k]));
@@ -208,6 +220,13 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
 std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int, int>>& pixels,
                                                  const std::function<bool(double)>& progress) const
 {
+  return this->traceCentresKept(pixels, progress, nullptr);
+}
+
+std::vector<RayRecord> FrameTracer::traceCentresKept(const std::vector<std::pair<int, int>>& pixels,
+                                                     const std::function<bool(double)>& progress,
+                                                     CentreRays* kept) const
+{
   if (effectiveGridLattice(this->Desc.rendering) > 1)
   {
     std::vector<RayRecord> grid = this->traceGrid(pixels, progress);
@@ -216,6 +235,20 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
   }
   const long n = static_cast<long>(pixels.size());
   std::vector<RayRecord> out(pixels.size());
+  const std::int64_t width = this->Desc.camera.width;
+  auto keyOf = [width](const std::pair<int, int>& ij)
+  { return static_cast<std::int64_t>(ij.second) * width + ij.first; };
+  std::vector<unsigned char> known(pixels.size(), 0);
+  if (kept)
+    for (std::size_t k = 0; k < pixels.size(); ++k)
+    {
+      const auto found = kept->Records.find(keyOf(pixels[k]));
+      if (found != kept->Records.end())
+      {
+        out[k] = found->second;
+        known[k] = 1;
+      }
+    }
   std::atomic<long> done{ 0 };
   std::atomic<bool> stop{ false };
   const long reportEvery = std::max(1L, n / 200);
@@ -229,7 +262,8 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
     {
       if (stop.load(std::memory_order_relaxed))
         continue;
-      out[k] = this->traceThrough(*prop, pixels[k].first, pixels[k].second);
+      if (!known[static_cast<std::size_t>(k)])
+        out[k] = this->traceThrough(*prop, pixels[k].first, pixels[k].second);
       const long d = ++done;
       // Only the master thread reports: VTK's progress events are not thread-safe.
       if (progress && omp_get_thread_num() == 0 && d - lastReported >= reportEvery)
@@ -244,6 +278,10 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
   // (the master's own reports above depend on how the rays were shared out).
   if (progress && !stop && n > 0)
     progress(1.0);
+  if (kept)
+    for (std::size_t k = 0; k < pixels.size(); ++k)
+      if (!known[k] && out[k].termination != Termination::Running) // traced, not stopped early
+        kept->Records.emplace(keyOf(pixels[k]), out[k]);
   computeJacobians(out);
   return out;
 }

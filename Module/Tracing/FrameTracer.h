@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -32,6 +33,22 @@ constexpr long kParallelRecords = 16384;
 /// (with a grid lattice above 1, traceCentres processes the lattice blocks holding them whole).
 ASRTTRACING_EXPORT std::vector<std::pair<int, int>> edgeNeighbours(
   const std::vector<std::pair<int, int>>& pixels, int width, int height);
+
+/// Centre rays that FrameTracer::tracePixels traced, kept for later calls on the same tracer: a
+/// centre ray depends on its pixel alone, so a pixel asked for again, or traced before as the
+/// neighbour of one asked for, is taken from here instead of traced again, and the records come
+/// out the same bit for bit. Kept only on grid lattice 1 (scattered pixels); above it the lattice
+/// blocks are traced whole and nothing is kept. Not to be shared by calls running at once.
+class ASRTTRACING_EXPORT CentreRays
+{
+public:
+  /// How many centre rays are kept.
+  std::size_t size() const { return this->Records.size(); }
+
+private:
+  friend class FrameTracer;
+  std::unordered_map<std::int64_t, RayRecord> Records; ///< by j · width + i, before Jacobians
+};
 
 /// Traces pixels of one scene. Thread-safe: every traced pixel uses its own propagator.
 class ASRTTRACING_EXPORT FrameTracer
@@ -80,6 +97,11 @@ public:
   /// returned records of untraced pixels keep termination Running.
   std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                      const std::function<bool(double)>& progress = nullptr) const;
+  /// As above, the centre rays found in `kept` taken from there, and those traced added to it
+  /// (CentreRays): raysIntegrated() counts only the centre rays traced now.
+  std::vector<RayRecord> tracePixels(const std::vector<std::pair<int, int>>& pixels,
+                                     CentreRays& kept,
+                                     const std::function<bool(double)>& progress = nullptr) const;
 
   /// The centre rays of tracePixels alone: point-sampled colours, one ray a pixel, Jacobians from
   /// the neighbours among these pixels. For callers that complete the Jacobians with neighbours
@@ -117,8 +139,12 @@ private:
   /// Traces the pixels' centre rays, keeps the first `keep` and anti-aliases them with the rest
   /// (their neighbours) as bordering samples.
   std::vector<RayRecord> traceKeeping(const std::vector<std::pair<int, int>>& pixels,
-                                      std::size_t keep,
-                                      const std::function<bool(double)>& progress) const;
+                                      std::size_t keep, const std::function<bool(double)>& progress,
+                                      CentreRays* kept = nullptr) const;
+  /// traceCentres, the centre rays in `kept` (if given) taken from there and those traced added.
+  std::vector<RayRecord> traceCentresKept(const std::vector<std::pair<int, int>>& pixels,
+                                          const std::function<bool(double)>& progress,
+                                          CentreRays* kept) const;
   /// The adaptive judgement of antialias(): sets side[k] to `adaptiveSide` for the records to
   /// sample, bendOnly[k] where a footprint that bends is the only reason, and counts in
   /// midpointRays[k] the edge-midpoint rays it traced on their behalf. `lookup` holds the records

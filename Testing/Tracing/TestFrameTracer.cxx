@@ -946,6 +946,60 @@ TEST(FrameTracerRays, ASubsetCountsTheNeighboursItTracesAndDrops)
               subset.size(), own, static_cast<long long>(adaptive.raysIntegrated()), neighbours);
 }
 
+// Centre rays kept between calls (CentreRays): a list traced after another takes the centre rays
+// the first traced (its pixels and their edge neighbours) instead of tracing them again. Its
+// records are those of the same list traced on a fresh tracer, bit for bit (Jacobians and colours
+// included), and the tracer integrates exactly the centre rays it did not have fewer.
+TEST(FrameTracerRays, KeptCentreRaysAreReusedAndGiveTheSameRecords)
+{
+  const int W = 32, H = 24;
+  SceneDescription d = photonSphereScene(W, H);
+  d.rendering = scatteredPixelRendering(d.rendering); // lattice 1: scattered pixels
+  std::vector<std::pair<int, int>> first, second;
+  for (int j = 6; j < 12; ++j) // a block, then a band overlapping it and its neighbours
+    for (int i = 8; i < 16; ++i)
+      first.emplace_back(i, j);
+  for (int j = 4; j < 18; ++j)
+    for (int i = 15; i < 18; ++i)
+      second.emplace_back(i, j);
+  second.emplace_back(3, 3); // and a pixel far from both
+
+  const FrameTracer fresh(d);
+  const std::vector<RayRecord> alone = fresh.tracePixels(second);
+  const long long aloneRays = fresh.raysIntegrated();
+
+  const FrameTracer tracer(d);
+  CentreRays kept;
+  const std::vector<RayRecord> a = tracer.tracePixels(first, kept);
+  // Every centre ray it traced is kept: the pixels asked for and their edge neighbours.
+  EXPECT_EQ(kept.size(), first.size() + edgeNeighbours(first, W, H).size());
+  const long long before = tracer.raysIntegrated();
+  const std::vector<RayRecord> b = tracer.tracePixels(second, kept);
+  ASSERT_EQ(b.size(), alone.size());
+  for (std::size_t k = 0; k < b.size(); ++k)
+  {
+    EXPECT_EQ(firstDifference(b[k], alone[k]), "") << second[k].first << "," << second[k].second;
+    EXPECT_EQ(b[k].raysPerPixel, alone[k].raysPerPixel);
+    EXPECT_EQ(b[k].color, alone[k].color);
+  }
+  // The centre rays of the second list (its pixels and their neighbours) found among the first's.
+  std::vector<std::pair<int, int>> traced = first, asked = second;
+  for (const auto& n : edgeNeighbours(first, W, H))
+    traced.push_back(n);
+  for (const auto& n : edgeNeighbours(second, W, H))
+    asked.push_back(n);
+  std::sort(traced.begin(), traced.end());
+  long long reused = 0;
+  for (const auto& ij : asked)
+    reused += std::binary_search(traced.begin(), traced.end(), ij);
+  ASSERT_GT(reused, 10);
+  EXPECT_EQ(tracer.raysIntegrated() - before, aloneRays - reused);
+  std::printf("[ measured ] %zu pixels after %zu: %lld rays integrated, %lld on a fresh tracer "
+              "(%lld centre rays kept)\n",
+              second.size(), first.size(), static_cast<long long>(tracer.raysIntegrated() - before),
+              aloneRays, reused);
+}
+
 // ---- 9. Jacobians -------------------------------------------------------------------------------
 TEST(FrameTracerRecords, JacobiansMatchThePinholeProjection)
 {
