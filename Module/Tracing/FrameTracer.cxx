@@ -172,15 +172,18 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
                                                 CentreRays& kept,
                                                 const std::function<bool(double)>& progress) const
 {
-  std::vector<std::pair<int, int>> all = pixels;
-  const std::vector<std::pair<int, int>> halo =
-    edgeNeighbours(pixels, this->Desc.camera.width, this->Desc.camera.height);
-  all.insert(all.end(), halo.begin(), halo.end());
-  return this->traceKeeping(all, pixels.size(), progress, &kept);
+  return this->tracePixelsKept(pixels, progress, &kept);
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
+{
+  return this->tracePixelsKept(pixels, progress, nullptr);
+}
+
+std::vector<RayRecord> FrameTracer::tracePixelsKept(const std::vector<std::pair<int, int>>& pixels,
+                                                    const std::function<bool(double)>& progress,
+                                                    CentreRays* kept) const
 {
   // The pixels' edge neighbours that are not among them are traced too, as the halo rows of a
   // band are: a pixel's Jacobian and its anti-aliasing read its neighbours, so that with them a
@@ -189,7 +192,7 @@ std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int,
   const std::vector<std::pair<int, int>> halo =
     edgeNeighbours(pixels, this->Desc.camera.width, this->Desc.camera.height);
   all.insert(all.end(), halo.begin(), halo.end());
-  return this->traceKeeping(all, pixels.size(), progress);
+  return this->traceKeeping(all, pixels.size(), progress, kept);
 }
 
 std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int, int>>& pixels,

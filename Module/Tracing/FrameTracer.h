@@ -141,6 +141,10 @@ private:
   std::vector<RayRecord> traceKeeping(const std::vector<std::pair<int, int>>& pixels,
                                       std::size_t keep, const std::function<bool(double)>& progress,
                                       CentreRays* kept = nullptr) const;
+  /// tracePixels, the centre rays in `kept` (if given) taken from there and those traced added.
+  std::vector<RayRecord> tracePixelsKept(const std::vector<std::pair<int, int>>& pixels,
+                                         const std::function<bool(double)>& progress,
+                                         CentreRays* kept) const;
   /// traceCentres, the centre rays in `kept` (if given) taken from there and those traced added.
   std::vector<RayRecord> traceCentresKept(const std::vector<std::pair<int, int>>& pixels,
                                           const std::function<bool(double)>& progress,
