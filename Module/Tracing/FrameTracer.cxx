@@ -241,7 +241,8 @@ std::vector<RayRecord> FrameTracer::traceCentresKept(const std::vector<std::pair
   const std::int64_t width = this->Desc.camera.width;
   auto keyOf = [width](const std::pair<int, int>& ij)
   { return static_cast<std::int64_t>(ij.second) * width + ij.first; };
-  std::vector<unsigned char> known(pixels.size(), 0);
+  // Which centre rays `kept` held (left empty without it: a whole frame's rows pay nothing).
+  std::vector<unsigned char> known(kept ? pixels.size() : 0, 0);
   if (kept)
     for (std::size_t k = 0; k < pixels.size(); ++k)
     {
@@ -265,7 +266,7 @@ std::vector<RayRecord> FrameTracer::traceCentresKept(const std::vector<std::pair
     {
       if (stop.load(std::memory_order_relaxed))
         continue;
-      if (!known[static_cast<std::size_t>(k)])
+      if (!kept || !known[static_cast<std::size_t>(k)])
         out[k] = this->traceThrough(*prop, pixels[k].first, pixels[k].second);
       const long d = ++done;
       // Only the master thread reports: VTK's progress events are not thread-safe.
