@@ -9,6 +9,7 @@
 #include "GeodesicSceneLoading.h"
 #include "InterpolatorPipeline.h"
 #include "KdTreeIndex.h"
+#include "LeaveOneOut.h"
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 #include "SettingsError.h"
@@ -72,6 +73,7 @@ struct vtkGeodesicPathInterpolator::Internals
   /// The moved edges' correspondences between keys, kept across time steps: every frame between
   /// two keys matches the same pairs (kept by the records' content, so keys read again are safe).
   std::shared_ptr<asrt::PathMatchCache> Matches = std::make_shared<asrt::PathMatchCache>();
+  std::shared_ptr<asrt::LeaveOneOutCache> LeftOut = std::make_shared<asrt::LeaveOneOutCache>();
 
   /// The keys' scenes, checked against each other, and the path parameter.
   void Validate(vtkGeodesicPathInterpolator* self, const std::vector<vtkPolyData*>& hits)
@@ -398,6 +400,9 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     options.pointIndex = asrt::kdTreeIndexFactory();
     options.matchCache = in.Matches;
     options.hedgeNearShadow = !(this->QualityTarget > 0.0); // the plain preview
+    // The keys' leave-one-out errors only order the pixels to re-trace.
+    options.leaveOneOut = this->QualityTarget > 0.0;
+    options.leaveOneOutCache = in.LeftOut;
     asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
                                                    *in.Shading.scene, options);
     this->UpdateProgress(0.3);

@@ -14,8 +14,8 @@
 // "0.11,0.055"), ASRT_BENCH_PATH_TARGETS (dB, "30,35,40"), ASRT_BENCH_PATH_REFERENCE (samples a
 // side of the converged frames, 8: point samples in the study, filtered ones in the paths table),
 // ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above), ASRT_BENCH_PATH_DUMP (a
-// directory: each study frame's pixels, their way of predicting, estimate, true error and
-// surfaces, as CSV).
+// directory: each study frame's pixels, their way of predicting, estimate, true error, surfaces
+// and the keys' leave-one-out error, as CSV).
 // Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
@@ -32,6 +32,7 @@
 #include "GeodesicSceneLoading.h"
 #include "ImageQuality.h"
 #include "KdTreeIndex.h"
+#include "LeaveOneOut.h"
 #include "PathInterpolation.h"
 #include "SettingsError.h"
 
@@ -663,13 +664,17 @@ void runRampStudy(double tStart)
         std::snprintf(name, sizeof name, "%s/h%g-M%.4f.csv", dump, h, f.mass);
         if (FILE* out = std::fopen(name, "w"))
         {
-          std::fprintf(out, "p,method,estimate,err8,errf,obj,objt,term,termt\n");
+          // The keys' leave-one-out error at each pixel, not dilated.
+          const std::vector<float> loo =
+            leaveOneOutError(path, f.mass, kSide, kSide, *shading.scene, with, 0);
+          std::fprintf(out, "p,method,estimate,err8,errf,obj,objt,term,termt,loo\n");
           for (std::size_t p = 0; p < err2.size(); ++p)
-            std::fprintf(out, "%zu,%d,%.9g,%.9g,%.9g,%d,%d,%d,%d\n", p, int(plain.method[p]),
+            std::fprintf(out, "%zu,%d,%.9g,%.9g,%.9g,%d,%d,%d,%d,%.9g\n", p, int(plain.method[p]),
                          double(plain.estimate[p]), err2[p],
                          double(colorError2(plain.records[p].color, f.traced[p].color)),
                          plain.records[p].objectId, f.traced[p].objectId,
-                         int(plain.records[p].termination), int(f.traced[p].termination));
+                         int(plain.records[p].termination), int(f.traced[p].termination),
+                         loo.empty() ? 0.0 : double(loo[p]));
           std::fclose(out);
         }
       }

@@ -2,6 +2,7 @@
 
 #include "ErrorEstimate.h"
 #include "FrameTracer.h"
+#include "LeaveOneOut.h"
 #include "PathEdges.h"
 
 #include <algorithm>
@@ -772,6 +773,8 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   if (options.movedEdges)
     predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
                  options.hedgeNearShadow, options.matchCache.get(), f);
+  if (options.leaveOneOut)
+    weighByLeaveOneOut(f, leaveOneOutError(keys, t, width, height, scene, options));
   return f;
 }
 

@@ -55,6 +55,7 @@
 namespace asrt
 {
 class FrameTracer;
+class LeaveOneOutCache;
 
 /// Windings of one pixel in two keys that differ by this much or more are a change of image.
 constexpr double kWindingJump = 0.5 * M_PI;
@@ -196,6 +197,14 @@ struct PathOptions
   /// Where the moved edges' correspondences are kept between frames (null: each frame matches
   /// its keys afresh). The frames are the same either way.
   std::shared_ptr<PathMatchCache> matchCache;
+  /// Weigh each predicted pixel's estimate by how well the keys predict each other there
+  /// (LeaveOneOut.h): where an inner key, left out, is badly predicted from the other keys,
+  /// the frame between them is likely badly predicted too. Needs a key beyond each inner key
+  /// that is left out; without one the estimate is as it is.
+  bool leaveOneOut = true;
+  /// Where the keys' leave-one-out errors are kept between frames (null: made afresh for each).
+  /// The frames are the same either way.
+  std::shared_ptr<LeaveOneOutCache> leaveOneOutCache;
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within

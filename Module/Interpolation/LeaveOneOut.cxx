@@ -1,0 +1,161 @@
+#include "LeaveOneOut.h"
+
+#include "AsrtTypes.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+
+namespace asrt
+{
+namespace
+{
+bool isPrediction(std::uint8_t m)
+{
+  return m != static_cast<std::uint8_t>(PathMethod::Retrace) &&
+         m != static_cast<std::uint8_t>(PathMethod::Key) &&
+         m != static_cast<std::uint8_t>(PathMethod::Retraced);
+}
+
+std::uint64_t bitsOf(double x)
+{
+  std::uint64_t w = 0;
+  std::memcpy(&w, &x, sizeof w);
+  return w;
+}
+
+/// A running hash of 64-bit words (the FNV-1a step, on whole words, then a xorshift).
+std::uint64_t combine(std::uint64_t h, std::uint64_t w)
+{
+  h = (h ^ w) * 0x100000001b3ULL;
+  return h ^ (h >> 31);
+}
+}
+
+LeaveOneOutCache::LeaveOneOutCache(std::size_t capacity)
+  : Capacity(std::max<std::size_t>(capacity, 1))
+{
+}
+
+std::shared_ptr<const std::vector<float>> LeaveOneOutCache::errors(
+  std::uint64_t key, const std::function<std::vector<float>()>& make)
+{
+  {
+    std::lock_guard<std::mutex> lock(this->Mutex);
+    for (auto e = this->Entries.begin(); e != this->Entries.end(); ++e)
+      if (e->first == key)
+      {
+        this->Entries.splice(this->Entries.begin(), this->Entries, e);
+        return this->Entries.front().second;
+      }
+  }
+  auto made = std::make_shared<const std::vector<float>>(make());
+  std::lock_guard<std::mutex> lock(this->Mutex);
+  ++this->Made;
+  this->Entries.emplace_front(key, made);
+  while (this->Entries.size() > this->Capacity)
+    this->Entries.pop_back();
+  return made;
+}
+
+std::size_t LeaveOneOutCache::made() const
+{
+  std::lock_guard<std::mutex> lock(this->Mutex);
+  return this->Made;
+}
+
+std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, int width,
+                                    int height, const Scene& scene, const PathOptions& options,
+                                    int radius)
+{
+  // interpolateAlongPath checks the keys, when it predicts one of them from the others.
+  if (keys.size() < 2 || !(t >= keys.front().s && t <= keys.back().s))
+    throw InvalidParameter("leaveOneOutError: t lies outside the keys");
+  std::size_t a = 0;
+  while (a + 2 < keys.size() && keys[a + 1].s <= t)
+    ++a;
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  std::vector<float> worst;
+  // The keys' own correspondences stay kept for the frames: those of the pairs that skip a key
+  // are matched once per key left out, where its errors are kept.
+  PathOptions inner = options;
+  inner.leaveOneOut = false;
+  inner.matchCache = nullptr;
+  for (const std::size_t k : { a, a + 1 })
+  {
+    if (k == 0 || k + 1 == keys.size())
+      continue;
+    // The prediction at keys[k].s reads the two keys on either side of it, at most.
+    std::vector<PathKey> others;
+    for (std::size_t q = k >= 2 ? k - 2 : 0; q <= std::min(k + 2, keys.size() - 1); ++q)
+      if (q != k)
+        others.push_back(keys[q]);
+    const auto make = [&]()
+    {
+      const PathFrame left = interpolateAlongPath(others, keys[k].s, width, height, scene, inner);
+      const std::vector<RayRecord>& own = *keys[k].records;
+      std::vector<float> e(n);
+      for (std::size_t p = 0; p < n; ++p)
+        e[p] = colorError2(left.records[p].color, own[p].color);
+      return e;
+    };
+    std::shared_ptr<const std::vector<float>> e;
+    if (options.leaveOneOutCache)
+    {
+      std::uint64_t id = combine(0x5851f42d4c957f2dULL, bitsOf(keys[k].s));
+      id = combine(id, (options.movedEdges ? 1u : 0u) | (options.hedgeMovedEdges ? 2u : 0u) |
+                         (options.hedgeNearShadow ? 4u : 0u));
+      id = combine(id, matchingFingerprint(*keys[k].records));
+      for (const PathKey& q : others)
+        id = combine(combine(id, bitsOf(q.s)), matchingFingerprint(*q.records));
+      e = options.leaveOneOutCache->errors(id, make);
+    }
+    else
+      e = std::make_shared<const std::vector<float>>(make());
+    worst.resize(n, 0.0f);
+    for (std::size_t p = 0; p < n; ++p)
+      worst[p] = std::max(worst[p], (*e)[p]);
+  }
+  if (worst.empty() || radius <= 0)
+    return worst;
+  // The largest within the square of side 2 radius + 1: rows, then columns.
+  std::vector<float> rows(n), out(n);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      float m = 0.0f;
+      for (int x = std::max(0, i - radius); x <= std::min(width - 1, i + radius); ++x)
+        m = std::max(m, worst[static_cast<std::size_t>(j) * width + x]);
+      rows[static_cast<std::size_t>(j) * width + i] = m;
+    }
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      float m = 0.0f;
+      for (int y = std::max(0, j - radius); y <= std::min(height - 1, j + radius); ++y)
+        m = std::max(m, rows[static_cast<std::size_t>(y) * width + i]);
+      out[static_cast<std::size_t>(j) * width + i] = m;
+    }
+  return out;
+}
+
+void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L)
+{
+  if (L.empty())
+    return;
+  // The weights move each way's estimated error among its pixels without adding to it: the
+  // way's total, which its probes calibrate, stays as it was.
+  std::array<double, kPathMethodCount> before{}, after{};
+  for (std::size_t p = 0; p < L.size(); ++p)
+    if (isPrediction(f.method[p]) && std::isfinite(f.estimate[p]))
+    {
+      before[f.method[p]] += f.estimate[p];
+      after[f.method[p]] += f.estimate[p] * leaveOneOutWeight(L[p]);
+    }
+  for (std::size_t p = 0; p < L.size(); ++p)
+    if (isPrediction(f.method[p]) && after[f.method[p]] > 0)
+      f.estimate[p] = static_cast<float>(f.estimate[p] * leaveOneOutWeight(L[p]) *
+                                         (before[f.method[p]] / after[f.method[p]]));
+}
+}
