@@ -3,7 +3,6 @@
 #include "ErrorEstimate.h"
 #include "FrameTracer.h"
 #include "GeodesicSceneLoading.h"
-#include "LeaveOneOut.h"
 #include "PathInterpolation.h"
 #include "RayStore.h"
 #include "RecordAllocation.h"
@@ -121,8 +120,6 @@ struct MovieMaker::Internals
   std::set<int> wholeCounted;
   /// The rays the records of each interpolated frame's re-traced pixels hold, read or traced.
   std::map<int, double> heldRays;
-  /// The keys' leave-one-out errors, for the frames between the same keys.
-  std::shared_ptr<LeaveOneOutCache> leftOut = std::make_shared<LeaveOneOutCache>();
   /// The rays each whole frame's records hold (their raysPerPixel), kept or let go.
   std::map<int, double> wholeHeldRays;
   /// Pictures of whole frames traced by this movie, encoded when traced
@@ -548,7 +545,12 @@ struct MovieMaking
     // fell from 33.1 to 29.6 dB against the converged one.
     PathOptions options;
     options.movedEdges = false;
-    options.leaveOneOutCache = in.leftOut;
+    // Nor the keys' leave-one-out errors: without moved edges they reorder only the few pixels
+    // chosen beyond the keys' disagreements, and predicting the keys left out costs what the rays
+    // they save do (paired first runs at 200×200, bench/movie-paired: the Kerr orbit and spin ramp
+    // 10–17 % fewer rays for the same CPU, the mass ramp and Fig. 1's orbit 1–3 % fewer rays for
+    // 10 % more CPU; bench/REPORT.md).
+    options.leaveOneOut = false;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene, options);
     const auto after = std::upper_bound(keys.begin(), keys.end(), k);

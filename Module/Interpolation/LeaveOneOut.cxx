@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <map>
 
 namespace asrt
 {
@@ -82,15 +83,28 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
   PathOptions inner = options;
   inner.leaveOneOut = false;
   inner.matchCache = nullptr;
+  // Each key's fingerprint, once: the two keys left out share most of the keys that predict them.
+  std::map<std::size_t, std::uint64_t> fingerprints;
+  const auto fingerprint = [&](std::size_t q)
+  {
+    const auto found = fingerprints.find(q);
+    if (found != fingerprints.end())
+      return found->second;
+    return fingerprints[q] = combine(bitsOf(keys[q].s), matchingFingerprint(*keys[q].records));
+  };
   for (const std::size_t k : { a, a + 1 })
   {
     if (k == 0 || k + 1 == keys.size())
       continue;
     // The prediction at keys[k].s reads the two keys on either side of it, at most.
     std::vector<PathKey> others;
+    std::vector<std::size_t> used;
     for (std::size_t q = k >= 2 ? k - 2 : 0; q <= std::min(k + 2, keys.size() - 1); ++q)
       if (q != k)
+      {
         others.push_back(keys[q]);
+        used.push_back(q);
+      }
     const auto make = [&]()
     {
       const PathFrame left = interpolateAlongPath(others, keys[k].s, width, height, scene, inner);
@@ -103,12 +117,11 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     std::shared_ptr<const std::vector<float>> e;
     if (options.leaveOneOutCache)
     {
-      std::uint64_t id = combine(0x5851f42d4c957f2dULL, bitsOf(keys[k].s));
+      std::uint64_t id = combine(0x5851f42d4c957f2dULL, fingerprint(k));
       id = combine(id, (options.movedEdges ? 1u : 0u) | (options.hedgeMovedEdges ? 2u : 0u) |
                          (options.hedgeNearShadow ? 4u : 0u));
-      id = combine(id, matchingFingerprint(*keys[k].records));
-      for (const PathKey& q : others)
-        id = combine(combine(id, bitsOf(q.s)), matchingFingerprint(*q.records));
+      for (const std::size_t q : used)
+        id = combine(id, fingerprint(q));
       e = options.leaveOneOutCache->errors(id, make);
     }
     else
