@@ -17,8 +17,10 @@
  * others for the frame's estimated PSNR against the converged picture at t to reach the target
  * (the estimate's scale is measured by tracing ProbeFraction of the pixels,
  * asrt::completePathFrame; the keys' own error against their converged pictures by a few probe
- * pixels traced converged, asrt::measureSettingsError). The correspondences between keys that
- * the moved edges match are kept across time steps (asrt::PathMatchCache, the last 3 pairs: at
+ * pixels traced converged, asrt::measureSettingsError; the order of re-tracing within each way of
+ * predicting weighed by how well the keys predict each other, each inner key predicted from the
+ * others, asrt::leaveOneOutError, kept across time steps too). The correspondences between keys
+ * that the moved edges match are kept across time steps (asrt::PathMatchCache, the last 3 pairs: at
  * 1920×1080 about 400 MB beside the keys' own records), so that the frames after the first
  * between two keys, or of the next pair, do not match them again.
  *
