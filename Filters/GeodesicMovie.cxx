@@ -545,11 +545,12 @@ struct MovieMaking
     // fell from 33.1 to 29.6 dB against the converged one.
     PathOptions options;
     options.movedEdges = false;
-    // Nor the keys' leave-one-out errors: without moved edges they reorder only the few pixels
-    // chosen beyond the keys' disagreements, and predicting the keys left out costs what the rays
-    // they save do (paired first runs at 200×200, bench/movie-paired: the Kerr orbit and spin ramp
-    // 10–17 % fewer rays for the same CPU, the mass ramp and Fig. 1's orbit 1–3 % fewer rays for
-    // 10 % more CPU; bench/REPORT.md).
+    // Nor the keys' leave-one-out errors, which would let the edge blends' scale go without its
+    // floor: where the plan measures frames between many sets of keys (on the mass ramp, 46 keys
+    // left out for 12 frames), predicting the keys left out costs more than the rays it saves.
+    // Paired first runs at 200×200 (bench/movie-paired, bench/REPORT.md): the Kerr orbit 0.73 →
+    // 0.43 of direct's CPU, the spin ramp 0.72 → 0.71, the mass ramp 1.02 → 1.19, Fig. 1's
+    // orbit 1.10 → 1.32.
     options.leaveOneOut = false;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene, options);

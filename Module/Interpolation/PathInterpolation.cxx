@@ -289,7 +289,8 @@ struct ProbeSample
 constexpr double kLeastScale = 1.0 / 1024.0;
 }
 
-double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, EstimateScaling scaling)
+double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, EstimateScaling scaling,
+                     bool edgeBlendsRanked)
 {
   double estimated = 0, erred = 0;
   for (const ProbePair& q : probes)
@@ -308,9 +309,10 @@ double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, Estimat
     spread += (q.error - ratio * q.estimate) * (q.error - ratio * q.estimate);
   const double standardError = n > 1 ? std::sqrt(spread / (n - 1) / n) / (estimated / n) : ratio;
   const double raised = ratio + kConfidence * standardError;
-  // Edge blends' and moved edges' errors are rare and large: a ratio their probes happen to set
-  // low would leave them untraced.
-  const bool rareAndLarge = m == PathMethod::EdgeBlend || m == PathMethod::MovedEdge;
+  // Moved edges' and edge blends' errors are rare and large: a ratio their probes happen to set
+  // low would leave them untraced, unless the keys' leave-one-out errors put them first.
+  const bool rareAndLarge =
+    m == PathMethod::MovedEdge || (m == PathMethod::EdgeBlend && !edgeBlendsRanked);
   return std::max(rareAndLarge ? 1.0 : kLeastScale, raised);
 }
 
@@ -774,7 +776,11 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
     predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
                  options.hedgeNearShadow, options.matchCache.get(), f);
   if (options.leaveOneOut)
-    weighByLeaveOneOut(f, leaveOneOutError(keys, t, width, height, scene, options));
+  {
+    const std::vector<float> L = leaveOneOutError(keys, t, width, height, scene, options);
+    weighByLeaveOneOut(f, L);
+    f.leaveOneOutWeighed = !L.empty();
+  }
   return f;
 }
 
@@ -898,7 +904,8 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
   }
   double scale[kPathMethodCount];
   for (int m = 0; m < kPathMethodCount; ++m)
-    scale[m] = estimateScale(static_cast<PathMethod>(m), pairs[m], scaling);
+    scale[m] =
+      estimateScale(static_cast<PathMethod>(m), pairs[m], scaling, frame.leaveOneOutWeighed);
   std::vector<double> calibrated(n, 0.0);
   for (std::size_t p = 0; p < n; ++p)
     if (isPrediction(methods[p]))

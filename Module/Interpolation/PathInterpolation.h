@@ -108,6 +108,10 @@ struct PathFrame
   /// Per pixel, what the inner pair of keys around t show (empty for a key): the edges the keys
   /// saw, which completePathFrame holds the edges traced at t against.
   std::vector<PathSurface> innerKeys[2];
+  /// Whether the estimates were weighed by the keys' leave-one-out errors (PathOptions::
+  /// leaveOneOut, where a key could be left out): they then rank the edge blends, whose scale
+  /// completePathFrame leaves without a floor (estimateScale).
+  bool leaveOneOutWeighed = false;
   /// Pixels per PathMethod.
   std::vector<std::size_t> counts() const;
 };
@@ -235,8 +239,8 @@ struct PathCompletion
 enum class EstimateScaling : std::uint8_t
 {
   /// The probes' true error over their estimates (Cochran's ratio estimate) raised by two of its
-  /// standard errors; at least 1 for edge blends and moved edges across an edge, whose errors are
-  /// rare and large.
+  /// standard errors; at least 1 for moved edges across an edge, whose errors are rare and large,
+  /// and for edge blends unless the keys' leave-one-out errors rank them.
   Ratio = 0,
   /// The probes' true error over their estimates, at least 1 for every way: the estimate only
   /// ever scaled up.
@@ -252,12 +256,16 @@ struct ProbePair
 /// The scale of way `m`'s estimates from its probes. Ratio: Cochran's ratio estimate
 /// R = Σ error / Σ estimate raised by two of its standard errors,
 /// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
-/// 3rd ed., § 6.3), at least 1 for edge blends and moved edges (PathMethod::MovedEdge) and at least
-/// 1/1024 for the others (their order of re-tracing kept where every probe came out exact).
+/// 3rd ed., § 6.3), at least 1 for moved edges (PathMethod::MovedEdge) and at least 1/1024 for the
+/// others (their order of re-tracing kept where every probe came out exact). Edge blends' errors
+/// are rare and large too: at least 1 for them as well, unless `edgeBlendsRanked` (the estimates
+/// were weighed by the keys' leave-one-out errors, LeaveOneOut.h; with those weights and no floor
+/// every frame of the benchmark's four paths meets its target, bench/REPORT.md).
 /// AtLeastOne: R, at least 1.
 /// 1 where the probes' estimates sum to 0 (or there are none).
 ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,
-                                              EstimateScaling scaling);
+                                              EstimateScaling scaling,
+                                              bool edgeBlendsRanked = false);
 
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
 /// then, worst estimate first, just enough more for the completed frame's estimated PSNR against

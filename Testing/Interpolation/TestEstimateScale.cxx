@@ -22,9 +22,11 @@ TEST(EstimateScale, ErrorsProportionalToTheEstimatesGiveTheirRatio)
   EXPECT_NEAR(asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::Ratio), 0.2, 1e-12);
   EXPECT_NEAR(asrt::estimateScale(PathMethod::Quadratic, probes, EstimateScaling::Ratio), 0.2,
               1e-12);
-  // Edge blends and moved edges across an edge keep at least 1; the old scaling floors every way
-  // at 1.
+  // Moved edges across an edge keep at least 1, and edge blends unless the keys' leave-one-out
+  // errors rank them; the old scaling floors every way at 1.
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio), 1.0);
+  EXPECT_NEAR(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio, true), 0.2,
+              1e-12);
   EXPECT_EQ(asrt::estimateScale(PathMethod::MovedEdge, probes, EstimateScaling::Ratio), 1.0);
   EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::AtLeastOne), 1.0);
   // Moved pixels off the edges are scaled as the per-pixel predictions are.
