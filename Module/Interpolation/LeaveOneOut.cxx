@@ -26,6 +26,27 @@ std::uint64_t bitsOf(double x)
   return w;
 }
 
+/// Per pixel of a width × height frame, the largest of `in` within `radius` pixels along the
+/// direction (di, dj), one of (1, 0) and (0, 1).
+std::vector<float> largestAlong(const std::vector<float>& in, int width, int height, int radius,
+                                int di, int dj)
+{
+  std::vector<float> out(in.size());
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      float m = 0.0f;
+      for (int k = -radius; k <= radius; ++k)
+      {
+        const int x = i + k * di, y = j + k * dj;
+        if (x >= 0 && x < width && y >= 0 && y < height)
+          m = std::max(m, in[static_cast<std::size_t>(y) * width + x]);
+      }
+      out[static_cast<std::size_t>(j) * width + i] = m;
+    }
+  return out;
+}
+
 /// A running hash of 64-bit words (the FNV-1a step, on whole words, then a xorshift).
 std::uint64_t combine(std::uint64_t h, std::uint64_t w)
 {
@@ -35,35 +56,19 @@ std::uint64_t combine(std::uint64_t h, std::uint64_t w)
 }
 
 LeaveOneOutCache::LeaveOneOutCache(std::size_t capacity)
-  : Capacity(std::max<std::size_t>(capacity, 1))
+  : Kept(capacity)
 {
 }
 
 std::shared_ptr<const std::vector<float>> LeaveOneOutCache::errors(
   std::uint64_t key, const std::function<std::vector<float>()>& make)
 {
-  {
-    std::lock_guard<std::mutex> lock(this->Mutex);
-    for (auto e = this->Entries.begin(); e != this->Entries.end(); ++e)
-      if (e->first == key)
-      {
-        this->Entries.splice(this->Entries.begin(), this->Entries, e);
-        return this->Entries.front().second;
-      }
-  }
-  auto made = std::make_shared<const std::vector<float>>(make());
-  std::lock_guard<std::mutex> lock(this->Mutex);
-  ++this->Made;
-  this->Entries.emplace_front(key, made);
-  while (this->Entries.size() > this->Capacity)
-    this->Entries.pop_back();
-  return made;
+  return this->Kept.get(key, make);
 }
 
 std::size_t LeaveOneOutCache::made() const
 {
-  std::lock_guard<std::mutex> lock(this->Mutex);
-  return this->Made;
+  return this->Kept.made();
 }
 
 std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, int width,
@@ -132,25 +137,9 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
   }
   if (worst.empty() || radius <= 0)
     return worst;
-  // The largest within the square of side 2 radius + 1: rows, then columns.
-  std::vector<float> rows(n), out(n);
-  for (int j = 0; j < height; ++j)
-    for (int i = 0; i < width; ++i)
-    {
-      float m = 0.0f;
-      for (int x = std::max(0, i - radius); x <= std::min(width - 1, i + radius); ++x)
-        m = std::max(m, worst[static_cast<std::size_t>(j) * width + x]);
-      rows[static_cast<std::size_t>(j) * width + i] = m;
-    }
-  for (int j = 0; j < height; ++j)
-    for (int i = 0; i < width; ++i)
-    {
-      float m = 0.0f;
-      for (int y = std::max(0, j - radius); y <= std::min(height - 1, j + radius); ++y)
-        m = std::max(m, rows[static_cast<std::size_t>(y) * width + i]);
-      out[static_cast<std::size_t>(j) * width + i] = m;
-    }
-  return out;
+  // The largest within the square of side 2 radius + 1: along the rows, then the columns.
+  return largestAlong(largestAlong(worst, width, height, radius, 1, 0), width, height, radius, 0,
+                      1);
 }
 
 void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L)

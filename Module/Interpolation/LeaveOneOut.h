@@ -25,9 +25,7 @@ public:
   std::size_t made() const;
 
 private:
-  mutable std::mutex Mutex;
-  std::list<std::pair<std::uint64_t, std::shared_ptr<const std::vector<float>>>> Entries;
-  std::size_t Capacity = 4, Made = 0;
+  KeptResults<std::uint64_t, std::vector<float>> Kept;
 };
 
 /// Of the inner keys around t, each one that has a key on either side of it predicted from the

@@ -544,7 +544,7 @@ std::uint64_t matchingFingerprint(const std::vector<RayRecord>& records)
 }
 
 PathMatchCache::PathMatchCache(std::size_t capacity)
-  : Capacity(std::max<std::size_t>(capacity, 1))
+  : Kept(capacity)
 {
 }
 
@@ -552,31 +552,14 @@ std::shared_ptr<const Correspondence> PathMatchCache::matches(
   const std::vector<RayRecord>& a, const std::vector<RayRecord>& b,
   const std::function<Correspondence()>& match)
 {
-  const std::uint64_t fa = matchingFingerprint(a), fb = matchingFingerprint(b);
-  {
-    std::lock_guard<std::mutex> lock(this->Mutex);
-    for (auto e = this->Entries.begin(); e != this->Entries.end(); ++e)
-      if (e->a == fa && e->b == fb)
-      {
-        this->Entries.splice(this->Entries.begin(), this->Entries, e);
-        return this->Entries.front().matches;
-      }
-  }
   // Matched outside the lock: another thread may match the same pair meanwhile, to the same
   // correspondence.
-  auto made = std::make_shared<const Correspondence>(match());
-  std::lock_guard<std::mutex> lock(this->Mutex);
-  ++this->Made;
-  this->Entries.push_front({ fa, fb, made });
-  while (this->Entries.size() > this->Capacity)
-    this->Entries.pop_back();
-  return made;
+  return this->Kept.get({ matchingFingerprint(a), matchingFingerprint(b) }, match);
 }
 
 std::size_t PathMatchCache::made() const
 {
-  std::lock_guard<std::mutex> lock(this->Mutex);
-  return this->Made;
+  return this->Kept.made();
 }
 
 const char* toString(PathMethod m)

@@ -39,6 +39,7 @@
 #define asrt_PathInterpolation_h
 
 #include "FrameMatching.h"
+#include "KeptResults.h"
 #include "RayRecord.h"
 #include "Scene.h"
 #include "asrtInterpolationModule.h"
@@ -163,14 +164,8 @@ public:
   std::size_t made() const;
 
 private:
-  struct Entry
-  {
-    std::uint64_t a = 0, b = 0;
-    std::shared_ptr<const Correspondence> matches;
-  };
-  mutable std::mutex Mutex;
-  std::list<Entry> Entries; ///< most recently used first
-  std::size_t Capacity = 3, Made = 0;
+  /// By the fingerprints of the two frames' records.
+  KeptResults<std::pair<std::uint64_t, std::uint64_t>, Correspondence> Kept;
 };
 
 /// A fingerprint of the fields of a frame's records that its matching reads (pixel, hit point,
