@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <string>
 
 namespace asrt
 {
@@ -101,6 +102,11 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
   {
     if (k == 0 || k + 1 == keys.size())
       continue;
+    if (!keys[k].records || keys[k].records->size() != n)
+      throw InvalidParameter("leaveOneOutError: key " + std::to_string(k) + " has " +
+                             std::to_string(keys[k].records ? keys[k].records->size() : 0) +
+                             " records, not " + std::to_string(width) + " x " +
+                             std::to_string(height));
     // The prediction at keys[k].s reads the two keys on either side of it, at most.
     std::vector<PathKey> others;
     std::vector<std::size_t> used;

@@ -121,6 +121,14 @@ TEST(LeaveOneOut, AKeyThatDisagreesWithItsNeighboursMarksTheSquareAroundIt)
     ASSERT_EQ(L.size(), frame.size());
     EXPECT_LT(*std::max_element(L.begin(), L.end()), 1e-6 * step) << "t = " << t;
   }
+  // A key left out with too few records, or t outside the keys, is refused by name.
+  const std::vector<RayRecord> few(frame.begin(), frame.begin() + side);
+  std::vector<PathKey> broken = keys;
+  broken[2].records = &few;
+  EXPECT_THROW(leaveOneOutError(broken, 2.5, side, side, *d.scene, withMovedEdges()),
+               InvalidParameter);
+  EXPECT_THROW(leaveOneOutError(keys, 4.5, side, side, *d.scene, withMovedEdges()),
+               InvalidParameter);
   // Two keys: neither can be left out.
   EXPECT_TRUE(
     leaveOneOutError({ keys[0], keys[1] }, 0.5, side, side, *d.scene, withMovedEdges()).empty());
