@@ -3,6 +3,7 @@
 #include "ErrorEstimate.h"
 #include "FrameTracer.h"
 #include "GeodesicSceneLoading.h"
+#include "LeaveOneOut.h"
 #include "PathInterpolation.h"
 #include "RayStore.h"
 #include "RecordAllocation.h"
@@ -120,6 +121,8 @@ struct MovieMaker::Internals
   std::set<int> wholeCounted;
   /// The rays the records of each interpolated frame's re-traced pixels hold, read or traced.
   std::map<int, double> heldRays;
+  /// The keys' leave-one-out errors, for the frames between the same keys.
+  std::shared_ptr<LeaveOneOutCache> leftOut = std::make_shared<LeaveOneOutCache>();
   /// The rays each whole frame's records hold (their raysPerPixel), kept or let go.
   std::map<int, double> wholeHeldRays;
   /// Pictures of whole frames traced by this movie, encoded when traced
@@ -545,13 +548,13 @@ struct MovieMaking
     // fell from 33.1 to 29.6 dB against the converged one.
     PathOptions options;
     options.movedEdges = false;
-    // Nor the keys' leave-one-out errors, which would let the edge blends' scale go without its
-    // floor: where the plan measures frames between many sets of keys (on the mass ramp, 46 keys
-    // left out for 12 frames), predicting the keys left out costs more than the rays it saves.
-    // Paired first runs at 200×200 (bench/movie-paired, bench/REPORT.md): the Kerr orbit 0.73 →
-    // 0.43 of direct's CPU, the spin ramp 0.72 → 0.71, the mass ramp 1.02 → 1.19, Fig. 1's
-    // orbit 1.10 → 1.32.
-    options.leaveOneOut = false;
+    // The keys' leave-one-out errors rank the edge blends, whose scale then has no floor; each
+    // key's are kept for the frames on either side of it, and made without estimates (their
+    // colours alone). Paired first runs at 200×200 (bench/movie-paired, bench/REPORT.md): the
+    // Kerr orbit 0.67 → 0.45 of direct's CPU, the spin ramp 0.74 → 0.71, the mass ramp and
+    // Fig. 1's orbit 3 % more (the plan measures frames between many sets of keys, each set's
+    // keys left out made afresh).
+    options.leaveOneOutCache = in.leftOut;
     PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                            *in.shading->scene, options);
     const auto after = std::upper_bound(keys.begin(), keys.end(), k);

@@ -89,6 +89,7 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
   PathOptions inner = options;
   inner.leaveOneOut = false;
   inner.matchCache = nullptr;
+  inner.estimates = false;
   // Each key's fingerprint, once: the two keys left out share most of the keys that predict them.
   std::map<std::size_t, std::uint64_t> fingerprints;
   const auto fingerprint = [&](std::size_t q)

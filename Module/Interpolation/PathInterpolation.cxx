@@ -89,7 +89,8 @@ float predictionError(const Scene& scene, const RayRecord& out, const RayRecord&
 /// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike;
 /// sets `estimate` as the header says.
 RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                       const Scene& scene, PathMethod& method, float& estimate)
+                       const Scene& scene, PathMethod& method, float& estimate,
+                       bool withEstimate = true)
 {
   const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
   const bool left =
@@ -107,6 +108,12 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   }
   RayRecord out = predictRecord(nodes, s, n, t);
   out.color = shadePrediction(scene, out);
+  estimate = 0.0f;
+  if (!withEstimate)
+  {
+    method = n == 4 ? PathMethod::Cubic : n == 3 ? PathMethod::Quadratic : PathMethod::Linear;
+    return out;
+  }
   if (n == 2)
   {
     // One order lower is the nearer key itself: its (u, v) shows how far the pixel moved on the
@@ -155,7 +162,7 @@ float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, 
 /// itself would. The record is the centre ray's prediction, colour aside.
 RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
                            int width, int height, const Scene& scene, PathMethod& method,
-                           float& estimate)
+                           float& estimate, bool withEstimate = true)
 {
   const RayRecord& ra = (*keys[a].records)[p];
   const RayRecord& rb = (*keys[a + 1].records)[p];
@@ -189,6 +196,9 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   // anti-aliasing an edge pixel took).
   out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
   method = PathMethod::EdgeBlend;
+  estimate = 0.0f;
+  if (!withEstimate)
+    return out;
   if (n == 2)
   {
     estimate = std::max(colorError2(ra.color, rb.color),
@@ -750,9 +760,10 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       }
       PathMethod m;
       if (!singleRay(ka[p]) || !singleRay(kb[p]))
-        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, scene, m, f.estimate[p]);
+        f.records[p] = predictEdgePixel(keys, a, p, t, width, height, scene, m, f.estimate[p],
+                                        options.estimates);
       else
-        f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p]);
+        f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p], options.estimates);
       f.method[p] = static_cast<std::uint8_t>(m);
     }
   if (options.movedEdges)

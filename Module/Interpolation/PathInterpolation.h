@@ -201,6 +201,10 @@ struct PathOptions
   /// the frame between them is likely badly predicted too. Needs a key beyond each inner key
   /// that is left out; without one the estimate is as it is.
   bool leaveOneOut = true;
+  /// Estimate each pixel's error (PathFrame::estimate). Off, the pixels predicted per pixel get
+  /// an estimate of 0 and the frame is made without the shading the estimate takes (four more
+  /// texture samples a pixel): the colours are the same. A key left out needs its colours alone.
+  bool estimates = true;
   /// Where the keys' leave-one-out errors are kept between frames (null: made afresh for each).
   /// The frames are the same either way.
   std::shared_ptr<LeaveOneOutCache> leaveOneOutCache;

@@ -137,7 +137,7 @@ TEST(LeaveOneOut, AKeyThatDisagreesWithItsNeighboursMarksTheSquareAroundIt)
 // Keys of the mass ramp around a frame the test traces: weighed by the leave-one-out errors, the
 // estimate keeps each way of predicting's total (what its probes calibrate) and orders the pixels
 // so that, over two frames and two targets, fewer re-traced reach 35 and 40 dB against the traced
-// frame than in its order without;
+// frame than in its order without; made without estimates, the frame's colours are the same;
 // the errors kept between frames give the same frames, each key left out once.
 TEST(LeaveOneOut, TheWeighedEstimateReachesTargetsWithFewerPixelsAndKeepsEachWaysTotal)
 {
@@ -161,6 +161,13 @@ TEST(LeaveOneOut, TheWeighedEstimateReachesTargetsWithFewerPixelsAndKeepsEachWay
     const PathFrame a = interpolateAlongPath(keys, t, side, side, *atT.scene, plain);
     const PathFrame b = interpolateAlongPath(keys, t, side, side, *atT.scene, weighed);
     const PathFrame c = interpolateAlongPath(keys, t, side, side, *atT.scene, kept);
+    // Without estimates (as the keys left out are made): the same colours and ways.
+    PathOptions colours = plain;
+    colours.estimates = false;
+    const PathFrame d = interpolateAlongPath(keys, t, side, side, *atT.scene, colours);
+    ASSERT_EQ(a.method, d.method);
+    for (std::size_t p = 0; p < a.records.size(); ++p)
+      ASSERT_EQ(a.records[p].color, d.records[p].color) << p;
     ASSERT_EQ(a.method, b.method);
     ASSERT_EQ(b.estimate, c.estimate) << "t = " << t;
     std::array<double, kPathMethodCount> totalA{}, totalB{};
