@@ -1,11 +1,11 @@
 #include "LeaveOneOut.h"
 
 #include "AsrtTypes.h"
+#include "RecordHashing.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <string>
 
@@ -13,20 +13,6 @@ namespace asrt
 {
 namespace
 {
-bool isPrediction(std::uint8_t m)
-{
-  return m != static_cast<std::uint8_t>(PathMethod::Retrace) &&
-         m != static_cast<std::uint8_t>(PathMethod::Key) &&
-         m != static_cast<std::uint8_t>(PathMethod::Retraced);
-}
-
-std::uint64_t bitsOf(double x)
-{
-  std::uint64_t w = 0;
-  std::memcpy(&w, &x, sizeof w);
-  return w;
-}
-
 /// Per pixel of a width × height frame, the largest of `in` within `radius` pixels along the
 /// direction (di, dj), one of (1, 0) and (0, 1).
 std::vector<float> largestAlong(const std::vector<float>& in, int width, int height, int radius,
@@ -46,13 +32,6 @@ std::vector<float> largestAlong(const std::vector<float>& in, int width, int hei
       out[static_cast<std::size_t>(j) * width + i] = m;
     }
   return out;
-}
-
-/// A running hash of 64-bit words (the FNV-1a step, on whole words, then a xorshift).
-std::uint64_t combine(std::uint64_t h, std::uint64_t w)
-{
-  h = (h ^ w) * 0x100000001b3ULL;
-  return h ^ (h >> 31);
 }
 }
 
@@ -97,7 +76,7 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     const auto found = fingerprints.find(q);
     if (found != fingerprints.end())
       return found->second;
-    return fingerprints[q] = combine(bitsOf(keys[q].s), matchingFingerprint(*keys[q].records));
+    return fingerprints[q] = mixWord(bitsOf(keys[q].s), matchingFingerprint(*keys[q].records));
   };
   for (const std::size_t k : { a, a + 1 })
   {
@@ -129,11 +108,11 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     std::shared_ptr<const std::vector<float>> e;
     if (options.leaveOneOutCache)
     {
-      std::uint64_t id = combine(0x5851f42d4c957f2dULL, fingerprint(k));
-      id = combine(id, (options.movedEdges ? 1u : 0u) | (options.hedgeMovedEdges ? 2u : 0u) |
+      std::uint64_t id = mixWord(0x5851f42d4c957f2dULL, fingerprint(k));
+      id = mixWord(id, (options.movedEdges ? 1u : 0u) | (options.hedgeMovedEdges ? 2u : 0u) |
                          (options.hedgeNearShadow ? 4u : 0u));
       for (const std::size_t q : used)
-        id = combine(id, fingerprint(q));
+        id = mixWord(id, fingerprint(q));
       e = options.leaveOneOutCache->errors(id, make);
     }
     else

@@ -4,10 +4,10 @@
 #include "FrameTracer.h"
 #include "LeaveOneOut.h"
 #include "PathEdges.h"
+#include "RecordHashing.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -223,13 +223,6 @@ constexpr std::size_t kProbesPerMethod = 32;
 constexpr std::size_t kTailProbes = 16;
 /// Standard errors added to a tail's mean probe error: one frame in forty or so exceeds it.
 constexpr double kConfidence = 2.0;
-
-bool isPrediction(std::uint8_t m)
-{
-  return m != static_cast<std::uint8_t>(PathMethod::Retrace) &&
-         m != static_cast<std::uint8_t>(PathMethod::Key) &&
-         m != static_cast<std::uint8_t>(PathMethod::Retraced);
-}
 
 std::uint64_t pixelHash(std::uint64_t x)
 {
@@ -514,27 +507,6 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
 }
 }
 
-namespace
-{
-/// Mixes a 64-bit word into a running hash (the multiply-xorshift step of MurmurHash3's
-/// finalizer, applied per word).
-std::uint64_t mixWord(std::uint64_t h, std::uint64_t w)
-{
-  w *= 0xff51afd7ed558ccdULL;
-  w ^= w >> 33;
-  h ^= w;
-  h *= 0xc4ceb9fe1a85ec53ULL;
-  return h ^ (h >> 29);
-}
-
-std::uint64_t bitsOf(double x)
-{
-  std::uint64_t w = 0;
-  std::memcpy(&w, &x, sizeof w);
-  return w;
-}
-}
-
 std::uint64_t matchingFingerprint(const std::vector<RayRecord>& records)
 {
   std::uint64_t h = mixWord(0x9e3779b97f4a7c15ULL, records.size());
@@ -769,7 +741,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   if (options.movedEdges)
     predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
                  options.hedgeNearShadow, options.matchCache.get(), f);
-  if (options.leaveOneOut)
+  if (options.leaveOneOut && options.estimates) // the weights weigh the estimates alone
   {
     const std::vector<float> L = leaveOneOutError(keys, t, width, height, scene, options);
     weighByLeaveOneOut(f, L);

@@ -88,6 +88,15 @@ enum class PathMethod : std::uint8_t
 constexpr int kPathMethodCount = 9;
 ASRTINTERPOLATION_EXPORT const char* toString(PathMethod m);
 
+/// Whether a pixel got its record by a way of predicting: neither a key's, nor traced at t, nor
+/// still to be traced.
+inline bool isPrediction(std::uint8_t m)
+{
+  return m != static_cast<std::uint8_t>(PathMethod::Retrace) &&
+         m != static_cast<std::uint8_t>(PathMethod::Key) &&
+         m != static_cast<std::uint8_t>(PathMethod::Retraced);
+}
+
 /// What a key frame shows at a pixel: the surface, and how its ray ended there.
 struct PathSurface
 {
