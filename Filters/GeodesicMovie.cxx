@@ -123,6 +123,10 @@ struct MovieMaker::Internals
   std::map<int, double> heldRays;
   /// The keys' leave-one-out errors, for the frames between the same keys.
   std::shared_ptr<LeaveOneOutCache> leftOut = std::make_shared<LeaveOneOutCache>();
+  /// Each whole frame's matchingFingerprint, once computed: the keys' leave-one-out errors are
+  /// looked up by it for every frame between them. A frame's records are the same whenever it is
+  /// made or read again.
+  std::map<int, std::uint64_t> fingerprints;
   /// The rays each whole frame's records hold (their raysPerPixel), kept or let go.
   std::map<int, double> wholeHeldRays;
   /// Pictures of whole frames traced by this movie, encoded when traced
@@ -537,8 +541,14 @@ struct MovieMaking
     // Frame order is the order of direction · s: the keys go in as they are.
     std::vector<PathKey> pathKeys;
     for (int key : keysAround(keys, k))
-      pathKeys.push_back(
-        { direction * maker.Frames[static_cast<std::size_t>(key)].s, &this->whole(key) });
+    {
+      const std::vector<RayRecord>& records = this->whole(key);
+      auto fingerprint = in.fingerprints.find(key);
+      if (fingerprint == in.fingerprints.end())
+        fingerprint = in.fingerprints.emplace(key, matchingFingerprint(records)).first;
+      pathKeys.push_back({ direction * maker.Frames[static_cast<std::size_t>(key)].s, &records,
+                           fingerprint->second });
+    }
     if (!in.shading)
       this->withTextures(maker.Frames.front());
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];

@@ -76,7 +76,9 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     const auto found = fingerprints.find(q);
     if (found != fingerprints.end())
       return found->second;
-    return fingerprints[q] = mixWord(bitsOf(keys[q].s), matchingFingerprint(*keys[q].records));
+    const std::uint64_t records =
+      keys[q].fingerprint != 0 ? keys[q].fingerprint : matchingFingerprint(*keys[q].records);
+    return fingerprints[q] = mixWord(bitsOf(keys[q].s), records);
   };
   for (const std::size_t k : { a, a + 1 })
   {

@@ -40,11 +40,13 @@ void checkKeys(const std::vector<PathKey>& keys, double t, int width, int height
       invalid("the keys' parameters must be finite and strictly increasing (key " +
               std::to_string(k) + ")");
     const std::vector<RayRecord>& r = *keys[k].records;
-    for (std::size_t p = 0; p < n; ++p)
-      if (r[p].i != static_cast<int>(p % width) || r[p].j != static_cast<int>(p / width))
-        invalid("key frame " + std::to_string(k) + ": record " + std::to_string(p) + " is pixel (" +
-                std::to_string(r[p].i) + ", " + std::to_string(r[p].j) + "), not (" +
-                std::to_string(p % width) + ", " + std::to_string(p / width) + ")");
+    std::size_t p = 0;
+    for (int j = 0; j < height; ++j)
+      for (int i = 0; i < width; ++i, ++p)
+        if (r[p].i != i || r[p].j != j)
+          invalid("key frame " + std::to_string(k) + ": record " + std::to_string(p) +
+                  " is pixel (" + std::to_string(r[p].i) + ", " + std::to_string(r[p].j) +
+                  "), not (" + std::to_string(i) + ", " + std::to_string(j) + ")");
   }
   if (!(t >= keys.front().s && t <= keys.back().s))
   {
@@ -62,11 +64,31 @@ bool singleRay(const RayRecord& r)
   return r.raysPerPixel <= 1;
 }
 
+/// A disagreement in (u, v) this many pixels long or less, at the pixel's footprint (its
+/// Jacobian), lies within the texture filter's reach of a pixel, where the filtered colour varies
+/// linearly.
+constexpr double kLinearDisagreement = 0.25;
+
+/// Whether the disagreement (du, dv) is at most `pixels` long at `r`'s footprint: the pixel
+/// offset J⁻¹ (du, dv), J = ∂(u, v)/∂(i, j). False where J is singular or not finite.
+bool withinFootprint(const RayRecord& r, double du, double dv, double pixels)
+{
+  const double det = r.dudi * r.dvdj - r.dudj * r.dvdi;
+  if (!std::isfinite(det) || det == 0.0)
+    return false;
+  const double di = (r.dvdj * du - r.dudj * dv) / det;
+  const double dj = (r.dudi * dv - r.dvdi * du) / det;
+  return di * di + dj * dj <= pixels * pixels;
+}
+
 /// The estimate of a prediction `out` from its lower order `lower`: the squared colour difference
 /// between them, or more where the texture changes within the orders' disagreement about (u, v).
 /// Two predictions may land on like colours while a small bright feature (a star) lies between or
 /// beside them; a ray sweeping across it between keys is missed by both. So the colour is also
-/// sampled one disagreement further on, and one to either side of it.
+/// sampled one disagreement further on, and one to either side of it. Where the disagreement is
+/// a small part of the pixel's footprint, the filtered colour is linear across it: the sample
+/// further on then differs from the prediction as the lower order does, and the two sides alike,
+/// so one side is sampled alone.
 float predictionError(const Scene& scene, const RayRecord& out, const RayRecord& lower)
 {
   const Color lowerColor = shadePrediction(scene, lower);
@@ -75,9 +97,11 @@ float predictionError(const Scene& scene, const RayRecord& out, const RayRecord&
     return estimate;
   const double du = shortUDifference(out.u, lower.u), dv = out.v - lower.v;
   const TextureFootprint footprint{ out.dudi, out.dvdi, out.dudj, out.dvdj };
-  const double offsets[3][2] = { { du, dv }, { -dv, du }, { dv, -du } };
-  for (const auto& d : offsets)
+  const double offsets[3][2] = { { -dv, du }, { du, dv }, { dv, -du } };
+  const int sampled = withinFootprint(out, du, dv, kLinearDisagreement) ? 1 : 3;
+  for (int k = 0; k < sampled; ++k)
   {
+    const double(&d)[2] = offsets[k];
     const double u = out.u + d[0];
     const double v = std::clamp(out.v + d[1], 0.0, 1.0);
     const Color c = scene.shadeFootprint(out.objectId, u - std::floor(u), v, footprint);

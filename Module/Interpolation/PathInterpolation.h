@@ -30,7 +30,9 @@
 //    lower order's error: that squared difference, summed over the channels in levels² of 255,
 //    ranks the pixels for re-tracing. Two orders may land on like colours while a bright feature
 //    of the texture lies just beside them (keys far apart move a pixel across many texels), so
-//    the texture is also sampled one disagreement in (u, v) further on and to either side. A
+//    the texture is also sampled one disagreement in (u, v) further on and to either side (one
+//    side alone where the disagreement is a quarter of a pixel or less, where the filtered colour
+//    is linear across it and the other two samples say what the lower order and that side do). A
 //    linear prediction's estimate is also at least the squared colour step between its keys.
 //    A moved edge's estimate is the disagreement of the other ways of moving the scene points,
 //    and of the pixel's own prediction where there is one, with the prediction (PathEdges.h).
@@ -67,6 +69,9 @@ struct PathKey
 {
   double s = 0;
   const std::vector<RayRecord>* records = nullptr;
+  /// matchingFingerprint(*records), where the caller keeps it for keys it passes again and again
+  /// (0: computed where it is needed).
+  std::uint64_t fingerprint = 0;
 };
 
 /// How a pixel of a path frame got its record.

@@ -153,6 +153,12 @@ TEST(LeaveOneOut, TheWeighedEstimateReachesTargetsWithFewerPixelsAndKeepsEachWay
   PathOptions weighed = withMovedEdges();
   PathOptions kept = withMovedEdges();
   kept.leaveOneOutCache = std::make_shared<LeaveOneOutCache>();
+  // Keys whose fingerprints their caller keeps (as asrt movie does), kept errors of their own.
+  std::vector<PathKey> printed = keys;
+  for (PathKey& key : printed)
+    key.fingerprint = matchingFingerprint(*key.records);
+  PathOptions keptPrinted = kept;
+  keptPrinted.leaveOneOutCache = std::make_shared<LeaveOneOutCache>();
   double gained = 0;
   for (const double t : { 0.6825, 0.7375 })
   {
@@ -170,6 +176,9 @@ TEST(LeaveOneOut, TheWeighedEstimateReachesTargetsWithFewerPixelsAndKeepsEachWay
       ASSERT_EQ(a.records[p].color, d.records[p].color) << p;
     ASSERT_EQ(a.method, b.method);
     ASSERT_EQ(b.estimate, c.estimate) << "t = " << t;
+    ASSERT_EQ(b.estimate,
+              interpolateAlongPath(printed, t, side, side, *atT.scene, keptPrinted).estimate)
+      << "t = " << t;
     std::array<double, kPathMethodCount> totalA{}, totalB{};
     std::size_t moved = 0;
     for (std::size_t p = 0; p < a.records.size(); ++p)
@@ -198,4 +207,5 @@ TEST(LeaveOneOut, TheWeighedEstimateReachesTargetsWithFewerPixelsAndKeepsEachWay
   }
   EXPECT_GT(gained, 0.01) << "the weighed order re-traces no fewer pixels on the whole";
   EXPECT_EQ(kept.leaveOneOutCache->made(), 3u); // keys 1 and 2, then 2 (kept) and 3
+  EXPECT_EQ(keptPrinted.leaveOneOutCache->made(), 3u);
 }
