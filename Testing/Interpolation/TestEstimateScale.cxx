@@ -57,6 +57,12 @@ TEST(EstimateScale, ProbesThatAllCameOutExactKeepTheOrder)
   const double s = asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::Ratio);
   EXPECT_GT(s, 0.0);
   EXPECT_LT(s, 0.01);
+  // Edge blends' errors are rare and large: a sample that saw none of them scales them by 1, or,
+  // where the keys' leave-one-out errors rank them, by a sixteenth (an edge a quarter of a pixel
+  // off), not by the least scale.
+  EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio), 1.0);
+  EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio, true),
+            1.0 / 16.0);
   // No estimate to scale (or no probe): 1.
   EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, std::vector<ProbePair>(8, ProbePair{ 0, 4 }),
                                 EstimateScaling::Ratio),
