@@ -110,6 +110,35 @@ float predictionError(const Scene& scene, const RayRecord& out, const RayRecord&
   return estimate;
 }
 
+/// What predictRecord gives of the fields a prediction is shaded from (object, ending, u, v and
+/// their Jacobian), the same values, and nothing else: the lower order an estimate is measured by.
+RayRecord predictSurface(const RayRecord* const* nodes, const double* s, int n, double t)
+{
+  double w[4];
+  lagrangeWeights(s, n, t, w);
+  RayRecord out;
+  out.objectId = nodes[0]->objectId;
+  out.termination = nodes[0]->termination;
+  out.u = out.v = 0;
+  out.dudi = out.dudj = out.dvdi = out.dvdj = 0;
+  double u = nodes[0]->u;
+  for (int k = 0; k < n; ++k)
+  {
+    const RayRecord& r = *nodes[k];
+    if (k > 0)
+      u += shortUDifference(r.u, nodes[k - 1]->u);
+    out.u += w[k] * u;
+    out.v += w[k] * r.v;
+    out.dudi += w[k] * r.dudi;
+    out.dudj += w[k] * r.dudj;
+    out.dvdi += w[k] * r.dvdi;
+    out.dvdj += w[k] * r.dvdj;
+  }
+  out.u -= std::floor(out.u);
+  out.v = std::clamp(out.v, 0.0, 1.0);
+  return out;
+}
+
 /// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike;
 /// sets `estimate` as the header says.
 RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
@@ -152,7 +181,7 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   // One order lower: without the outer node farther from t (the left one on a tie).
   const bool dropLeft = left && (!right || t - keys[a - 1].s >= keys[a + 2].s - t);
   const int offset = dropLeft ? 1 : 0;
-  const RayRecord lower = predictRecord(nodes + offset, s + offset, n - 1, t);
+  const RayRecord lower = predictSurface(nodes + offset, s + offset, n - 1, t);
   estimate = predictionError(scene, out, lower);
   return out;
 }
@@ -916,11 +945,17 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
     const double cb = calibrated[static_cast<std::size_t>(b)];
     return ca != cb ? ca > cb : a < b;
   };
-  std::vector<std::int32_t> rest;
+  // Sorted as (calibrated, pixel) pairs side by side, not indices that look their values up.
+  std::vector<std::pair<double, std::int32_t>> order;
   for (std::size_t p = 0; p < n; ++p)
     if (!traced[p] && methods[p] != static_cast<std::uint8_t>(PathMethod::Key))
-      rest.push_back(static_cast<std::int32_t>(p));
-  std::sort(rest.begin(), rest.end(), worse);
+      order.emplace_back(calibrated[p], static_cast<std::int32_t>(p));
+  std::sort(order.begin(), order.end(),
+            [](const std::pair<double, std::int32_t>& a, const std::pair<double, std::int32_t>& b)
+            { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::vector<std::int32_t> rest(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    rest[k] = order[k].second;
   // What re-tracing the first k of `rest` leaves is bounded twice, per way of predicting: by the
   // calibrated estimates, and by the probes' own errors (each probe stands for the untraced pixels
   // about its place in the order), with a confidence margin, so that a sample that happened to
