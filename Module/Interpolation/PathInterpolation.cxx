@@ -64,6 +64,30 @@ bool singleRay(const RayRecord& r)
   return r.raysPerPixel <= 1;
 }
 
+/// Sets `out`'s u, v and their Jacobian to the nodes' weighed by `w`: each node's u the short way
+/// round from the previous node's, so that a u drifting across the seam stays one smooth function
+/// of s, then wrapped into [0, 1); v clamped to [0, 1].
+void interpolateSurface(const RayRecord* const* nodes, const double* w, int n, RayRecord& out)
+{
+  out.u = out.v = 0;
+  out.dudi = out.dudj = out.dvdi = out.dvdj = 0;
+  double u = nodes[0]->u;
+  for (int k = 0; k < n; ++k)
+  {
+    const RayRecord& r = *nodes[k];
+    if (k > 0)
+      u += shortUDifference(r.u, nodes[k - 1]->u);
+    out.u += w[k] * u;
+    out.v += w[k] * r.v;
+    out.dudi += w[k] * r.dudi;
+    out.dudj += w[k] * r.dudj;
+    out.dvdi += w[k] * r.dvdi;
+    out.dvdj += w[k] * r.dvdj;
+  }
+  out.u -= std::floor(out.u);
+  out.v = std::clamp(out.v, 0.0, 1.0);
+}
+
 /// A disagreement in (u, v) this many pixels long or less, at the pixel's footprint (its
 /// Jacobian), lies within the texture filter's reach of a pixel, where the filtered colour varies
 /// linearly.
@@ -119,23 +143,7 @@ RayRecord predictSurface(const RayRecord* const* nodes, const double* s, int n, 
   RayRecord out;
   out.objectId = nodes[0]->objectId;
   out.termination = nodes[0]->termination;
-  out.u = out.v = 0;
-  out.dudi = out.dudj = out.dvdi = out.dvdj = 0;
-  double u = nodes[0]->u;
-  for (int k = 0; k < n; ++k)
-  {
-    const RayRecord& r = *nodes[k];
-    if (k > 0)
-      u += shortUDifference(r.u, nodes[k - 1]->u);
-    out.u += w[k] * u;
-    out.v += w[k] * r.v;
-    out.dudi += w[k] * r.dudi;
-    out.dudj += w[k] * r.dudj;
-    out.dvdi += w[k] * r.dvdi;
-    out.dvdj += w[k] * r.dvdj;
-  }
-  out.u -= std::floor(out.u);
-  out.v = std::clamp(out.v, 0.0, 1.0);
+  interpolateSurface(nodes, w, n, out);
   return out;
 }
 
@@ -672,20 +680,13 @@ RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, d
   RayRecord out = *nodes[0];
   out.origin = out.direction = out.hitPoint = out.hitNormal = Vec3::Zero();
   out.momentum = Vec4::Zero();
-  out.u = out.v = out.affineLength = out.winding = out.chordError = out.maxAbsH = 0;
-  out.dudi = out.dudj = out.dvdi = out.dvdj = 0;
+  out.affineLength = out.winding = out.chordError = out.maxAbsH = 0;
   out.steps = 0;
   out.raysPerPixel = 1;
-  // Each node's u the short way round from the previous node's, so that a u drifting across the
-  // seam stays one smooth function of s.
-  double u = nodes[0]->u;
+  interpolateSurface(nodes, w, n, out);
   for (int k = 0; k < n; ++k)
   {
     const RayRecord& r = *nodes[k];
-    if (k > 0)
-      u += shortUDifference(r.u, nodes[k - 1]->u);
-    out.u += w[k] * u;
-    out.v += w[k] * r.v;
     out.origin += w[k] * r.origin;
     out.direction += w[k] * r.direction;
     out.momentum += w[k] * r.momentum;
@@ -693,14 +694,8 @@ RayRecord predictRecord(const RayRecord* const* nodes, const double* s, int n, d
     out.hitNormal += w[k] * r.hitNormal;
     out.affineLength += w[k] * r.affineLength;
     out.winding += w[k] * r.winding;
-    out.dudi += w[k] * r.dudi;
-    out.dudj += w[k] * r.dudj;
-    out.dvdi += w[k] * r.dvdi;
-    out.dvdj += w[k] * r.dvdj;
     out.maxAbsH = std::max(out.maxAbsH, r.maxAbsH);
   }
-  out.u -= std::floor(out.u);
-  out.v = std::clamp(out.v, 0.0, 1.0);
   if (out.direction.norm() > 0)
     out.direction.normalize();
   if (out.hitNormal.norm() > 0)
