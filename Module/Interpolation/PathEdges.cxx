@@ -95,8 +95,11 @@ public:
     auto match = [&](std::size_t from, std::size_t to)
     {
       auto make = [&] { return matchFrames(samples(from), samples(to), index); };
-      return cache ? cache->matches(*keys[from].records, *keys[to].records, make)
-                   : std::make_shared<const Correspondence>(make());
+      if (!cache)
+        return std::make_shared<const Correspondence>(make());
+      if (keys[from].fingerprint != 0 && keys[to].fingerprint != 0)
+        return cache->matches(keys[from].fingerprint, keys[to].fingerprint, make);
+      return cache->matches(*keys[from].records, *keys[to].records, make);
     };
     const std::shared_ptr<const Correspondence> inner = match(a, a + 1);
     std::shared_ptr<const Correspondence> left, right;

@@ -382,11 +382,11 @@ double estimateScale(PathMethod m, const std::vector<ProbePair>& probes, Estimat
   // Moved edges' and edge blends' errors are rare and large: a ratio their probes happen to set
   // low would leave them untraced. Where the keys' leave-one-out errors put the edge blends first,
   // a sixteenth is enough.
-  const bool rareAndLarge =
-    m == PathMethod::MovedEdge || (m == PathMethod::EdgeBlend && !edgeBlendsRanked);
-  const double least = rareAndLarge                 ? 1.0
-                       : m == PathMethod::EdgeBlend ? kRankedEdgeBlendScale
-                                                    : kLeastScale;
+  double least = kLeastScale;
+  if (m == PathMethod::MovedEdge)
+    least = 1.0;
+  else if (m == PathMethod::EdgeBlend)
+    least = edgeBlendsRanked ? kRankedEdgeBlendScale : 1.0;
   return std::max(least, raised);
 }
 
@@ -605,9 +605,15 @@ std::shared_ptr<const Correspondence> PathMatchCache::matches(
   const std::vector<RayRecord>& a, const std::vector<RayRecord>& b,
   const std::function<Correspondence()>& match)
 {
+  return this->matches(matchingFingerprint(a), matchingFingerprint(b), match);
+}
+
+std::shared_ptr<const Correspondence> PathMatchCache::matches(
+  std::uint64_t a, std::uint64_t b, const std::function<Correspondence()>& match)
+{
   // Matched outside the lock: another thread may match the same pair meanwhile, to the same
   // correspondence.
-  return this->Kept.get({ matchingFingerprint(a), matchingFingerprint(b) }, match);
+  return this->Kept.get({ a, b }, match);
 }
 
 std::size_t PathMatchCache::made() const
@@ -796,12 +802,20 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
         f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p], options.estimates);
       f.method[p] = static_cast<std::uint8_t>(m);
     }
+  // The kept correspondences and leave-one-out errors are both looked up by the keys'
+  // fingerprints: each key's made once here, where the caller did not give it.
+  const bool weighed = options.leaveOneOut && options.estimates; // the weights weigh the estimates
+  std::vector<PathKey> keyed = keys;
+  if ((options.movedEdges && options.matchCache) || (weighed && options.leaveOneOutCache))
+    for (PathKey& key : keyed)
+      if (key.fingerprint == 0)
+        key.fingerprint = matchingFingerprint(*key.records);
   if (options.movedEdges)
-    predictEdges(keys, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
+    predictEdges(keyed, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
                  options.hedgeNearShadow, options.matchCache.get(), f);
-  if (options.leaveOneOut && options.estimates) // the weights weigh the estimates alone
+  if (weighed)
   {
-    const std::vector<float> L = leaveOneOutError(keys, t, width, height, scene, options);
+    const std::vector<float> L = leaveOneOutError(keyed, t, width, height, scene, options);
     weighByLeaveOneOut(f, L);
     f.leaveOneOutWeighed = !L.empty();
   }

@@ -174,6 +174,9 @@ public:
   std::shared_ptr<const Correspondence> matches(const std::vector<RayRecord>& a,
                                                 const std::vector<RayRecord>& b,
                                                 const std::function<Correspondence()>& match);
+  /// As above, by the frames' fingerprints (matchingFingerprint), where the caller has them.
+  std::shared_ptr<const Correspondence> matches(std::uint64_t a, std::uint64_t b,
+                                                const std::function<Correspondence()>& match);
   /// How many correspondences `matches` made (rather than found kept) so far.
   std::size_t made() const;
 

@@ -378,6 +378,13 @@ TEST_F(PathInterpolationRamp, KeptCorrespondencesGiveTheSameFramesMatchingEachPa
       ASSERT_EQ(a.records[p].color, b.records[p].color) << "t = " << t << ", pixel " << p;
   }
   EXPECT_EQ(kept.matchCache->made(), 3u);
+  // The keys' fingerprints given by the caller find the same kept pairs: nothing matched again.
+  std::vector<PathKey> printed = path;
+  for (PathKey& key : printed)
+    key.fingerprint = matchingFingerprint(*key.records);
+  const PathFrame given = interpolateAlongPath(printed, 0.73, Side, Side, scene, kept);
+  EXPECT_EQ(kept.matchCache->made(), 3u);
+  ASSERT_EQ(given.estimate, interpolateAlongPath(path, 0.73, Side, Side, scene, kept).estimate);
   // Another key 2 (one surface coordinate a little off): the pairs it is in are matched again.
   std::vector<RayRecord> changed = keys()[2];
   changed[changed.size() / 2].u = std::nextafter(changed[changed.size() / 2].u, 2.0);
