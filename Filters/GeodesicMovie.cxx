@@ -29,6 +29,13 @@ namespace asrt
 
 namespace
 {
+/// The key of frame k's re-traced subset among those kept in memory: which pixels, and beside
+/// which border they were traced.
+std::pair<int, std::string> retracedKey(int k, const PixelSubsetId& subset)
+{
+  return { k, std::to_string(subset.count) + ":" + subset.digest + ":" + subset.border };
+}
+
 /// The prior of the re-trace share (SpacingShareModel), until the first keys are measured: a
 /// quarter of a frame re-traced, beyond the probes, between keys a quarter of the path apart. The
 /// paper's mass ramp re-traced 23 % in exact mode with keys ΔM = 0.2 apart on M 0.1 → 1.2 (README,
@@ -97,8 +104,7 @@ struct MovieMaker::Internals
   std::uint64_t uses = 0;
   /// The rays each whole frame made took: integrated if traced, its records' if read.
   std::map<int, double> wholeRays;
-  /// Re-traced pixels kept in memory (MovieSettings::cacheRetraced): frame, subset's count and
-  /// digest.
+  /// Re-traced pixels kept in memory (MovieSettings::cacheRetraced), by retracedKey.
   std::map<std::pair<int, std::string>, std::vector<RayRecord>> retraced;
   std::optional<SceneDescription> shading; ///< the first frame's scene, textures loaded
   std::string shadingObjects;              ///< its text without what a path varies
@@ -390,9 +396,7 @@ struct MovieMaking
   std::optional<std::vector<RayRecord>> known(int k, const SceneDescription& subset,
                                               const std::vector<std::pair<int, int>>& pixels)
   {
-    const std::pair<int, std::string> cacheKey(k, std::to_string(subset.subset.count) + ":" +
-                                                    subset.subset.digest);
-    const auto cached = in.retraced.find(cacheKey);
+    const auto cached = in.retraced.find(retracedKey(k, subset.subset));
     if (cached != in.retraced.end())
       return cached->second;
     if (!maker.Store)
@@ -436,13 +440,13 @@ struct MovieMaking
   /// and drops, FrameTracer::raysIntegrated), counted as the movie's.
   TracedPixels tracedSubset(const FrameTracer& tracer,
                             const std::vector<std::pair<int, int>>& pixels,
-                            const SceneDescription& subset, CentreRays* kept = nullptr)
+                            const SceneDescription& subset, CentreRays* kept = nullptr,
+                            const std::vector<JacobianSample>& border = {})
   {
     const auto t0 = std::chrono::steady_clock::now();
     const std::int64_t before = tracer.raysIntegrated();
     TracedPixels out;
-    out.records = kept ? tracer.tracePixels(pixels, *kept, this->progress())
-                       : tracer.tracePixels(pixels, this->progress());
+    out.records = tracer.tracePixelsBeside(pixels, border, kept, this->progress());
     out.rays = static_cast<double>(tracer.raysIntegrated() - before);
     if (this->cancelled())
       throw MovieCancelled();
@@ -463,16 +467,17 @@ struct MovieMaking
     // The frame's lists border each other: their centre rays are traced once (CentreRays).
     auto kept = std::make_shared<CentreRays>();
     return
-      [this, k, &tracer, &report, storeOnly, kept](const std::vector<std::pair<int, int>>& pixels)
+      [this, k, &tracer, &report, storeOnly, kept](const std::vector<std::pair<int, int>>& pixels,
+                                                   const std::vector<JacobianSample>& border)
     {
       TracedPixels out;
       if (pixels.empty())
         return out;
       SceneDescription subset = maker.Frames[static_cast<std::size_t>(k)].identity;
       subset.subset = pixelSubsetId(pixels);
+      subset.subset.border = borderDigest(border); // the records' Jacobians and colours read it
       subset.rendering = scatteredPixelRendering(subset.rendering); // as the tracer traces them
-      const std::pair<int, std::string> cacheKey(k, std::to_string(subset.subset.count) + ":" +
-                                                      subset.subset.digest);
+      const std::pair<int, std::string> cacheKey = retracedKey(k, subset.subset);
       if (auto found = this->known(k, subset, pixels))
       {
         in.heldRays[k] += raysOf(*found);
@@ -488,7 +493,7 @@ struct MovieMaking
       }
       if (storeOnly)
         throw NotServed();
-      out = this->tracedSubset(tracer(), pixels, subset, kept.get()); // this frame's tracer alone
+      out = this->tracedSubset(tracer(), pixels, subset, kept.get(), border); // this frame's alone
       in.heldRays[k] += raysOf(out.records);
       report.raysTraced += out.rays;
       if (maker.Settings.cacheRetraced)
@@ -677,14 +682,15 @@ struct MovieMaking
     const int width = maker.Width, height = maker.Height;
     RetraceRays rays;
     const PixelTracer fromTruth =
-      [&truth, &rays, width, height](const std::vector<std::pair<int, int>>& ij)
+      [&truth, &rays, width, height](const std::vector<std::pair<int, int>>& ij,
+                                     const std::vector<JacobianSample>& border)
     {
       TracedPixels out;
       out.records.reserve(ij.size());
       for (const auto& p : ij)
         out.records.push_back(truth[static_cast<std::size_t>(p.second) * width + p.first]);
       // What tracing the list at k would integrate (RetraceRays.h).
-      const RetraceRays list = predictRetraceRays(truth, width, height, ij);
+      const RetraceRays list = predictRetraceRays(truth, width, height, ij, border);
       rays += list;
       out.rays = list.total();
       return out;

@@ -321,12 +321,15 @@ struct TracedPixels
   double rays = 0;
 };
 
-/// Traces the given pixels (i, j) at the frame's parameters and returns their records, each the
-/// whole frame's record of that pixel (FrameTracer::tracePixels's), and the rays it integrated.
-using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, int>>& pixels)>;
+/// Traces the given pixels (i, j) at the frame's parameters and returns their records and the
+/// rays it integrated. With `border` empty each record is the whole frame's record of that pixel
+/// (FrameTracer::tracePixels's); else the records read the edge neighbours' samples given there
+/// instead of tracing them (FrameTracer::tracePixelsBeside's).
+using PixelTracer = std::function<TracedPixels(const std::vector<std::pair<int, int>>& pixels,
+                                               const std::vector<JacobianSample>& border)>;
 
-/// The pixel tracer of a frame tracer (which must outlive it): FrameTracer::tracePixels, and the
-/// rays it integrated read around each call (FrameTracer::raysIntegrated; the records'
+/// The pixel tracer of a frame tracer (which must outlive it): FrameTracer::tracePixelsBeside,
+/// and the rays it integrated read around each call (FrameTracer::raysIntegrated; the records'
 /// raysPerPixel leave out the edge neighbours it traces and drops). The centre rays it traced are
 /// kept between its calls (CentreRays): a pixel or neighbour traced for one list is not traced
 /// again for a later one, and the records are the same.
@@ -335,8 +338,12 @@ ASRTINTERPOLATION_EXPORT PixelTracer pixelTracerOf(const FrameTracer& tracer);
 /// As above, the pixels got from `trace` (called with the must-retrace pixels and the probes,
 /// then once per round of neighbours that contradict traced pixels, then with the chosen ones;
 /// each list is a function of the frame as predicted and of the records traced before, so the
-/// same keys and the same records choose the same lists). A caller may
-/// serve them from a store of pixels traced before, provided they are the traced records.
+/// same keys and the same records choose the same lists). Each list is traced beside the edge
+/// neighbours the frame vouches for (the `border` of the call): those traced before, and predicted
+/// ones whose estimate is within a level a channel. Their rays are not traced only to be dropped;
+/// the records' Jacobians and colours read them, within that level of what the traced rays would
+/// give. The other neighbours are traced and dropped. A caller may serve the lists from a store
+/// of pixels traced before beside the same border, provided they are the traced records.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
   PathFrame& frame, const PixelTracer& trace, double targetDb, double probeFraction = 0.01,
   double settingsMse = 0.0, EstimateScaling scaling = EstimateScaling::Ratio);

@@ -17,7 +17,8 @@ RetraceRays& RetraceRays::operator+=(const RetraceRays& o)
 }
 
 RetraceRays predictRetraceRays(const std::vector<RayRecord>& frame, int width, int height,
-                               const std::vector<std::pair<int, int>>& pixels)
+                               const std::vector<std::pair<int, int>>& pixels,
+                               const std::vector<JacobianSample>& border)
 {
   if (width <= 0 || height <= 0 ||
       frame.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
@@ -53,7 +54,12 @@ RetraceRays predictRetraceRays(const std::vector<RayRecord>& frame, int width, i
   }
   std::sort(edges.begin(), edges.end());
   rays.midpoints = static_cast<double>(std::unique(edges.begin(), edges.end()) - edges.begin());
-  rays.neighbours = static_cast<double>(edgeNeighbours(pixels, width, height).size());
+  std::vector<std::pair<int, int>> given;
+  for (const JacobianSample& s : border)
+    given.emplace_back(s.i, s.j);
+  std::sort(given.begin(), given.end());
+  for (const auto& n : edgeNeighbours(pixels, width, height))
+    rays.neighbours += std::binary_search(given.begin(), given.end(), n) ? 0.0 : 1.0;
   return rays;
 }
 }

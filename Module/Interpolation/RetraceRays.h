@@ -5,8 +5,9 @@
 //
 // FrameTracer::tracePixels, with the scattered-pixel rendering (lattice 1), integrates for one
 // list of pixels:
-//  - the centre ray of each pixel, and of each edge neighbour not in the list (edgeNeighbours),
-//    which it traces for the Jacobians and the anti-aliasing judgement and then drops;
+//  - the centre ray of each pixel, and of each edge neighbour neither in the list (edgeNeighbours)
+//    nor given beside it (FrameTracer::tracePixelsBeside), which it traces for the Jacobians and
+//    the anti-aliasing judgement and then drops;
 //  - one ray through the midpoint of every edge between 4-adjacent centres that end differently
 //    (another object, image order or termination), one of them in the list: each edge once a list;
 //  - the anti-aliasing samples of the pixels in the list.
@@ -38,13 +39,15 @@ struct RetraceRays
   RetraceRays& operator+=(const RetraceRays& o);
 };
 
-/// The rays FrameTracer::tracePixels integrates to re-trace `pixels` (each once, inside the
-/// frame) of the frame whose whole records, width × height in pixel order (record p is pixel
-/// (p mod width, p / width)), are `frame`. Throws InvalidParameter for a frame of another size or
-/// a pixel outside it.
-ASRTINTERPOLATION_EXPORT RetraceRays
-predictRetraceRays(const std::vector<RayRecord>& frame, int width, int height,
-                   const std::vector<std::pair<int, int>>& pixels);
+/// The rays FrameTracer::tracePixelsBeside integrates to re-trace `pixels` (each once, inside the
+/// frame) beside the neighbour samples `border` (empty: tracePixels, every neighbour traced) of
+/// the frame whose whole records, width × height in pixel order (record p is pixel
+/// (p mod width, p / width)), are `frame`: the edge neighbours given in `border` are not traced.
+/// The midpoints and samples are counted from the frame's own neighbours. Throws
+/// InvalidParameter for a frame of another size or a pixel outside it.
+ASRTINTERPOLATION_EXPORT RetraceRays predictRetraceRays(
+  const std::vector<RayRecord>& frame, int width, int height,
+  const std::vector<std::pair<int, int>>& pixels, const std::vector<JacobianSample>& border = {});
 }
 
 #endif

@@ -130,7 +130,7 @@ SettingsError measureSettingsError(const std::vector<RayRecord>& frame, int widt
   ij.reserve(probes.size());
   for (std::int32_t p : probes)
     ij.emplace_back(p % width, p / width);
-  const TracedPixels traced = converged(ij);
+  const TracedPixels traced = converged(ij, {}); // every neighbour traced: the converged records
   SettingsError out = settingsError(frame, probes, traced.records);
   out.rays = traced.rays;
   return out;

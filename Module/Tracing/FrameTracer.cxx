@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace asrt
 {
@@ -195,10 +196,42 @@ std::vector<RayRecord> FrameTracer::tracePixelsKept(const std::vector<std::pair<
   return this->traceKeeping(all, pixels.size(), progress, kept);
 }
 
+std::vector<RayRecord> FrameTracer::tracePixelsBeside(
+  const std::vector<std::pair<int, int>>& pixels, const std::vector<JacobianSample>& border,
+  CentreRays* kept, const std::function<bool(double)>& progress) const
+{
+  const int width = this->Desc.camera.width, height = this->Desc.camera.height;
+  std::vector<std::pair<int, int>> asked = pixels;
+  std::sort(asked.begin(), asked.end());
+  std::vector<std::pair<int, int>> given;
+  given.reserve(border.size());
+  for (const JacobianSample& s : border)
+  {
+    const std::string where = "(" + std::to_string(s.i) + ", " + std::to_string(s.j) + ")";
+    if (s.i < 0 || s.i >= width || s.j < 0 || s.j >= height)
+      throw InvalidParameter("tracing beside given neighbours: the border sample of pixel " +
+                             where + " lies outside the " + std::to_string(width) + " x " +
+                             std::to_string(height) + " frame");
+    if (std::binary_search(asked.begin(), asked.end(), std::pair(s.i, s.j)))
+      throw InvalidParameter("tracing beside given neighbours: pixel " + where +
+                             " is both asked for and given as a border sample");
+    given.emplace_back(s.i, s.j);
+  }
+  std::sort(given.begin(), given.end());
+  if (std::adjacent_find(given.begin(), given.end()) != given.end())
+    throw InvalidParameter("tracing beside given neighbours: a border sample is given twice");
+  std::vector<std::pair<int, int>> all = pixels;
+  for (const auto& n : edgeNeighbours(pixels, width, height))
+    if (!std::binary_search(given.begin(), given.end(), n))
+      all.push_back(n);
+  return this->traceKeeping(all, pixels.size(), progress, kept, border);
+}
+
 std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int, int>>& pixels,
                                                  std::size_t keep,
                                                  const std::function<bool(double)>& progress,
-                                                 CentreRays* kept) const
+                                                 CentreRays* kept,
+                                                 const std::vector<JacobianSample>& border) const
 {
   // The centre rays take the first share of the progress; anti-aliasing reports the rest.
   const bool extra =
@@ -211,7 +244,10 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
     restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
   }
   std::vector<RayRecord> out = this->traceCentresKept(pixels, centreProgress, kept);
-  std::vector<JacobianSample> halo;
+  // The Jacobians again, now with the given neighbours beside the traced ones.
+  if (!border.empty())
+    computeJacobians(out, border);
+  std::vector<JacobianSample> halo = border;
   for (std::size_t k = keep; k < out.size(); ++k)
     halo.push_back(jacobianSample(out[k]));
   out.resize(std::min(keep, out.size()));

@@ -103,6 +103,19 @@ public:
                                      CentreRays& kept,
                                      const std::function<bool(double)>& progress = nullptr) const;
 
+  /// tracePixels, with the edge neighbours' centre rays read from `border` (at most one sample a
+  /// pixel, none on one of `pixels`) instead of traced: each record's Jacobian and anti-aliasing
+  /// judgement read them as they would the neighbours' own rays. Neighbours missing from `border`
+  /// are traced and dropped as tracePixels traces them. With the neighbours' own centre rays as
+  /// `border` the records are tracePixels' bit for bit; with others (a prediction of them) the
+  /// records' rays are still their own, their Jacobians and colours follow the samples given.
+  /// The centre rays found in `kept` (if given) are taken from there and those traced added.
+  /// Throws InvalidParameter for a border sample outside the frame, on one of the pixels, or
+  /// given twice.
+  std::vector<RayRecord> tracePixelsBeside(
+    const std::vector<std::pair<int, int>>& pixels, const std::vector<JacobianSample>& border,
+    CentreRays* kept = nullptr, const std::function<bool(double)>& progress = nullptr) const;
+
   /// The centre rays of tracePixels alone: point-sampled colours, one ray a pixel, Jacobians from
   /// the neighbours among these pixels. For callers that complete the Jacobians with neighbours
   /// traced elsewhere before anti-aliasing (row bands, other processes). With a grid lattice
@@ -137,10 +150,11 @@ public:
 
 private:
   /// Traces the pixels' centre rays, keeps the first `keep` and anti-aliases them with the rest
-  /// (their neighbours) as bordering samples.
+  /// (their neighbours) and `border` as bordering samples.
   std::vector<RayRecord> traceKeeping(const std::vector<std::pair<int, int>>& pixels,
                                       std::size_t keep, const std::function<bool(double)>& progress,
-                                      CentreRays* kept = nullptr) const;
+                                      CentreRays* kept = nullptr,
+                                      const std::vector<JacobianSample>& border = {}) const;
   /// tracePixels, the centre rays in `kept` (if given) taken from there and those traced added.
   std::vector<RayRecord> tracePixelsKept(const std::vector<std::pair<int, int>>& pixels,
                                          const std::function<bool(double)>& progress,

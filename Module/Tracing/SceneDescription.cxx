@@ -1,12 +1,45 @@
 #include "SceneDescription.h"
 
+#include "RayRecord.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 
 namespace asrt
 {
+namespace
+{
+/// FNV-1a, 64 bits, over little-endian bytes.
+struct Fnv1a64
+{
+  std::uint64_t h = 14695981039346656037ULL;
+  void feed(std::uint64_t u, int bytes)
+  {
+    for (int b = 0; b < bytes; ++b)
+    {
+      this->h ^= (u >> (8 * b)) & 0xffu;
+      this->h *= 1099511628211ULL;
+    }
+  }
+  void feed(std::int32_t v) { this->feed(static_cast<std::uint32_t>(v), 4); }
+  void feed(double v)
+  {
+    std::uint64_t u;
+    std::memcpy(&u, &v, sizeof u);
+    this->feed(u, 8);
+  }
+  std::string hex() const
+  {
+    char out[17];
+    std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(this->h));
+    return out;
+  }
+};
+}
+
 PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels)
 {
   std::sort(pixels.begin(), pixels.end());
@@ -15,26 +48,35 @@ PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels)
   id.count = static_cast<std::int64_t>(pixels.size());
   if (pixels.empty())
     return id;
-  // FNV-1a, 64 bits, over the little-endian bytes of each (i, j) as two int32.
-  std::uint64_t h = 14695981039346656037ULL;
-  auto feed = [&h](std::int32_t v)
-  {
-    const auto u = static_cast<std::uint32_t>(v);
-    for (int b = 0; b < 4; ++b)
-    {
-      h ^= (u >> (8 * b)) & 0xffu;
-      h *= 1099511628211ULL;
-    }
-  };
+  Fnv1a64 h;
   for (const auto& [i, j] : pixels)
   {
-    feed(i);
-    feed(j);
+    h.feed(static_cast<std::int32_t>(i));
+    h.feed(static_cast<std::int32_t>(j));
   }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  id.digest = hex;
+  id.digest = h.hex();
   return id;
+}
+
+std::string borderDigest(std::vector<JacobianSample> border)
+{
+  if (border.empty())
+    return {};
+  std::sort(border.begin(), border.end(),
+            [](const JacobianSample& a, const JacobianSample& b)
+            { return std::pair(a.j, a.i) < std::pair(b.j, b.i); });
+  Fnv1a64 h;
+  for (const JacobianSample& s : border)
+  {
+    h.feed(s.i);
+    h.feed(s.j);
+    h.feed(s.u);
+    h.feed(s.v);
+    h.feed(s.objectId);
+    h.feed(s.imageOrder);
+    h.feed(static_cast<std::int32_t>(s.termination));
+  }
+  return h.hex();
 }
 
 namespace

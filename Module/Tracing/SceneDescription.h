@@ -6,6 +6,7 @@
 
 #include "Antialiasing.h"
 #include "Camera.h"
+#include "RayRecord.h"
 #include "RayTracer.h"
 #include "Scene.h"
 #include "SpacetimeParameters.h"
@@ -27,15 +28,24 @@ struct PixelSubsetId
 {
   std::int64_t count = 0;
   std::string digest; ///< 16 hex digits: FNV-1a 64 of the sorted, distinct (i, j) as int32 pairs
+  /// Empty where the pixels' edge neighbours were traced; else 16 hex digits, borderDigest of the
+  /// neighbour samples their records read instead (FrameTracer::tracePixelsBeside), on which
+  /// their Jacobians and colours then depend.
+  std::string border;
   bool operator==(const PixelSubsetId& o) const
   {
-    return this->count == o.count && this->digest == o.digest;
+    return this->count == o.count && this->digest == o.digest && this->border == o.border;
   }
 };
 
 /// The identity of a set of pixels: sorted and deduplicated first, so the order and repetitions
 /// of the list do not matter. An empty list gives count 0 (a whole frame).
 ASRTTRACING_EXPORT PixelSubsetId pixelSubsetId(std::vector<std::pair<int, int>> pixels);
+
+/// The identity of neighbour samples given in place of traced neighbours (PixelSubsetId::border):
+/// 16 hex digits, FNV-1a 64 over each sample's fields (i, j, objectId, imageOrder and termination
+/// as int32, u and v as the bits of their doubles), the samples in pixel order; empty for none.
+ASRTTRACING_EXPORT std::string borderDigest(std::vector<JacobianSample> border);
 
 struct SceneDescription
 {

@@ -529,16 +529,23 @@ public:
 private:
   static PixelSubsetId subset(const json& j)
   {
-    Fields f(j, "subset", { "pixels", "digest" });
+    Fields f(j, "subset", { "pixels", "digest", "border" });
     PixelSubsetId s;
     s.count = integer(f.require("pixels"), f.sub("pixels"), 1, kMaxFramePixels);
-    s.digest = str(f.require("digest"), f.sub("digest"));
-    const bool hex =
-      s.digest.size() == 16 &&
-      std::all_of(s.digest.begin(), s.digest.end(),
-                  [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
-    if (!hex)
-      fail(f.sub("digest"), "must be 16 hexadecimal digits, got " + show(f.require("digest")));
+    auto digest = [&](const char* key)
+    {
+      const std::string d = str(f.require(key), f.sub(key));
+      const bool hex =
+        d.size() == 16 &&
+        std::all_of(d.begin(), d.end(),
+                    [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+      if (!hex)
+        fail(f.sub(key), "must be 16 hexadecimal digits, got " + show(f.require(key)));
+      return d;
+    };
+    s.digest = digest("digest");
+    if (f.get("border"))
+      s.border = digest("border");
     return s;
   }
 
@@ -967,7 +974,12 @@ std::string effectiveSceneText(const SceneDescription& d)
     j["rendering"]["gridTolerance"] = a.gridTolerance;
   // Whole frames keep exactly the text they always had; a subset frame is a frame of its own.
   if (d.subset.count > 0)
+  {
     j["subset"] = { { "pixels", d.subset.count }, { "digest", d.subset.digest } };
+    // Pixels traced beside given neighbours are a subset of their own; others keep their text.
+    if (!d.subset.border.empty())
+      j["subset"]["border"] = d.subset.border;
+  }
   else
     j.erase("subset");
   return j.dump();

@@ -97,7 +97,8 @@ TEST(PathInterpolator, TimeStepsRunThroughTheKeysAndKeysAreThemselves)
 
 // The frame at M = 0.72, between the keys 0.70 and 0.75, against the frame traced there: with a
 // quality target the filter must reach it (within the 1 dB the target allows), re-tracing far
-// fewer pixels than the frame has, and its re-traced pixels are the traced frame's.
+// fewer pixels than the frame has, and its re-traced pixels are the traced frame's (within the
+// 8-bit level their predicted neighbours may move a colour by, PathInterpolation.h).
 TEST(PathInterpolator, AQualityTargetHoldsAgainstTheTracedFrame)
 {
   Pipeline p(rampKeys({ 0.65, 0.7, 0.75, 0.8 }));
@@ -145,7 +146,7 @@ TEST(PathInterpolator, AQualityTargetHoldsAgainstTheTracedFrame)
       {
         ++marked;
         for (int c = 0; c < 3; ++c)
-          ASSERT_EQ(rgb[3 * k + c], expected[3 * k + c]) << "pixel " << k;
+          ASSERT_LE(std::abs(int(rgb[3 * k + c]) - int(expected[3 * k + c])), 2) << "pixel " << k;
       }
     EXPECT_EQ(marked, retraced);
   }

@@ -97,12 +97,13 @@ TEST(RetraceRays, FromAFrameTracedOnTheGridTheMovieRetraceIsPredicted)
     PathFrame frame = interpolateAlongPath(path, t, side, side, *atT.scene, options);
     double predicted = 0, actual = 0;
     int lists = 0;
-    const PixelTracer trace = [&](const std::vector<std::pair<int, int>>& pixels)
+    const PixelTracer trace =
+      [&](const std::vector<std::pair<int, int>>& pixels, const std::vector<JacobianSample>& border)
     {
-      predicted += predictRetraceRays(whole, side, side, pixels).total();
+      predicted += predictRetraceRays(whole, side, side, pixels, border).total();
       const std::int64_t before = retracer.raysIntegrated();
       TracedPixels out;
-      out.records = retracer.tracePixels(pixels);
+      out.records = retracer.tracePixelsBeside(pixels, border);
       out.rays = static_cast<double>(retracer.raysIntegrated() - before);
       actual += out.rays;
       ++lists;

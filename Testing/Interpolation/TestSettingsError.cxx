@@ -179,7 +179,8 @@ TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
 TEST(SettingsError, ABadFrameOrProbeListIsRefused)
 {
   std::vector<RayRecord> frame(12);
-  const PixelTracer none = [](const std::vector<std::pair<int, int>>& ij)
+  const PixelTracer none =
+    [](const std::vector<std::pair<int, int>>& ij, const std::vector<JacobianSample>&)
   {
     TracedPixels out;
     out.records.resize(ij.size());

@@ -946,6 +946,83 @@ TEST(FrameTracerRays, ASubsetCountsTheNeighboursItTracesAndDrops)
               subset.size(), own, static_cast<long long>(adaptive.raysIntegrated()), neighbours);
 }
 
+// Neighbours given beside the pixels (tracePixelsBeside): with the whole frame's own centre rays
+// there, the records are the whole frame's bit for bit (Jacobians and colours included) and the
+// tracer integrates exactly the neighbours' rays fewer than tracePixels; neighbours left out of
+// the border are traced. Given other samples, the records' rays stay their own and their
+// Jacobians follow the samples.
+TEST(FrameTracerRays, NeighboursGivenBesideThePixelsAreReadInsteadOfTraced)
+{
+  const int W = 32, H = 24;
+  SceneDescription d = photonSphereScene(W, H);
+  d.rendering = scatteredPixelRendering(d.rendering); // lattice 1: scattered pixels
+  const std::vector<RayRecord> whole = FrameTracer(d).traceRows(0, H);
+  std::vector<std::pair<int, int>> pixels;
+  for (int j = 6; j < 12; ++j) // a block
+    for (int i = 8; i < 16; ++i)
+      pixels.emplace_back(i, j);
+  for (int j = 1; j < H; j += 6) // scattered pixels
+    for (int i = 20; i < W; i += 5)
+      pixels.emplace_back(i, j);
+  pixels.emplace_back(0, 0); // a corner
+  const std::vector<std::pair<int, int>> halo = edgeNeighbours(pixels, W, H);
+  auto sampleOf = [&](int i, int j)
+  { return jacobianSample(whole[static_cast<std::size_t>(j) * W + i]); };
+
+  const FrameTracer reference(d);
+  const std::vector<RayRecord> traced = reference.tracePixels(pixels);
+  const long long tracedRays = reference.raysIntegrated();
+  for (const bool everyOther : { false, true })
+  {
+    std::vector<JacobianSample> border;
+    for (const auto& [i, j] : halo)
+      if (!everyOther || (i + j) % 2 == 0)
+        border.push_back(sampleOf(i, j));
+    const FrameTracer tracer(d);
+    const std::vector<RayRecord> beside = tracer.tracePixelsBeside(pixels, border);
+    ASSERT_EQ(beside.size(), pixels.size());
+    for (std::size_t k = 0; k < pixels.size(); ++k)
+    {
+      const RayRecord& w = whole[static_cast<std::size_t>(pixels[k].second) * W + pixels[k].first];
+      EXPECT_EQ(firstDifference(beside[k], w), "") << pixels[k].first << "," << pixels[k].second;
+      EXPECT_EQ(beside[k].color, w.color);
+      EXPECT_EQ(firstDifference(beside[k], traced[k]), "");
+    }
+    EXPECT_EQ(tracer.raysIntegrated(), tracedRays - static_cast<long long>(border.size()))
+      << (everyOther ? "every other neighbour given" : "every neighbour given");
+  }
+
+  // Other samples: a neighbour's (u, v) a little off moves the Jacobians that read it.
+  std::vector<JacobianSample> shifted;
+  for (const auto& [i, j] : halo)
+  {
+    JacobianSample s = sampleOf(i, j);
+    s.u += 1e-3;
+    s.v += 1e-3;
+    shifted.push_back(s);
+  }
+  const std::vector<RayRecord> off = FrameTracer(d).tracePixelsBeside(pixels, shifted);
+  int jacobiansMoved = 0;
+  for (std::size_t k = 0; k < pixels.size(); ++k)
+  {
+    EXPECT_TRUE(off[k].objectId == traced[k].objectId && off[k].u == traced[k].u &&
+                off[k].v == traced[k].v && off[k].hitPoint == traced[k].hitPoint &&
+                off[k].termination == traced[k].termination)
+      << pixels[k].first << "," << pixels[k].second;
+    jacobiansMoved += off[k].dudi != traced[k].dudi || off[k].dvdj != traced[k].dvdj;
+  }
+  EXPECT_GT(jacobiansMoved, 0);
+
+  // A border sample outside the frame, on a pixel asked for, or given twice is refused.
+  const FrameTracer tracer(d);
+  JacobianSample outside = sampleOf(halo[0].first, halo[0].second);
+  outside.i = W;
+  EXPECT_THROW(tracer.tracePixelsBeside(pixels, { outside }), InvalidParameter);
+  EXPECT_THROW(tracer.tracePixelsBeside(pixels, { sampleOf(8, 6) }), InvalidParameter);
+  const JacobianSample twice = sampleOf(halo[0].first, halo[0].second);
+  EXPECT_THROW(tracer.tracePixelsBeside(pixels, { twice, twice }), InvalidParameter);
+}
+
 // Centre rays kept between calls (CentreRays): a list traced after another takes the centre rays
 // the first traced (its pixels and their edge neighbours) instead of tracing them again. Its
 // records are those of the same list traced on a fresh tracer, bit for bit (Jacobians and colours

@@ -705,6 +705,28 @@ TEST(SceneFile, SubsetFramesHaveAnIdentityOfTheirOwn)
   const SceneDescription back = parseScene(partText, ".", none, SceneOrigin::Program);
   EXPECT_EQ(back.subset, id);
   EXPECT_EQ(effectiveSceneText(back), partText);
+  // Pixels traced beside given neighbour samples are a subset of their own, by those samples.
+  JacobianSample given;
+  given.i = 2;
+  given.j = 2;
+  given.u = 0.25;
+  given.termination = Termination::Escaped;
+  SceneDescription beside = part;
+  beside.subset.border = borderDigest({ given });
+  EXPECT_EQ(beside.subset.border.size(), 16u);
+  EXPECT_EQ(borderDigest({}), "");
+  JacobianSample moved = given;
+  moved.u = std::nextafter(0.25, 1.0);
+  EXPECT_NE(borderDigest({ moved }), beside.subset.border); // every bit of u counts
+  JacobianSample other = given;
+  other.i = 1;
+  EXPECT_EQ(borderDigest({ given, other }), borderDigest({ other, given })); // in pixel order
+  const std::string besideText = effectiveSceneText(beside);
+  EXPECT_NE(besideText, partText);
+  const SceneDescription besideBack = parseScene(besideText, ".", none, SceneOrigin::Program);
+  EXPECT_EQ(besideBack.subset, beside.subset);
+  EXPECT_FALSE(besideBack.subset == part.subset);
+  EXPECT_EQ(effectiveSceneText(besideBack), besideText);
   // Clearing it gives the whole frame's text back.
   SceneDescription cleared = back;
   cleared.subset = PixelSubsetId();
@@ -723,8 +745,9 @@ TEST(SceneFile, SubsetFramesHaveAnIdentityOfTheirOwn)
   }
   EXPECT_EQ(parseSceneWithoutImages(partText).subset, id);
 
-  for (const char* bad : { R"({"pixels": 0, "digest": "0123456789abcdef"})",
-                           R"({"pixels": 3, "digest": "xyz"})", R"({"pixels": 3})" })
+  for (const char* bad :
+       { R"({"pixels": 0, "digest": "0123456789abcdef"})", R"({"pixels": 3, "digest": "xyz"})",
+         R"({"pixels": 3})", R"({"pixels": 3, "digest": "0123456789abcdef", "border": "12"})" })
   {
     json doc = json::parse(wholeText);
     doc["subset"] = json::parse(bad);
