@@ -207,13 +207,13 @@ std::vector<RayRecord> FrameTracer::tracePixelsBeside(
   given.reserve(border.size());
   for (const JacobianSample& s : border)
   {
-    const std::string where = "(" + std::to_string(s.i) + ", " + std::to_string(s.j) + ")";
+    auto where = [&] { return "(" + std::to_string(s.i) + ", " + std::to_string(s.j) + ")"; };
     if (s.i < 0 || s.i >= width || s.j < 0 || s.j >= height)
       throw InvalidParameter("tracing beside given neighbours: the border sample of pixel " +
-                             where + " lies outside the " + std::to_string(width) + " x " +
+                             where() + " lies outside the " + std::to_string(width) + " x " +
                              std::to_string(height) + " frame");
     if (std::binary_search(asked.begin(), asked.end(), std::pair(s.i, s.j)))
-      throw InvalidParameter("tracing beside given neighbours: pixel " + where +
+      throw InvalidParameter("tracing beside given neighbours: pixel " + where() +
                              " is both asked for and given as a border sample");
     given.emplace_back(s.i, s.j);
   }
