@@ -76,9 +76,7 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     const auto found = fingerprints.find(q);
     if (found != fingerprints.end())
       return found->second;
-    const std::uint64_t records =
-      keys[q].fingerprint != 0 ? keys[q].fingerprint : matchingFingerprint(*keys[q].records);
-    return fingerprints[q] = mixWord(bitsOf(keys[q].s), records);
+    return fingerprints[q] = mixWord(bitsOf(keys[q].s), keyFingerprint(keys[q]));
   };
   for (const std::size_t k : { a, a + 1 })
   {

@@ -95,11 +95,8 @@ public:
     auto match = [&](std::size_t from, std::size_t to)
     {
       auto make = [&] { return matchFrames(samples(from), samples(to), index); };
-      if (!cache)
-        return std::make_shared<const Correspondence>(make());
-      if (keys[from].fingerprint != 0 && keys[to].fingerprint != 0)
-        return cache->matches(keys[from].fingerprint, keys[to].fingerprint, make);
-      return cache->matches(*keys[from].records, *keys[to].records, make);
+      return cache ? cache->matches(keyFingerprint(keys[from]), keyFingerprint(keys[to]), make)
+                   : std::make_shared<const Correspondence>(make());
     };
     const std::shared_ptr<const Correspondence> inner = match(a, a + 1);
     std::shared_ptr<const Correspondence> left, right;

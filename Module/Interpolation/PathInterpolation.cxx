@@ -608,18 +608,16 @@ PathMatchCache::PathMatchCache(std::size_t capacity)
 }
 
 std::shared_ptr<const Correspondence> PathMatchCache::matches(
-  const std::vector<RayRecord>& a, const std::vector<RayRecord>& b,
-  const std::function<Correspondence()>& match)
-{
-  return this->matches(matchingFingerprint(a), matchingFingerprint(b), match);
-}
-
-std::shared_ptr<const Correspondence> PathMatchCache::matches(
   std::uint64_t a, std::uint64_t b, const std::function<Correspondence()>& match)
 {
   // Matched outside the lock: another thread may match the same pair meanwhile, to the same
   // correspondence.
   return this->Kept.get({ a, b }, match);
+}
+
+std::uint64_t keyFingerprint(const PathKey& key)
+{
+  return key.fingerprint != 0 ? key.fingerprint : matchingFingerprint(*key.records);
 }
 
 std::size_t PathMatchCache::made() const
@@ -814,8 +812,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   std::vector<PathKey> keyed = keys;
   if ((options.movedEdges && options.matchCache) || (weighed && options.leaveOneOutCache))
     for (PathKey& key : keyed)
-      if (key.fingerprint == 0)
-        key.fingerprint = matchingFingerprint(*key.records);
+      key.fingerprint = keyFingerprint(key);
   if (options.movedEdges)
     predictEdges(keyed, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
                  options.hedgeNearShadow, options.matchCache.get(), f);

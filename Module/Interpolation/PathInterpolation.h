@@ -170,11 +170,8 @@ class ASRTINTERPOLATION_EXPORT PathMatchCache
 {
 public:
   explicit PathMatchCache(std::size_t capacity = 3);
-  /// The correspondence of the frames with records `a` and `b`, `match()` where none is kept.
-  std::shared_ptr<const Correspondence> matches(const std::vector<RayRecord>& a,
-                                                const std::vector<RayRecord>& b,
-                                                const std::function<Correspondence()>& match);
-  /// As above, by the frames' fingerprints (matchingFingerprint), where the caller has them.
+  /// The correspondence of the frames whose records have fingerprints `a` and `b`
+  /// (matchingFingerprint, keyFingerprint), `match()` where none is kept.
   std::shared_ptr<const Correspondence> matches(std::uint64_t a, std::uint64_t b,
                                                 const std::function<Correspondence()>& match);
   /// How many correspondences `matches` made (rather than found kept) so far.
@@ -190,6 +187,9 @@ private:
 /// direction): equal records, equal fingerprints; different ones, different fingerprints but for
 /// a collision of 64-bit hashes.
 ASRTINTERPOLATION_EXPORT std::uint64_t matchingFingerprint(const std::vector<RayRecord>& records);
+
+/// A key's matchingFingerprint: the one its caller kept (PathKey::fingerprint), else made now.
+ASRTINTERPOLATION_EXPORT std::uint64_t keyFingerprint(const PathKey& key);
 
 /// How interpolateAlongPath predicts.
 struct PathOptions

@@ -54,12 +54,7 @@ RetraceRays predictRetraceRays(const std::vector<RayRecord>& frame, int width, i
   }
   std::sort(edges.begin(), edges.end());
   rays.midpoints = static_cast<double>(std::unique(edges.begin(), edges.end()) - edges.begin());
-  std::vector<std::pair<int, int>> given;
-  for (const JacobianSample& s : border)
-    given.emplace_back(s.i, s.j);
-  std::sort(given.begin(), given.end());
-  for (const auto& n : edgeNeighbours(pixels, width, height))
-    rays.neighbours += std::binary_search(given.begin(), given.end(), n) ? 0.0 : 1.0;
+  rays.neighbours = static_cast<double>(neighboursToTrace(pixels, width, height, border).size());
   return rays;
 }
 }

@@ -169,31 +169,33 @@ std::vector<std::pair<int, int>> edgeNeighbours(const std::vector<std::pair<int,
   return halo;
 }
 
+std::vector<std::pair<int, int>> neighboursToTrace(const std::vector<std::pair<int, int>>& pixels,
+                                                   int width, int height,
+                                                   const std::vector<JacobianSample>& border)
+{
+  std::vector<std::pair<int, int>> given;
+  given.reserve(border.size());
+  for (const JacobianSample& s : border)
+    given.emplace_back(s.i, s.j);
+  std::sort(given.begin(), given.end());
+  std::vector<std::pair<int, int>> traced;
+  for (const auto& n : edgeNeighbours(pixels, width, height))
+    if (!std::binary_search(given.begin(), given.end(), n))
+      traced.push_back(n);
+  return traced;
+}
+
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 CentreRays& kept,
                                                 const std::function<bool(double)>& progress) const
 {
-  return this->tracePixelsKept(pixels, progress, &kept);
+  return this->tracePixelsBeside(pixels, {}, &kept, progress);
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
                                                 const std::function<bool(double)>& progress) const
 {
-  return this->tracePixelsKept(pixels, progress, nullptr);
-}
-
-std::vector<RayRecord> FrameTracer::tracePixelsKept(const std::vector<std::pair<int, int>>& pixels,
-                                                    const std::function<bool(double)>& progress,
-                                                    CentreRays* kept) const
-{
-  // The pixels' edge neighbours that are not among them are traced too, as the halo rows of a
-  // band are: a pixel's Jacobian and its anti-aliasing read its neighbours, so that with them a
-  // subset's records are the whole frame's records of those pixels, bit for bit.
-  std::vector<std::pair<int, int>> all = pixels;
-  const std::vector<std::pair<int, int>> halo =
-    edgeNeighbours(pixels, this->Desc.camera.width, this->Desc.camera.height);
-  all.insert(all.end(), halo.begin(), halo.end());
-  return this->traceKeeping(all, pixels.size(), progress, kept);
+  return this->tracePixelsBeside(pixels, {}, nullptr, progress);
 }
 
 std::vector<RayRecord> FrameTracer::tracePixelsBeside(
@@ -220,10 +222,12 @@ std::vector<RayRecord> FrameTracer::tracePixelsBeside(
   std::sort(given.begin(), given.end());
   if (std::adjacent_find(given.begin(), given.end()) != given.end())
     throw InvalidParameter("tracing beside given neighbours: a border sample is given twice");
+  // The pixels' edge neighbours not given are traced too, as the halo rows of a band are: a
+  // pixel's Jacobian and its anti-aliasing read its neighbours, so that with them (or with their
+  // own rays given) a subset's records are the whole frame's records of those pixels, bit for bit.
   std::vector<std::pair<int, int>> all = pixels;
-  for (const auto& n : edgeNeighbours(pixels, width, height))
-    if (!std::binary_search(given.begin(), given.end(), n))
-      all.push_back(n);
+  const std::vector<std::pair<int, int>> halo = neighboursToTrace(pixels, width, height, border);
+  all.insert(all.end(), halo.begin(), halo.end());
   return this->traceKeeping(all, pixels.size(), progress, kept, border);
 }
 
@@ -243,10 +247,7 @@ std::vector<RayRecord> FrameTracer::traceKeeping(const std::vector<std::pair<int
     centreProgress = [&](double f) { return progress(share * f); };
     restProgress = [&](double f) { return progress(share + (1.0 - share) * f); };
   }
-  std::vector<RayRecord> out = this->traceCentresKept(pixels, centreProgress, kept);
-  // The Jacobians again, now with the given neighbours beside the traced ones.
-  if (!border.empty())
-    computeJacobians(out, border);
+  std::vector<RayRecord> out = this->traceCentresKept(pixels, centreProgress, kept, border);
   std::vector<JacobianSample> halo = border;
   for (std::size_t k = keep; k < out.size(); ++k)
     halo.push_back(jacobianSample(out[k]));
@@ -262,14 +263,14 @@ std::vector<RayRecord> FrameTracer::traceCentres(const std::vector<std::pair<int
   return this->traceCentresKept(pixels, progress, nullptr);
 }
 
-std::vector<RayRecord> FrameTracer::traceCentresKept(const std::vector<std::pair<int, int>>& pixels,
-                                                     const std::function<bool(double)>& progress,
-                                                     CentreRays* kept) const
+std::vector<RayRecord> FrameTracer::traceCentresKept(
+  const std::vector<std::pair<int, int>>& pixels, const std::function<bool(double)>& progress,
+  CentreRays* kept, const std::vector<JacobianSample>& neighbours) const
 {
   if (effectiveGridLattice(this->Desc.rendering) > 1)
   {
     std::vector<RayRecord> grid = this->traceGrid(pixels, progress);
-    computeJacobians(grid);
+    computeJacobians(grid, neighbours);
     return grid;
   }
   const long n = static_cast<long>(pixels.size());
@@ -322,7 +323,7 @@ std::vector<RayRecord> FrameTracer::traceCentresKept(const std::vector<std::pair
     for (std::size_t k = 0; k < pixels.size(); ++k)
       if (!known[k] && out[k].termination != Termination::Running) // traced, not stopped early
         kept->Records.emplace(keyOf(pixels[k]), out[k]);
-  computeJacobians(out);
+  computeJacobians(out, neighbours);
   return out;
 }
 

@@ -34,6 +34,12 @@ constexpr long kParallelRecords = 16384;
 ASRTTRACING_EXPORT std::vector<std::pair<int, int>> edgeNeighbours(
   const std::vector<std::pair<int, int>>& pixels, int width, int height);
 
+/// The edge neighbours of `pixels` (edgeNeighbours) that FrameTracer::tracePixelsBeside traces:
+/// those `border` gives no sample for.
+ASRTTRACING_EXPORT std::vector<std::pair<int, int>> neighboursToTrace(
+  const std::vector<std::pair<int, int>>& pixels, int width, int height,
+  const std::vector<JacobianSample>& border);
+
 /// Centre rays that FrameTracer::tracePixels traced, kept for later calls on the same tracer: a
 /// centre ray depends on its pixel alone, so a pixel asked for again, or traced before as the
 /// neighbour of one asked for, is taken from here instead of traced again, and the records come
@@ -155,14 +161,12 @@ private:
                                       std::size_t keep, const std::function<bool(double)>& progress,
                                       CentreRays* kept = nullptr,
                                       const std::vector<JacobianSample>& border = {}) const;
-  /// tracePixels, the centre rays in `kept` (if given) taken from there and those traced added.
-  std::vector<RayRecord> tracePixelsKept(const std::vector<std::pair<int, int>>& pixels,
-                                         const std::function<bool(double)>& progress,
-                                         CentreRays* kept) const;
-  /// traceCentres, the centre rays in `kept` (if given) taken from there and those traced added.
+  /// traceCentres, the centre rays in `kept` (if given) taken from there and those traced added,
+  /// the Jacobians read from `neighbours` too where the pixels border them.
   std::vector<RayRecord> traceCentresKept(const std::vector<std::pair<int, int>>& pixels,
                                           const std::function<bool(double)>& progress,
-                                          CentreRays* kept) const;
+                                          CentreRays* kept,
+                                          const std::vector<JacobianSample>& neighbours = {}) const;
   /// The adaptive judgement of antialias(): sets side[k] to `adaptiveSide` for the records to
   /// sample, bendOnly[k] where a footprint that bends is the only reason, and counts in
   /// midpointRays[k] the edge-midpoint rays it traced on their behalf. `lookup` holds the records
