@@ -124,6 +124,24 @@ inline AntialiasOptions convergedRendering(int side = kConvergedSide)
   return o;
 }
 
+/// The side of the converged rendering that judges a quality target of `targetDb` (PSNR): one
+/// whose pictures' own error lies at least 6 dB below the target's, so that it adds at most a
+/// quarter to the error it measures. Against 16 × 16 samples (Figs. 1 and 5 and the Kerr disk at
+/// 200 × 200, every centre ray traced, bench/REPORT.md) 4 × 4 lies 42.8–48.5 dB and 8 × 8
+/// 51.0–57.2 dB: each doubling of the side gains about 8 dB. So 4 × 4 judges targets up to 36 dB,
+/// 8 × 8 up to 45, 16 × 16 up to 53, and 32 × 32, the most a rendering may take, those above. A
+/// frame of more pixels has fewer of them on edges, where that error lies, and fares better. The
+/// benches score against it; the settings' own error is estimated against 4 × 4 whatever the
+/// target (SettingsError.h, Reference).
+inline int convergedSideFor(double targetDb)
+{
+  if (!(targetDb > 36.0))
+    return kConvergedSide;
+  if (targetDb <= 45.0)
+    return 2 * kConvergedSide;
+  return targetDb <= 53.0 ? 4 * kConvergedSide : 8 * kConvergedSide;
+}
+
 /// Whether a rendering is converged already: as many samples in every pixel as the converged
 /// rendering or more (its frames are their own converged pictures).
 inline bool isConvergedRendering(const AntialiasOptions& o)

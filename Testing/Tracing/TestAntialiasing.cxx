@@ -252,6 +252,32 @@ TEST(Antialiasing, SamplesAtTheirToleranceLandWithinAFewHundredthsOfAPixel)
   EXPECT_LT(shift.back(), 0.05);
 }
 
+TEST(Antialiasing, EachTargetIsJudgedByAConvergedPictureWellBelowItsError)
+{
+  // convergedSideFor picks, for a quality target, the converged picture that judges it: one whose
+  // own error lies at least 6 dB below the target's at 200 × 200. Here the truth is the picture
+  // at 16 × 16 samples a pixel, traced by the test, of Fig. 1 (strongly lensed, its edges where
+  // the error lies) at 96 × 96: about twice the share of edge pixels, so the margin held is half,
+  // 3 dB.
+  EXPECT_EQ(convergedSideFor(35.0), kConvergedSide); // the default target keeps its picture
+  EXPECT_GT(convergedSideFor(40.0), convergedSideFor(35.0));
+  EXPECT_GE(convergedSideFor(60.0), convergedSideFor(40.0));
+  EXPECT_LE(convergedSideFor(100.0), 32); // the most a rendering may take
+  const int N = 96;
+  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
+                                     [](const std::string& path) { return readPngTexture(path); });
+  d.camera.width = N;
+  d.camera.height = N;
+  const std::vector<RayRecord> truth = traceFrame(d, convergedRendering(16));
+  auto psnrOf = [&](int side)
+  { return -20.0 * std::log10(rmsDifference(traceFrame(d, convergedRendering(side)), truth)); };
+  const double coarse = psnrOf(convergedSideFor(35.0)), fine = psnrOf(convergedSideFor(40.0));
+  EXPECT_GE(coarse, 35.0 + 3.0);
+  EXPECT_GE(fine, 40.0 + 3.0);
+  // And the coarser picture could not judge the higher target: its own error is too near it.
+  EXPECT_LT(coarse, 40.0 + 3.0);
+}
+
 TEST(Antialiasing, BendingFootprintsOverOneColourAreSettledByTheirCornerCells)
 {
   // A long floor of one colour seen from just above it, past a hole: towards its far edge the
