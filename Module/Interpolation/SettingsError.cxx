@@ -16,12 +16,12 @@ constexpr int kStrata = kSettingsStrata;
 /// Standard errors added to a stratum's mean, as completePathFrame's probe bound.
 constexpr double kSettingsConfidence = 2.0;
 
-/// 0: sampled by more than its centre ray; 1: centre interpolated by the grid; 2: one ray.
-int stratumOf(const RayRecord& r)
+constexpr std::uint8_t kSampledStratum = 0, kEdgeStratum = 3;
+
+/// Whether two neighbours' centre rays show alike: the same object, image order and termination.
+bool showAlike(const RayRecord& a, const RayRecord& b)
 {
-  if (r.raysPerPixel > 1)
-    return 0;
-  return r.traced ? 2 : 1;
+  return a.objectId == b.objectId && a.imageOrder == b.imageOrder && a.termination == b.termination;
 }
 
 [[noreturn]] void invalid(const std::string& what)
@@ -70,19 +70,45 @@ double SettingsError::psnr() const
   return psnrOfMse(this->mseBound());
 }
 
+std::vector<std::uint8_t> settingsStrata(const std::vector<RayRecord>& frame)
+{
+  // The frame's width: its records run row by row, the first row from index 0.
+  std::size_t width = 0;
+  while (width < frame.size() && frame[width].j == frame.front().j)
+    ++width;
+  std::vector<std::uint8_t> strata(frame.size());
+  for (std::size_t p = 0; p < frame.size(); ++p)
+  {
+    const RayRecord& r = frame[p];
+    if (r.raysPerPixel > 1)
+    {
+      strata[p] = kSampledStratum;
+      continue;
+    }
+    const std::size_t i = width > 0 ? p % width : 0;
+    const bool edge = (i > 0 && !showAlike(r, frame[p - 1])) ||
+                      (i + 1 < width && p + 1 < frame.size() && !showAlike(r, frame[p + 1])) ||
+                      (p >= width && !showAlike(r, frame[p - width])) ||
+                      (p + width < frame.size() && !showAlike(r, frame[p + width]));
+    strata[p] = edge ? kEdgeStratum : r.traced ? 2 : 1;
+  }
+  return strata;
+}
+
 std::vector<std::int32_t> settingsProbes(const std::vector<RayRecord>& frame,
                                          std::size_t perStratum, std::uint64_t seed)
 {
+  const std::vector<std::uint8_t> strata = settingsStrata(frame);
   std::vector<std::int32_t> members[kStrata];
   for (std::size_t p = 0; p < frame.size(); ++p)
-    members[stratumOf(frame[p])].push_back(static_cast<std::int32_t>(p));
+    members[strata[p]].push_back(static_cast<std::int32_t>(p));
   std::vector<std::int32_t> probes;
   for (int s = 0; s < kStrata; ++s)
   {
     // probePixels ranks indices into the stratum by a fixed hash: the same frame, the same probes.
-    const std::vector<std::int32_t> picked =
-      probePixels(members[s].size(), 0.0, s == 0 ? 2 * perStratum : perStratum,
-                  seed + static_cast<unsigned>(s));
+    const bool twice = s == kSampledStratum || s == kEdgeStratum;
+    const std::vector<std::int32_t> picked = probePixels(
+      members[s].size(), 0.0, twice ? 2 * perStratum : perStratum, seed + static_cast<unsigned>(s));
     for (std::int32_t k : picked)
       probes.push_back(members[s][static_cast<std::size_t>(k)]);
   }
@@ -98,8 +124,9 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
     invalid(std::to_string(converged.size()) + " converged records for " +
             std::to_string(probes.size()) + " probes");
   SettingsError out;
-  for (const RayRecord& r : frame)
-    out.strata[stratumOf(r)].pixels += 1;
+  const std::vector<std::uint8_t> strata = settingsStrata(frame);
+  for (std::uint8_t s : strata)
+    out.strata[s].pixels += 1;
   for (SettingsStratum& s : out.strata)
     s.share = frame.empty() ? 0.0 : s.pixels / static_cast<double>(frame.size());
   for (std::size_t q = 0; q < probes.size(); ++q)
@@ -110,7 +137,7 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
     const RayRecord& r = frame[static_cast<std::size_t>(probes[q])];
     // Per channel, in double: colorError2's float would round a frame's sum.
     const double e = (255.0 * (r.color - converged[q].color)).squaredNorm() / 3.0;
-    SettingsStratum& s = out.strata[stratumOf(r)];
+    SettingsStratum& s = out.strata[strata[static_cast<std::size_t>(probes[q])]];
     s.count += 1;
     s.sum += e;
     s.sum2 += e * e;

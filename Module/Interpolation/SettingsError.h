@@ -6,11 +6,16 @@
 // cannot be met by re-tracing with them.
 //
 //  - Strata. The error lies mostly where the frame sampled a pixel by more than its centre ray
-//    (an edge: the samples approximate the pixel's box average), less where the adaptive grid
-//    interpolated the centre ray, least where one traced ray's footprint filter did. Each of the
-//    three is probed apart (its pixels with the lowest hashes), and the frame's error is their
-//    means weighted by their shares of the frame: unbiased, with far less variance than one
-//    uniform sample of as many probes, since the rare large errors sit in the smallest stratum.
+//    (an edge: the samples approximate the pixel's box average), and on the edges it did not
+//    sample (a pixel whose edge neighbour ends otherwise: another object, image or ending), less
+//    where the adaptive grid interpolated the centre ray, least where one traced ray's footprint
+//    filter did. Each of the four is probed apart (its pixels with the lowest hashes), and the
+//    frame's error is their means weighted by their shares of the frame: unbiased, with far less
+//    variance than one uniform sample of as many probes, since the rare large errors sit in the
+//    smallest strata. Without the edge stratum a rendering that samples no pixel (the fast
+//    preset's) was estimated anywhere from 27.5 to 51.5 dB (10th to 90th percentile of 400 draws
+//    of the probes) on the Kerr disk, where it scores 32.9 dB: its unsampled edges, 7 % of the
+//    pixels, hold 97 % of its error. With it, 30.7 to 36.4 dB.
 //  - Bound. The estimate raised by two of its standard errors (the strata's sample variances
 //    over their probe counts, weighted by their squared shares).
 //  - Pooling. A frame between two keys is traced with their settings on a view between theirs:
@@ -44,14 +49,16 @@
 namespace asrt
 {
 /// Probes drawn in each stratum of a frame (all of it where a stratum is smaller); the sampled
-/// pixels, which hold most of the error and its rare large values, get twice as many.
+/// pixels and the unsampled edges, which hold most of the error and its rare large values, get
+/// twice as many.
 constexpr std::size_t kSettingsProbesPerStratum = 20;
 /// The hash seed of the probes a movie or a filter draws: the same frame, the same probes.
 constexpr std::uint64_t kSettingsProbeSeed = 0x5851f42d4c957f2dULL;
 
 /// The strata of a frame's pixels: sampled by more than the centre ray; centre interpolated by
-/// the adaptive grid; one traced ray.
-constexpr int kSettingsStrata = 3;
+/// the adaptive grid; one traced ray; an edge not sampled (one ray, traced or interpolated, whose
+/// edge neighbour in the frame ends otherwise: object, image order or termination).
+constexpr int kSettingsStrata = 4;
 
 /// One stratum's probes: its share of the frame's pixels, and the sums of its probes' squared
 /// errors per channel.
@@ -77,10 +84,15 @@ struct SettingsError
   double psnr() const;
 };
 
-/// The probes of a whole frame's records (row-major, one per pixel): per stratum (sampled by
-/// more than the centre ray; centre interpolated by the grid; one traced ray), `perStratum` of
-/// its pixels (twice as many sampled ones), those whose indices hash lowest under `seed`, in
-/// increasing order.
+/// The stratum of each of a whole frame's records (row-major, one per pixel, as its pixels'
+/// coordinates say): 0 sampled by more than the centre ray; 1 centre interpolated by the grid;
+/// 2 one traced ray; 3 an edge not sampled.
+ASRTINTERPOLATION_EXPORT std::vector<std::uint8_t> settingsStrata(
+  const std::vector<RayRecord>& frame);
+
+/// The probes of a whole frame's records (row-major, one per pixel): per stratum
+/// (settingsStrata), `perStratum` of its pixels (twice as many sampled ones and edges), those
+/// whose indices hash lowest under `seed`, in increasing order.
 ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> settingsProbes(
   const std::vector<RayRecord>& frame, std::size_t perStratum = kSettingsProbesPerStratum,
   std::uint64_t seed = kSettingsProbeSeed);
