@@ -106,9 +106,13 @@ std::vector<std::int32_t> settingsProbes(const std::vector<RayRecord>& frame,
   for (int s = 0; s < kStrata; ++s)
   {
     // probePixels ranks indices into the stratum by a fixed hash: the same frame, the same probes.
-    const bool twice = s == kSampledStratum || s == kEdgeStratum;
-    const std::vector<std::int32_t> picked = probePixels(
-      members[s].size(), 0.0, twice ? 2 * perStratum : perStratum, seed + static_cast<unsigned>(s));
+    // Where the error lies (the strata's order): the sampled pixels twice, the unsampled edges
+    // once, the grid's and the traced single rays, which hold little, half each.
+    const std::size_t count = s == kSampledStratum ? 2 * perStratum
+                              : s == kEdgeStratum  ? perStratum
+                                                   : (perStratum + 1) / 2;
+    const std::vector<std::int32_t> picked =
+      probePixels(members[s].size(), 0.0, count, seed + static_cast<unsigned>(s));
     for (std::int32_t k : picked)
       probes.push_back(members[s][static_cast<std::size_t>(k)]);
   }

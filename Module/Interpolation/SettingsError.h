@@ -15,7 +15,8 @@
 //    smallest strata. Without the edge stratum a rendering that samples no pixel (the fast
 //    preset's) was estimated anywhere from 27.5 to 51.5 dB (10th to 90th percentile of 400 draws
 //    of the probes) on the Kerr disk, where it scores 32.9 dB: its unsampled edges, 7 % of the
-//    pixels, hold 97 % of its error. With it, 30.7 to 36.4 dB.
+//    pixels, hold 97 % of its error. With it, 30.9 to 36.1 dB, for as many probes (the single
+//    rays off the edges, which hold little, probed half as densely).
 //  - Bound. The estimate raised by two of its standard errors (the strata's sample variances
 //    over their probe counts, weighted by their squared shares).
 //  - Pooling. A frame between two keys is traced with their settings on a view between theirs:
@@ -29,10 +30,9 @@
 //    though above 36 dB a target is judged against 8 × 8 (convergedSideFor): the errors are
 //    heavy-tailed (on Fig. 1's orbit with the accurate preset, pixels off by more than 600
 //    levels², 0.1 % of the frame, hold a fifth to a quarter of its error), so 80 probes a key
-//    mostly miss
-//    them and then underestimate, and 4 × 4's own error is the margin that covers it. At
-//    --quality 40 on that orbit, 31 frames against 8 × 8: probes against 4 × 4, every frame
-//    39.7 dB or more; against 8 × 8, one frame 38.4 dB, its keys' bound 43 dB where they
+//    mostly miss them and then underestimate, and 4 × 4's own error is the margin that covers
+//    it. At --quality 40 on that orbit, 31 frames against 8 × 8: probes against 4 × 4, every
+//    frame 39.7 dB or more; against 8 × 8, one frame 38.4 dB, its keys' bound 43 dB where they
 //    score 41.
 //  - Units. Mean squared error per channel in levels² of 255, as psnrOfMse takes it.
 #ifndef asrt_SettingsError_h
@@ -49,8 +49,9 @@
 namespace asrt
 {
 /// Probes drawn in each stratum of a frame (all of it where a stratum is smaller); the sampled
-/// pixels and the unsampled edges, which hold most of the error and its rare large values, get
-/// twice as many.
+/// pixels, which hold most of the error and its rare large values, get twice as many, the grid's
+/// and the traced single rays off the edges, which hold little, half as many: 80 a frame, as
+/// many as before the unsampled edges were a stratum of their own.
 constexpr std::size_t kSettingsProbesPerStratum = 20;
 /// The hash seed of the probes a movie or a filter draws: the same frame, the same probes.
 constexpr std::uint64_t kSettingsProbeSeed = 0x5851f42d4c957f2dULL;
@@ -91,7 +92,8 @@ ASRTINTERPOLATION_EXPORT std::vector<std::uint8_t> settingsStrata(
   const std::vector<RayRecord>& frame);
 
 /// The probes of a whole frame's records (row-major, one per pixel): per stratum
-/// (settingsStrata), `perStratum` of its pixels (twice as many sampled ones and edges), those
+/// (settingsStrata), `perStratum` of its pixels (twice as many sampled ones, half as many
+/// single rays off the edges), those
 /// whose indices hash lowest under `seed`, in increasing order.
 ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> settingsProbes(
   const std::vector<RayRecord>& frame, std::size_t perStratum = kSettingsProbesPerStratum,
