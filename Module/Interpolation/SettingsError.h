@@ -93,8 +93,7 @@ ASRTINTERPOLATION_EXPORT std::vector<std::uint8_t> settingsStrata(
 
 /// The probes of a whole frame's records (row-major, one per pixel): per stratum
 /// (settingsStrata), `perStratum` of its pixels (twice as many sampled ones, half as many
-/// single rays off the edges), those
-/// whose indices hash lowest under `seed`, in increasing order.
+/// single rays off the edges), those whose indices hash lowest under `seed`, in increasing order.
 ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> settingsProbes(
   const std::vector<RayRecord>& frame, std::size_t perStratum = kSettingsProbesPerStratum,
   std::uint64_t seed = kSettingsProbeSeed);

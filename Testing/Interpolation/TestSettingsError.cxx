@@ -193,8 +193,8 @@ TEST_F(SettingsErrorRamp, UnsampledEdgesAreAStratumOfTheirOwn)
               psnrOfMse(brute), Draws, psnrOfMse(mean), std::sqrt(variance), psnrOfMse(uniformMean),
               std::sqrt(uniformVariance));
   EXPECT_NEAR(mean, brute, 0.2 * brute);
-  // Without the edge stratum the fast frame's probes fell into two strata of pixels spread over
-  // the frame as uniform ones are, and were no steadier.
+  // Without the edge stratum the fast frame's probes would fall into two strata of pixels spread
+  // over the frame as uniform ones are.
   EXPECT_LT(variance, 0.5 * uniformVariance);
 }
 
