@@ -169,20 +169,37 @@ std::vector<std::pair<int, int>> edgeNeighbours(const std::vector<std::pair<int,
   return halo;
 }
 
-std::vector<std::pair<int, int>> neighboursToTrace(const std::vector<std::pair<int, int>>& pixels,
-                                                   int width, int height,
-                                                   const std::vector<JacobianSample>& border)
+namespace
+{
+/// The pixels of the border samples, sorted.
+std::vector<std::pair<int, int>> borderPixels(const std::vector<JacobianSample>& border)
 {
   std::vector<std::pair<int, int>> given;
   given.reserve(border.size());
   for (const JacobianSample& s : border)
     given.emplace_back(s.i, s.j);
   std::sort(given.begin(), given.end());
+  return given;
+}
+
+/// The edge neighbours of `pixels` not among `given` (sorted).
+std::vector<std::pair<int, int>> neighboursNotGiven(const std::vector<std::pair<int, int>>& pixels,
+                                                    int width, int height,
+                                                    const std::vector<std::pair<int, int>>& given)
+{
   std::vector<std::pair<int, int>> traced;
   for (const auto& n : edgeNeighbours(pixels, width, height))
     if (!std::binary_search(given.begin(), given.end(), n))
       traced.push_back(n);
   return traced;
+}
+}
+
+std::vector<std::pair<int, int>> neighboursToTrace(const std::vector<std::pair<int, int>>& pixels,
+                                                   int width, int height,
+                                                   const std::vector<JacobianSample>& border)
+{
+  return neighboursNotGiven(pixels, width, height, borderPixels(border));
 }
 
 std::vector<RayRecord> FrameTracer::tracePixels(const std::vector<std::pair<int, int>>& pixels,
@@ -205,28 +222,25 @@ std::vector<RayRecord> FrameTracer::tracePixelsBeside(
   const int width = this->Desc.camera.width, height = this->Desc.camera.height;
   std::vector<std::pair<int, int>> asked = pixels;
   std::sort(asked.begin(), asked.end());
-  std::vector<std::pair<int, int>> given;
-  given.reserve(border.size());
-  for (const JacobianSample& s : border)
+  const std::vector<std::pair<int, int>> given = borderPixels(border);
+  for (const auto& [i, j] : given)
   {
-    auto where = [&] { return "(" + std::to_string(s.i) + ", " + std::to_string(s.j) + ")"; };
-    if (s.i < 0 || s.i >= width || s.j < 0 || s.j >= height)
+    auto where = [&] { return "(" + std::to_string(i) + ", " + std::to_string(j) + ")"; };
+    if (i < 0 || i >= width || j < 0 || j >= height)
       throw InvalidParameter("tracing beside given neighbours: the border sample of pixel " +
                              where() + " lies outside the " + std::to_string(width) + " x " +
                              std::to_string(height) + " frame");
-    if (std::binary_search(asked.begin(), asked.end(), std::pair(s.i, s.j)))
+    if (std::binary_search(asked.begin(), asked.end(), std::pair(i, j)))
       throw InvalidParameter("tracing beside given neighbours: pixel " + where() +
                              " is both asked for and given as a border sample");
-    given.emplace_back(s.i, s.j);
   }
-  std::sort(given.begin(), given.end());
   if (std::adjacent_find(given.begin(), given.end()) != given.end())
     throw InvalidParameter("tracing beside given neighbours: a border sample is given twice");
   // The pixels' edge neighbours not given are traced too, as the halo rows of a band are: a
   // pixel's Jacobian and its anti-aliasing read its neighbours, so that with them (or with their
   // own rays given) a subset's records are the whole frame's records of those pixels, bit for bit.
   std::vector<std::pair<int, int>> all = pixels;
-  const std::vector<std::pair<int, int>> halo = neighboursToTrace(pixels, width, height, border);
+  const std::vector<std::pair<int, int>> halo = neighboursNotGiven(pixels, width, height, given);
   all.insert(all.end(), halo.begin(), halo.end());
   return this->traceKeeping(all, pixels.size(), progress, kept, border);
 }

@@ -65,6 +65,18 @@ protected:
       path.push_back({ From + H * k, &Keys[static_cast<std::size_t>(k)] });
     return path;
   }
+  /// The probes of `frame` drawn with `seed`, and their error against the converged picture at
+  /// the second key (KeyTruth: the frame must be of that view).
+  static std::pair<std::vector<std::int32_t>, SettingsError> drawnAgainstKeyTruth(
+    const std::vector<RayRecord>& frame, std::uint64_t seed)
+  {
+    std::vector<std::int32_t> probes = settingsProbes(frame, kSettingsProbesPerStratum, seed);
+    std::vector<RayRecord> truth;
+    for (std::int32_t p : probes)
+      truth.push_back(KeyTruth[static_cast<std::size_t>(p)]);
+    const SettingsError e = settingsError(frame, probes, truth);
+    return { std::move(probes), e };
+  }
   /// The settings' error of key k, measured with probes traced at the converged rendering.
   static SettingsError measured(int k)
   {
@@ -107,12 +119,7 @@ TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
   int bounded = 0;
   for (int d = 0; d < Draws; ++d)
   {
-    const std::vector<std::int32_t> probes =
-      settingsProbes(key, kSettingsProbesPerStratum, 1000 + 7 * d);
-    std::vector<RayRecord> at;
-    for (std::int32_t p : probes)
-      at.push_back(KeyTruth[static_cast<std::size_t>(p)]);
-    const SettingsError drawn = settingsError(key, probes, at);
+    const SettingsError drawn = drawnAgainstKeyTruth(key, 1000 + 7 * d).second;
     sum += drawn.mse();
     bounded += drawn.mseBound() >= brute;
   }
@@ -164,12 +171,8 @@ TEST_F(SettingsErrorRamp, UnsampledEdgesAreAStratumOfTheirOwn)
   double sum = 0, sum2 = 0, uniformSum = 0, uniformSum2 = 0;
   for (int d = 0; d < Draws; ++d)
   {
-    const std::vector<std::int32_t> probes =
-      settingsProbes(fast, kSettingsProbesPerStratum, 1000 + 7 * d);
-    std::vector<RayRecord> truth;
-    for (std::int32_t p : probes)
-      truth.push_back(KeyTruth[static_cast<std::size_t>(p)]);
-    const double m = settingsError(fast, probes, truth).mse();
+    const auto [probes, drawn] = drawnAgainstKeyTruth(fast, 1000 + 7 * d);
+    const double m = drawn.mse();
     sum += m;
     sum2 += m * m;
     // As many probes, uniformly over the frame (the lowest hashes of all its pixels).
