@@ -840,7 +840,10 @@ const MoviePlan& MovieMaker::plan()
     double kept = 0;
     for (std::size_t i = 0; i < m; ++i)
     {
-      if (stored[i])
+      // A frame of which no pixel was traced before cannot be served (every completion traces
+      // its probes at least): asking the store says so without interpolating it.
+      if (stored[i] ||
+          !this->Store->hasSubsetFrames(this->Frames[static_cast<std::size_t>(open[i])].identity))
         continue;
       MovieFrameReport dry;
       try

@@ -863,6 +863,21 @@ catch (...)
   storage::rethrowReadFailure(this->P->Limits);
 }
 
+bool RayStore::hasSubsetFrames(const SceneDescription& scene)
+try
+{
+  SceneDescription whole = scene;
+  whole.subset = PixelSubsetId();
+  const storage::SceneTexts texts = storage::sceneTexts(whole);
+  const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
+  this->P->requireSchema();
+  return storage::subsetFramesExist(this->P->conn(), texts, whole);
+}
+catch (...)
+{
+  storage::rethrowReadFailure(this->P->Limits);
+}
+
 void RayStore::storePicture(const PictureOrigin& origin, const FramePicture& picture)
 {
   const storage::SceneTexts texts =

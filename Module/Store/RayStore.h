@@ -361,6 +361,11 @@ public:
   /// since).
   std::optional<std::vector<std::int64_t>> interpolatedFrameKeys(const SceneDescription& scene,
                                                                  const std::string& recipe);
+  /// Whether the store holds a complete frame of some of the pixels of `scene` (the scene at its
+  /// parameters, with a "subset" naming the pixels; at any rendering): what a frame between keys
+  /// re-traced, or the probes a whole frame's own error was measured with. Where none is, nothing
+  /// of the frame was traced before.
+  bool hasSubsetFrames(const SceneDescription& scene);
 
   /// Stores `picture` of `origin`, replacing one of the same origin and format. A whole frame's
   /// goes when the frame is deleted; an interpolated frame's serves only while its frame is

@@ -493,5 +493,32 @@ std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const Sc
     keys.push_back(pg::getI64(r.get(), row, 0));
   return keys;
 }
+
+bool subsetFramesExist(PGconn* conn, const SceneTexts& texts, const SceneDescription& scene)
+{
+  // The parameters and the size narrow the rows to the frames of this view before any text is
+  // parsed; the texts, less what a subset frame adds (its pixels) and changes (the rendering it
+  // traces scattered pixels with), are then the same identity.
+  const Vec3& eye = scene.camera.position;
+  pg::Result r =
+    pg::Params()
+      .text(texts.frame)
+      .f64(scene.spacetime.mass)
+      .f64(scene.spacetime.spin)
+      .f64(scene.spacetime.charge)
+      .f64(eye.x())
+      .f64(eye.y())
+      .f64(eye.z())
+      .i32(scene.camera.width)
+      .i32(scene.camera.height)
+      .exec(conn,
+            "SELECT EXISTS (SELECT 1 FROM frames WHERE status = 'complete' AND mass = $2 AND "
+            "spin = $3 AND charge = $4 AND camera_x = $5 AND camera_y = $6 AND camera_z = $7 AND "
+            "width = $8 AND height = $9 AND strpos(effective_text, '\"subset\"') > 0 AND "
+            "effective_text::jsonb ? 'subset' AND (effective_text::jsonb - 'subset' - "
+            "'rendering') = ($1::jsonb - 'subset' - 'rendering'))",
+            "looking for the frame's pixel subsets failed");
+  return PQntuples(r.get()) == 1 && pg::getBool(r.get(), 0, 0);
+}
 }
 }

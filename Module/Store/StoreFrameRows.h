@@ -121,6 +121,9 @@ void recordInterpolatedKeys(PGconn* conn, const SceneTexts& texts, const std::st
 /// The keys recorded for the frame of `texts` and `recipe`, in order, if any.
 std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const SceneTexts& texts,
                                                           const std::string& recipe);
+/// Whether a complete frame of some of the pixels of `scene` (`texts` its texts) is stored: its
+/// identity but for the subset and the rendering (RayStore::hasSubsetFrames).
+bool subsetFramesExist(PGconn* conn, const SceneTexts& texts, const SceneDescription& scene);
 }
 }
 

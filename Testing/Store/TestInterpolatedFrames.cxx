@@ -100,3 +100,43 @@ TEST(InterpolatedFrames, AVersionSevenStoreGainsTheTable)
   store.recordInterpolatedFrame(scene(0.2), "quality=35", { a });
   EXPECT_EQ(store.interpolatedFrameKeys(scene(0.2), "quality=35"), (Keys{ { a } }));
 }
+
+TEST(InterpolatedFrames, SubsetFramesAreFoundByTheFramesIdentityAtAnyRendering)
+{
+  RayStore store(freshDatabase());
+  store.migrate();
+  auto subsetOf = [](asrt::SceneDescription d)
+  {
+    d.subset = asrt::pixelSubsetId({ { 1, 2 }, { 3, 4 }, { 5, 0 } });
+    return d;
+  };
+  EXPECT_FALSE(store.hasSubsetFrames(scene(0.2)));
+  // A frame stored whole is no subset of itself.
+  store.writeFrame(scene(0.2), "whole", syntheticRecords(1));
+  EXPECT_FALSE(store.hasSubsetFrames(scene(0.2)));
+  // Three pixels of the frame at 0.4, traced with another rendering than the frame's.
+  asrt::SceneDescription scattered = subsetOf(scene(0.4));
+  scattered.rendering.mode = asrt::AntialiasMode::Filter;
+  store.writeFrame(scattered, "subset", syntheticRecords(2, 3));
+  EXPECT_TRUE(store.hasSubsetFrames(scene(0.4)));
+  EXPECT_TRUE(store.hasSubsetFrames(subsetOf(scene(0.4)))); // its own subset named: the same frame
+  EXPECT_TRUE(store.hasSubsetFrames(scattered));
+  // Another mass, eye, size or tolerance: another frame.
+  EXPECT_FALSE(store.hasSubsetFrames(scene(0.2)));
+  EXPECT_FALSE(store.hasSubsetFrames(scene(0.5)));
+  asrt::SceneDescription moved = scene(0.4);
+  moved.camera.position.x() += 1e-9;
+  EXPECT_FALSE(store.hasSubsetFrames(moved));
+  EXPECT_FALSE(store.hasSubsetFrames(syntheticScene("interpolated", 0.4, 7, 5)));
+  // The name is no part of a frame's identity: findFrame finds the subset under another too.
+  asrt::SceneDescription renamed = scattered;
+  renamed.name = "another";
+  ASSERT_TRUE(store.findFrame(renamed).has_value());
+  EXPECT_TRUE(store.hasSubsetFrames(syntheticScene("another", 0.4)));
+  asrt::SceneDescription nearer = scene(0.4);
+  nearer.tracing.escapeRadius = 500;
+  EXPECT_FALSE(store.hasSubsetFrames(nearer));
+  // A subset frame still being written is visible to nobody.
+  store.beginTiledFrame(subsetOf(scene(0.6)), "being written", 2);
+  EXPECT_FALSE(store.hasSubsetFrames(scene(0.6)));
+}
