@@ -7,7 +7,6 @@
 #include "RecordHashing.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -409,15 +408,15 @@ struct PlacedProbe
   double error = 0;
 };
 
-/// Per way of predicting m, what re-tracing the first j of its pixels in the order of re-tracing
-/// leaves of its error, for every j from 0 to all of them: the larger of its calibrated
-/// estimates' sum and its probes' bound times its untraced pixels. A probe placed at or after
-/// the j-th pixel of its way (PlacedProbe::at counts the way's pixels before it) stands for those
-/// pixels; where fewer than kTailProbes lie there, the next ones before join them (higher
-/// estimates: an over- rather than an under-statement).
-std::array<std::vector<double>, kPathMethodCount> remainingErrorByWay(
-  const std::array<std::vector<std::int32_t>, kPathMethodCount>& order,
-  const std::vector<double>& calibrated, std::vector<PlacedProbe> probes)
+/// What re-tracing the first k of `rest` (the order of re-tracing) leaves, for every k: per way of
+/// predicting, the larger of its calibrated estimates' sum and its probes' bound times its
+/// untraced pixels, summed. The probes placed at or after k stand for those pixels; where fewer
+/// than kTailProbes lie there, the next ones before k join them (higher estimates: an over-
+/// rather than an under-statement).
+std::vector<double> remainingError(const std::vector<std::int32_t>& rest,
+                                   const std::vector<double>& calibrated,
+                                   const std::vector<std::uint8_t>& methods,
+                                   std::vector<PlacedProbe> probes)
 {
   constexpr int M = kPathMethodCount;
   std::stable_sort(probes.begin(), probes.end(),
@@ -435,124 +434,35 @@ std::array<std::vector<double>, kPathMethodCount> remainingErrorByWay(
     if (lowest[q.method].count < kTailProbes)
       lowest[q.method].add(q.error);
   }
-  std::array<std::vector<double>, M> remaining;
+  double missed[M];
   for (int m = 0; m < M; ++m)
+    missed[m] = erring[m].count > 0   ? erring[m].sum / erring[m].count
+                : erringAll.count > 0 ? erringAll.sum / erringAll.count
+                                      : 3.0;
+  std::vector<double> remaining(rest.size() + 1, 0.0);
+  double count[M] = {}, left[M] = {};
+  ProbeSample tail[M];
+  std::size_t next = 0;
+  for (std::size_t k = rest.size() + 1; k-- > 0;)
   {
-    const double missed = erring[m].count > 0   ? erring[m].sum / erring[m].count
-                          : erringAll.count > 0 ? erringAll.sum / erringAll.count
-                                                : 3.0;
-    const std::vector<std::int32_t>& way = order[static_cast<std::size_t>(m)];
-    std::vector<double>& left = remaining[static_cast<std::size_t>(m)];
-    left.assign(way.size() + 1, 0.0);
-    double count = 0, sum = 0;
-    ProbeSample tail;
-    std::size_t next = 0;
-    for (std::size_t j = way.size(); j-- > 0;)
+    if (k < rest.size())
     {
-      count += 1;
-      sum += calibrated[static_cast<std::size_t>(way[j])];
-      for (; next < probes.size() && probes[next].at >= j; ++next)
-        if (probes[next].method == m)
-          tail.add(probes[next].error);
-      const ProbeSample& sample = tail.count >= kTailProbes ? tail : lowest[m];
-      left[j] = std::max(sum, count * sample.meanBound(missed));
+      const std::size_t p = static_cast<std::size_t>(rest[k]);
+      count[methods[p]] += 1;
+      left[methods[p]] += calibrated[p];
     }
-  }
-  return remaining;
-}
-
-/// How many of each way's pixels to re-trace, first in its order, so that what they leave
-/// (`left`, remainingErrorByWay) sums to at most `allowed`: the first k of the one order of
-/// re-tracing across the ways, unless that re-traces more than kOrderOverWays times as many as,
-/// for a multiplier λ, each way's own best trade of what it leaves against λ per pixel, λ the
-/// largest that still meets `allowed` (a Lagrangian relaxation). The one order re-traces other
-/// ways' pixels beyond what their bounds ask, a margin for a bound that came out low; where a way
-/// whose probes alone hold its bound up sits low in the order, though, it would re-trace nearly
-/// every pixel of the other ways estimated above it, and that way is re-traced on its own.
-/// How many times the pixels each way's own trade chooses the one order of re-tracing may choose
-/// before each way is re-traced on its own (pixelsToRetrace). Fig. 1's orbit at 35 dB, 200 × 200,
-/// 61 frames after 31: the frames whose one order re-traced two thirds of their pixels chose 5.9
-/// and 7.6 times as many as each way on its own would, the others at most 2.3 times; always
-/// choosing the fewer left one of the path bench's four frames of the orbit 1.2 dB under its
-/// target against the converged picture, where the one order's margin had kept it above.
-constexpr double kOrderOverWays = 3.0;
-
-std::array<std::size_t, kPathMethodCount> pixelsToRetrace(
-  const std::vector<std::int32_t>& rest, const std::vector<std::uint8_t>& methods,
-  const std::array<std::vector<double>, kPathMethodCount>& left, double allowed)
-{
-  constexpr int M = kPathMethodCount;
-  auto total = [&](const std::array<std::size_t, M>& j)
-  {
+    for (; next < probes.size() && probes[next].at >= k; ++next)
+      tail[probes[next].method].add(probes[next].error);
     double sum = 0;
     for (int m = 0; m < M; ++m)
-      sum += left[static_cast<std::size_t>(m)][j[static_cast<std::size_t>(m)]];
-    return sum;
-  };
-  // The one order: the first k of `rest`.
-  std::array<std::size_t, M> byOrder{};
-  for (std::size_t k = 0; k < rest.size() && !(total(byOrder) <= allowed); ++k)
-    ++byOrder[methods[static_cast<std::size_t>(rest[k])]];
-  // Each way's own trade at multiplier λ: the j that minimises left[j] + λ·j (the fewest pixels
-  // on ties). What they leave falls as λ falls; λ = 0 re-traces every pixel, which leaves 0.
-  // The minimiser lies on the lower convex hull of the points (j, left[j]): found once per way.
-  std::array<std::vector<std::size_t>, M> hull;
-  for (std::size_t m = 0; m < static_cast<std::size_t>(M); ++m)
-    for (std::size_t k = 0; k < left[m].size(); ++k)
-    {
-      std::vector<std::size_t>& h = hull[m];
-      auto below = [&](std::size_t a, std::size_t b) // b lies on or above the chord from a to k
+      if (count[m] > 0)
       {
-        return (left[m][b] - left[m][a]) * static_cast<double>(k - a) >=
-               (left[m][k] - left[m][a]) * static_cast<double>(b - a);
-      };
-      while (h.size() >= 2 && below(h[h.size() - 2], h.back()))
-        h.pop_back();
-      h.push_back(k);
-    }
-  auto atMultiplier = [&](double lambda)
-  {
-    std::array<std::size_t, M> j{};
-    for (std::size_t m = 0; m < static_cast<std::size_t>(M); ++m)
-    {
-      double best = std::numeric_limits<double>::infinity();
-      for (std::size_t k : hull[m])
-        if (left[m][k] + lambda * static_cast<double>(k) < best)
-        {
-          best = left[m][k] + lambda * static_cast<double>(k);
-          j[m] = k;
-        }
-    }
-    return j;
-  };
-  double low = 0, high = 1;
-  for (const std::vector<double>& l : left)
-    high += l.front();
-  std::array<std::size_t, M> byWay = atMultiplier(low);
-  for (int step = 0; step < 64; ++step)
-  {
-    const double lambda = 0.5 * (low + high);
-    const std::array<std::size_t, M> j = atMultiplier(lambda);
-    if (total(j) <= allowed)
-    {
-      low = lambda;
-      byWay = j;
-    }
-    else
-      high = lambda;
+        const ProbeSample& sample = tail[m].count >= kTailProbes ? tail[m] : lowest[m];
+        sum += std::max(left[m], count[m] * sample.meanBound(missed[m]));
+      }
+    remaining[k] = sum;
   }
-  auto pixels = [](const std::array<std::size_t, M>& j)
-  {
-    std::size_t sum = 0;
-    for (std::size_t x : j)
-      sum += x;
-    return sum;
-  };
-  return static_cast<double>(pixels(byOrder)) >
-               kOrderOverWays * static_cast<double>(pixels(byWay)) &&
-             total(byWay) <= allowed
-           ? byWay
-           : byOrder;
+  return remaining;
 }
 
 PathSurface surfaceOf(const RayRecord& r)
@@ -1071,49 +981,36 @@ PathCompletion completePathFrame(PathFrame& frame, const PixelTracer& tracePixel
             [](const std::pair<double, std::int32_t>& a, const std::pair<double, std::int32_t>& b)
             { return a.first != b.first ? a.first > b.first : a.second < b.second; });
   std::vector<std::int32_t> rest(order.size());
-  std::array<std::vector<std::int32_t>, kPathMethodCount> byWay;
   for (std::size_t k = 0; k < order.size(); ++k)
-  {
     rest[k] = order[k].second;
-    byWay[methods[static_cast<std::size_t>(rest[k])]].push_back(rest[k]);
-  }
-  // What re-tracing the first j of a way's pixels leaves is bounded twice: by the calibrated
-  // estimates, and by the probes' own errors (each probe stands for the untraced pixels about its
-  // place in the way's order), with a confidence margin, so that a sample that happened to miss a
-  // way's rare large errors does not pass for a clean one.
+  // What re-tracing the first k of `rest` leaves is bounded twice, per way of predicting: by the
+  // calibrated estimates, and by the probes' own errors (each probe stands for the untraced pixels
+  // about its place in the order), with a confidence margin, so that a sample that happened to
+  // miss a way's rare large errors does not pass for a clean one.
   std::vector<PlacedProbe> placed;
   for (std::size_t q = 0; q < probes.size(); ++q)
     if (probeError[q] >= 0)
-    {
-      const std::uint8_t m = methods[static_cast<std::size_t>(probes[q])];
-      const std::vector<std::int32_t>& way = byWay[m];
       placed.push_back(
-        { static_cast<std::size_t>(std::lower_bound(way.begin(), way.end(), probes[q], worse) -
-                                   way.begin()),
-          m, probeError[q] });
-    }
-  const std::array<std::vector<double>, kPathMethodCount> left =
-    remainingErrorByWay(byWay, calibrated, placed);
+        { static_cast<std::size_t>(std::lower_bound(rest.begin(), rest.end(), probes[q], worse) -
+                                   rest.begin()),
+          methods[static_cast<std::size_t>(probes[q])], probeError[q] });
+  const std::vector<double> left = remainingError(rest, calibrated, methods, placed);
+  auto remaining = [&](std::size_t k) { return left[k] / (3.0 * static_cast<double>(n)); };
   // The frame's error against the converged picture is what the prediction leaves against the
   // frame traced at t plus that frame's own error (the settings'). Where the settings leave the
   // prediction less than a quarter of the target's error, the prediction is held to that quarter:
   // re-tracing with these settings cannot lift the frame above them.
   const double targetMse = mseOfPsnr(targetDb);
   const double budget = std::max(targetMse - settingsMse, 0.25 * targetMse);
-  const double pixels3 = 3.0 * static_cast<double>(n);
-  const std::array<std::size_t, kPathMethodCount> count =
-    pixelsToRetrace(rest, methods, left, budget * pixels3);
-  double leftOver = 0;
-  std::vector<std::int32_t> chosen;
-  for (std::size_t m = 0; m < static_cast<std::size_t>(kPathMethodCount); ++m)
-  {
-    leftOver += left[m][count[m]];
-    chosen.insert(chosen.end(), byWay[m].begin(),
-                  byWay[m].begin() + static_cast<std::ptrdiff_t>(count[m]));
-  }
-  done.estimatedPsnr = psnrOfMse(leftOver / pixels3 + settingsMse);
-  std::sort(chosen.begin(), chosen.end(), worse); // re-traced in the order of re-tracing
-  trace(chosen);
+  std::size_t count = rest.size();
+  for (std::size_t k = 0; k <= rest.size(); ++k)
+    if (remaining(k) <= budget)
+    {
+      count = k;
+      break;
+    }
+  done.estimatedPsnr = psnrOfMse(remaining(count) + settingsMse);
+  trace(std::vector<std::int32_t>(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(count)));
   return done;
 }
 }

@@ -285,21 +285,15 @@ ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<Pr
                                               bool edgeBlendsRanked = false);
 
 /// Re-traces, with `tracer` (the scene at t, the frame's size), the pixels that must be re-traced,
-/// then, worst estimate first within each way of predicting, just enough more for the completed
-/// frame's estimated PSNR against the frame traced at t to reach `targetDb`. The estimate's scale
-/// is calibrated by probes, a fixed pseudo-random `probeFraction` of the pixels (at least 64)
-/// traced at t, topped up to at least 32 pixels of every way of predicting (cubic, quadratic,
-/// linear, edge blend, moved edge, moved surface): per way, as `scaling` says. What the chosen
-/// pixels leave untraced is bounded per way of predicting by the larger of its calibrated
-/// estimates and its probes placed at or below them in the way's order (at least 16): their mean
-/// error plus two standard errors, with one more probe of the way's typical error counted in,
-/// since probes that all came out exact show only that errors are rare. How many of each way's
-/// pixels are chosen is the fewest found for the bounds to sum within the target: the first of
-/// one order across the ways (by calibrated estimate), or each way's own trade of its bound
-/// against its pixels, whichever chooses fewer. A way whose probes alone hold its bound up (an
-/// error its estimates missed, placed low in the order) is then re-traced on its own, not with
-/// every pixel of the other ways estimated above it. The estimated PSNR is infinite only when
-/// nothing predicted is left. Re-traced
+/// then, worst estimate first, just enough more for the completed frame's estimated PSNR against
+/// the frame traced at t to reach `targetDb`. The estimate's scale is calibrated by probes, a
+/// fixed pseudo-random `probeFraction` of the pixels (at least 64) traced at t, topped up to at
+/// least 32 pixels of every way of predicting (cubic, quadratic, linear, edge blend, moved edge,
+/// moved surface): per way, as `scaling` says. What the chosen pixels leave untraced is bounded per
+/// way of predicting by the larger of its calibrated estimates and its probes placed at or below
+/// them in the order (at least 16): their mean error plus two standard errors, with one more probe
+/// of the way's typical error counted in, since probes that all came out exact show only that
+/// errors are rare. The estimated PSNR is infinite only when nothing predicted is left. Re-traced
 /// records are the full frame's, bit for bit (FrameTracer::tracePixels). Where a pixel traced at t
 /// (a must-retrace pixel, a probe, or one traced for the reason that follows) shows another surface
 /// than its own prediction and than the prediction of a neighbour (8-neighbours), and neither inner

@@ -597,67 +597,6 @@ TEST(PathInterpolationMovedEdges, PixelsShowingAnotherSurfaceRankAboveTheOtherMo
   }
 }
 
-// A frame of two ways of predicting, made up so that each pixel's true colour is known: 18 000
-// cubic pixels off by a level or two, as estimated, and 2 000 quadratic ones estimated exact of
-// which every 8th is off by about 30 000 levels² (a texture edge that both orders place alike).
-// Only the quadratic way's probes hold the bound up, and they sit at the end of the order of
-// re-tracing, below every cubic pixel: completing the frame re-traces the quadratic pixels, not the
-// cubic ones estimated above them, and still meets its target against the true colours.
-TEST(PathCompletion, AWayWhoseProbesAloneHoldTheBoundUpIsReTracedOnItsOwn)
-{
-  constexpr int w = 200, h = 100, cubic = 18000;
-  constexpr double target = 35.0;
-  PathFrame frame;
-  frame.width = w;
-  frame.height = h;
-  frame.t = 0.5;
-  std::vector<RayRecord> truth(w * h);
-  for (int p = 0; p < w * h; ++p)
-  {
-    RayRecord r;
-    r.i = p % w;
-    r.j = p / w;
-    r.objectId = 1;
-    r.termination = Termination::HitObject;
-    r.color = Color(0.5, 0.5, 0.5);
-    frame.records.push_back(r);
-    const bool isCubic = p < cubic;
-    frame.method.push_back(
-      static_cast<std::uint8_t>(isCubic ? PathMethod::Cubic : PathMethod::Quadratic));
-    frame.estimate.push_back(isCubic ? 0.26f * static_cast<float>((1 + p % 5) * (1 + p % 5))
-                                     : 0.0f);
-    truth[static_cast<std::size_t>(p)] = r;
-    if (isCubic)
-      truth[static_cast<std::size_t>(p)].color.x() += 0.002 * (1 + p % 5);
-    else if (p % 8 == 0)
-      truth[static_cast<std::size_t>(p)].color = Color(0.5 + 0.68, 0.5, 0.5);
-  }
-  const std::vector<std::uint8_t> methods = frame.method;
-  const PixelTracer tracer =
-    [&](const std::vector<std::pair<int, int>>& pixels, const std::vector<JacobianSample>&)
-  {
-    TracedPixels out;
-    for (const auto& [i, j] : pixels)
-      out.records.push_back(truth[static_cast<std::size_t>(j * w + i)]);
-    out.rays = static_cast<double>(pixels.size());
-    return out;
-  };
-  const PathCompletion done = completePathFrame(frame, tracer, target);
-  std::size_t cubicTraced = 0, quadraticTraced = 0;
-  for (std::size_t p = 0; p < frame.method.size(); ++p)
-    if (frame.method[p] == static_cast<std::uint8_t>(PathMethod::Retraced))
-      ++(methods[p] == static_cast<std::uint8_t>(PathMethod::Cubic) ? cubicTraced
-                                                                    : quadraticTraced);
-  std::printf("[ path ] one way holding the bound up: %zu cubic and %zu quadratic pixels "
-              "re-traced (%zu probes), estimated %.1f dB, %.1f dB against the truth\n",
-              cubicTraced, quadraticTraced, done.probes, done.estimatedPsnr,
-              psnrOf(frame.records, truth));
-  EXPECT_LE(cubicTraced, done.probes); // the cubic pixels traced are probes
-  EXPECT_GT(quadraticTraced, std::size_t{ 1000 });
-  EXPECT_GE(done.estimatedPsnr, target);
-  EXPECT_GE(psnrOf(frame.records, truth), target);
-}
-
 // The whole mass ramp with key frames a quarter of it apart, where the orders of prediction
 // disagree little while the texture under a pixel changes a lot between keys: every frame between
 // them, completed to a target, meets it within 1 dB against the frame the test traces there, and
