@@ -866,12 +866,10 @@ catch (...)
 bool RayStore::hasSubsetFrames(const SceneDescription& scene)
 try
 {
-  SceneDescription whole = scene;
-  whole.subset = PixelSubsetId();
-  const storage::SceneTexts texts = storage::sceneTexts(whole);
+  const storage::SceneTexts texts = storage::sceneTexts(scene);
   const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
   this->P->requireSchema();
-  return storage::subsetFramesExist(this->P->conn(), texts, whole);
+  return storage::subsetFramesExist(this->P->conn(), texts, scene);
 }
 catch (...)
 {

@@ -122,7 +122,8 @@ void recordInterpolatedKeys(PGconn* conn, const SceneTexts& texts, const std::st
 std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const SceneTexts& texts,
                                                           const std::string& recipe);
 /// Whether a complete frame of some of the pixels of `scene` (`texts` its texts) is stored: its
-/// identity but for the subset and the rendering (RayStore::hasSubsetFrames).
+/// identity but for the subset and the rendering, which both sides leave out (so `scene` may name
+/// a subset itself; RayStore::hasSubsetFrames).
 bool subsetFramesExist(PGconn* conn, const SceneTexts& texts, const SceneDescription& scene);
 }
 }
