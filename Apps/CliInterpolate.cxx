@@ -82,7 +82,9 @@ Options:
                         enough others for the frame to reach DB against its converged picture
                         (4x4 samples a pixel); the key frames' own error against theirs is
                         measured first by a few probe pixels traced converged, and shown as
-                        "settings"
+                        "settings"; where they fall short of DB, the pixels that hold their
+                        error (the sampled edges first) are traced with the converged
+                        rendering ("converged%")
   --against-traced      with --quality: hold the target against the frame traced at each
                         frame's parameters with the key frames' settings instead
   --exact               with splats: re-trace the pixels the matching cannot vouch for (holes,
@@ -256,6 +258,17 @@ FrameAt pathFrames(vtkGeodesicPathInterpolator* path, bool target)
                       : std::numeric_limits<double>::infinity());
       line += text;
     }
+    if (target)
+    {
+      int dims[3];
+      frame->GetDimensions(dims);
+      const double pixels = static_cast<double>(dims[0]) * dims[1];
+      const double converged = frame->GetFieldData()->GetArray("ConvergedPixels")
+                                 ? fieldValue(frame, "ConvergedPixels")
+                                 : 0.0;
+      std::snprintf(text, sizeof text, " %9.1f", pixels > 0 ? 100 * converged / pixels : 0.0);
+      line += text;
+    }
     return frame;
   };
 }
@@ -418,7 +431,7 @@ int runInterpolate(const std::vector<std::string>& args)
     for (int m = 0; m < kPathMethodCount; ++m)
       std::printf(" %8s%%", toString(static_cast<PathMethod>(m)));
     if (quality > 0.0)
-      std::printf(" %9s %9s", "est. PSNR", "settings");
+      std::printf(" %9s %9s %9s", "est. PSNR", "settings", "converged%");
   }
   else
   {

@@ -368,6 +368,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkImageData* image = vtkImageData::GetData(outputVector, 0);
   this->LastRetracedCount = 0;
+  this->LastConvergedCount = 0;
   this->LastMustRetraceCount = 0;
   this->LastEstimatedPsnr = 0.0;
   this->LastSettingsPsnr = 0.0;
@@ -426,7 +427,8 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
                                              in.KeySettingsError(static_cast<std::size_t>(a + 1)))
                               : asrt::SettingsError{};
       this->LastSettingsPsnr = settings.psnr();
-      if (this->LastSettingsPsnr < this->QualityTarget)
+      const bool raise = this->HoldToConverged && this->RaiseRenderingForTarget;
+      if (this->LastSettingsPsnr < this->QualityTarget && !raise)
         vtkWarningMacro(<< "QualityTarget " << this->QualityTarget
                         << " dB is above what the key frames' settings reach against the "
                            "converged picture around t (their bound: "
@@ -440,9 +442,25 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
         atT.integrator.method = "auto"; // each key resolved "auto" for its own spacetime
       atT.rendering = asrt::scatteredPixelRendering(atT.rendering);
       const asrt::FrameTracer tracer(atT);
-      const asrt::PathCompletion done = asrt::completePathFrame(
-        f, tracer, this->QualityTarget, this->ProbeFraction, settings.mseBound());
+      asrt::PathCompletion done;
+      if (raise &&
+          settings.mseBound() > asrt::kRefineSettingsAbove * asrt::mseOfPsnr(this->QualityTarget))
+      {
+        // The rendering that judges the target (convergedSideFor): the refined pixels carry none
+        // of the error it measures.
+        asrt::SceneDescription convergedAtT = atT;
+        convergedAtT.rendering =
+          asrt::convergedRendering(asrt::convergedSideFor(this->QualityTarget));
+        const asrt::FrameTracer converged(convergedAtT);
+        done =
+          asrt::completePathFrame(f, asrt::pixelTracerOf(tracer), this->QualityTarget,
+                                  this->ProbeFraction, asrt::refinementFor(settings, converged));
+      }
+      else
+        done = asrt::completePathFrame(f, tracer, this->QualityTarget, this->ProbeFraction,
+                                       settings.mseBound());
       this->LastRetracedCount = static_cast<vtkIdType>(done.retraced);
+      this->LastConvergedCount = static_cast<vtkIdType>(done.refined);
       this->LastEstimatedPsnr = done.estimatedPsnr;
     }
     if (this->GetAbortExecute())
@@ -457,6 +475,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     vtkFieldData* fd = image->GetFieldData();
     asrt::addDoubleField(fd, "PathParameter", { s });
     asrt::addCountField(fd, "RetracedPixels", this->LastRetracedCount);
+    asrt::addCountField(fd, "ConvergedPixels", this->LastConvergedCount);
     if (this->QualityTarget > 0.0)
     {
       asrt::addDoubleField(fd, "EstimatedPsnr", { this->LastEstimatedPsnr });
@@ -481,11 +500,13 @@ void vtkGeodesicPathInterpolator::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfIntermediateFrames: " << this->NumberOfIntermediateFrames << "\n";
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
   os << indent << "HoldToConverged: " << this->HoldToConverged << "\n";
+  os << indent << "RaiseRenderingForTarget: " << this->RaiseRenderingForTarget << "\n";
   os << indent << "ProbeFraction: " << this->ProbeFraction << "\n";
   os << indent << "TextureDirectory: " << (this->TextureDirectory ? this->TextureDirectory : "")
      << "\n";
   os << indent << "PathParameterName: " << this->Impl->ParameterName << "\n";
   os << indent << "LastRetracedCount: " << this->LastRetracedCount << "\n";
+  os << indent << "LastConvergedCount: " << this->LastConvergedCount << "\n";
   os << indent << "LastMustRetraceCount: " << this->LastMustRetraceCount << "\n";
   os << indent << "LastEstimatedPsnr: " << this->LastEstimatedPsnr << "\n";
   os << indent << "LastSettingsPsnr: " << this->LastSettingsPsnr << "\n";

@@ -89,6 +89,16 @@ public:
   ///@}
 
   ///@{
+  /// With HoldToConverged: whether a target above what the key frames' settings reach around t
+  /// is met by tracing the pixels that hold their error (the sampled edges first, by the keys'
+  /// probes) with the converged rendering (on, the default; asrt::SettingsRefinement), or the
+  /// frame held to within about 1 dB of the keys' own bound (off, with a warning).
+  vtkSetMacro(RaiseRenderingForTarget, vtkTypeBool);
+  vtkGetMacro(RaiseRenderingForTarget, vtkTypeBool);
+  vtkBooleanMacro(RaiseRenderingForTarget, vtkTypeBool);
+  ///@}
+
+  ///@{
   /// The share of a frame's pixels traced to measure the estimate's scale (default 0.01, at least
   /// 64 pixels), in (0, 1].
   vtkSetMacro(ProbeFraction, double);
@@ -109,8 +119,10 @@ public:
   ///@{
   /// What the last RequestData did: pixels re-traced (probes included), pixels the keys could not
   /// vouch for, the estimated PSNR (0 without a target), and the bound on the inner keys'
-  /// own PSNR against their converged pictures (infinite without HoldToConverged or a target).
+  /// own PSNR against their converged pictures (infinite without HoldToConverged or a target);
+  /// the pixels traced with the converged rendering (RaiseRenderingForTarget).
   vtkGetMacro(LastRetracedCount, vtkIdType);
+  vtkGetMacro(LastConvergedCount, vtkIdType);
   vtkGetMacro(LastMustRetraceCount, vtkIdType);
   vtkGetMacro(LastEstimatedPsnr, double);
   vtkGetMacro(LastSettingsPsnr, double);
@@ -128,9 +140,11 @@ protected:
   int NumberOfIntermediateFrames = 8;
   double QualityTarget = 0.0;
   vtkTypeBool HoldToConverged = 1;
+  vtkTypeBool RaiseRenderingForTarget = 1;
   double ProbeFraction = 0.01;
   char* TextureDirectory = nullptr;
   vtkIdType LastRetracedCount = 0;
+  vtkIdType LastConvergedCount = 0;
   vtkIdType LastMustRetraceCount = 0;
   double LastEstimatedPsnr = 0.0;
   double LastSettingsPsnr = 0.0;

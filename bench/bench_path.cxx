@@ -249,6 +249,9 @@ struct PathScore
   double s = 0, tracedVsConverged = 0, mustBefore = 0, plainVsConverged = 0, plainVsTraced = 0,
          spearman = 0, settingsBound = 0;
   std::vector<double> share, doneVsConverged, doneVsTraced, estimated;
+  /// Per target: the share traced with the converged rendering (SettingsRefinement), and the
+  /// rays the completion integrated over those the frame traced at s took.
+  std::vector<double> convergedShare, raysOverTraced;
 };
 
 /// The settings' own error of a key at s (SettingsError.h): its probes traced converged.
@@ -284,6 +287,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   const SceneDescription atS = pathScene(path, r.s, keyRendering());
   const FrameTracer tracer(atS);
   const std::vector<std::uint8_t> traced = rgbOf(tracer.traceRows(0, kSide));
+  const double tracedRays = static_cast<double>(tracer.raysIntegrated());
   const AntialiasOptions converged = convergedRendering(kReferenceSide);
   const std::vector<std::uint8_t> reference =
     rgbOf(FrameTracer(pathScene(path, r.s, &converged)).traceRows(0, kSide));
@@ -315,7 +319,14 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   for (double target : targets)
   {
     PathFrame done = plain;
-    const PathCompletion c = completePathFrame(done, tracer, target, 0.01, held.mseBound());
+    // As vtkGeodesicPathInterpolator does by default (RaiseRenderingForTarget): where the keys'
+    // settings fall short of the target, the strata holding their error traced converged.
+    const AntialiasOptions judge = convergedRendering(convergedSideFor(target));
+    const FrameTracer convergedAtS(pathScene(path, r.s, &judge));
+    const PathCompletion c = completePathFrame(done, pixelTracerOf(tracer), target, 0.01,
+                                               refinementFor(held, convergedAtS));
+    r.convergedShare.push_back(c.refined / n);
+    r.raysOverTraced.push_back(c.raysTraced / tracedRays);
     const std::vector<std::uint8_t> doneRgb = rgbOf(done.records);
     r.share.push_back(c.retraced / n);
     r.doneVsConverged.push_back(psnrOf(doneRgb, reference));
@@ -346,9 +357,10 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               kKeyPreset.empty() ? "the scene's rendering"
                                  : ("the `" + kKeyPreset + "` preset's rendering").c_str());
   std::printf("| path | scene | h | traced vs converged | must re-trace without moved edges | "
-              "plain vs converged | plain vs traced | Spearman | T | settings | re-traced | vs "
-              "converged | below T − 1 | estimated | vs traced | time |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "plain vs converged | plain vs traced | Spearman | T | settings | re-traced | "
+              "converged | rays × traced | vs converged | below T − 1 | estimated | vs traced | "
+              "time |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const BenchPath& path : paths)
   {
     const double t0 = now();
@@ -373,7 +385,8 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
                    path.name.c_str(), path.parameter.c_str(), r.s, r.tracedVsConverged,
                    r.settingsBound, r.plainVsConverged, r.spearman);
       for (std::size_t t = 0; t < targets.size(); ++t)
-        std::fprintf(stderr, "; q%.0f %.1f %% %.1f dB (est. %.1f)", targets[t], 100 * r.share[t],
+        std::fprintf(stderr, "; q%.0f %.1f %% (%.1f %% converged, %.2f x rays) %.1f dB (est. %.1f)",
+                     targets[t], 100 * r.share[t], 100 * r.convergedShare[t], r.raysOverTraced[t],
                      r.doneVsConverged[t], r.estimated[t]);
       std::fprintf(stderr, " (%.0f s)\n", now() - t0);
     }
@@ -407,8 +420,8 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
         below += r.doneVsConverged[t] < targets[t] - 1.0;
       const bool first = t == 0;
       std::printf(
-        "| %s | %s | %s | %s | %s | %s | %s | %s | %.0f | %s | %s | %s | %d of %zu | %s | %s | %s "
-        "|\n",
+        "| %s | %s | %s | %s | %s | %s | %s | %s | %.0f | %s | %s | %s | %.2f | %s | %d of %zu | "
+        "%s | %s | %s |\n",
         first ? path.name.c_str() : "", first ? ("`" + path.scene + "`").c_str() : "",
         first ? spacing : "",
         first ? meanWorst([](const PathScore& r) { return r.tracedVsConverged; }, false).c_str()
@@ -420,6 +433,14 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
         first ? spearmanText : "", targets[t],
         meanWorst([](const PathScore& r) { return r.settingsBound; }, false).c_str(),
         meanWorst([t](const PathScore& r) { return r.share[t]; }, true).c_str(),
+        meanWorst([t](const PathScore& r) { return r.convergedShare[t]; }, true).c_str(),
+        [&]
+        {
+          double sum = 0;
+          for (const PathScore& r : scores)
+            sum += r.raysOverTraced[t];
+          return sum / static_cast<double>(scores.size());
+        }(),
         meanWorst([t](const PathScore& r) { return r.doneVsConverged[t]; }, false).c_str(), below,
         scores.size(), meanWorst([t](const PathScore& r) { return r.estimated[t]; }, false).c_str(),
         meanWorst([t](const PathScore& r) { return r.doneVsTraced[t]; }, false).c_str(),

@@ -110,6 +110,20 @@ struct PathSurface
   double winding = 0;
 };
 
+/// A record's surface: its object, termination and winding.
+inline PathSurface surfaceOf(const RayRecord& r)
+{
+  return { r.objectId, r.termination, r.winding };
+}
+
+/// Whether two pixels show the same surface the same way: the same object, the same termination
+/// and a winding continuous between them.
+inline bool sameSurface(const PathSurface& a, const PathSurface& b)
+{
+  return a.objectId == b.objectId && a.termination == b.termination &&
+         std::abs(a.winding - b.winding) < kWindingJump;
+}
+
 /// A frame at parameter t of a path.
 struct PathFrame
 {
@@ -242,6 +256,9 @@ struct PathCompletion
   std::size_t followed = 0;
   std::size_t retraced = 0; ///< pixels traced at t in all (the above, chosen ones and probes)
   std::size_t probes = 0;   ///< pixels traced to measure the estimate's scale
+  /// Pixels traced with the converged rendering where the keys' settings fell short of the
+  /// target (SettingsRefinement, SettingsError.h); some of them traced before with the keys'.
+  std::size_t refined = 0;
   /// Of the completed frame: against the converged picture, the error left untraced plus the
   /// settings' own (settingsMse); against the frame traced at t where that is 0.
   double estimatedPsnr = 0;
@@ -347,6 +364,18 @@ ASRTINTERPOLATION_EXPORT PixelTracer pixelTracerOf(const FrameTracer& tracer);
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
   PathFrame& frame, const PixelTracer& trace, double targetDb, double probeFraction = 0.01,
   double settingsMse = 0.0, EstimateScaling scaling = EstimateScaling::Ratio);
+
+struct SettingsRefinement; // SettingsError.h
+
+/// As above, held to the converged picture through `refinement.settings` (its bound the
+/// settingsMse above). Where that bound is above kRefineSettingsAbove of the target's error, which
+/// re-tracing with the keys' settings could not make up, the pixels of the strata holding it
+/// (strataToRefine, chosen on the frame once its must-retrace pixels and probes are traced) are
+/// traced with `refinement.converged` and carry none of it; the prediction is then held to the
+/// target less what the other strata leave.
+ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
+  PathFrame& frame, const PixelTracer& trace, double targetDb, double probeFraction,
+  const SettingsRefinement& refinement, EstimateScaling scaling = EstimateScaling::Ratio);
 }
 
 #endif

@@ -2,8 +2,10 @@
 
 #include "AsrtTypes.h"
 #include "ErrorEstimate.h"
+#include "FrameTracer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -17,6 +19,9 @@ constexpr int kStrata = kSettingsStrata;
 constexpr double kSettingsConfidence = 2.0;
 
 constexpr std::uint8_t kSampledStratum = 0, kEdgeStratum = 3;
+/// The hash seed of the pixels a partly refined stratum traces converged: another draw than the
+/// probes' (kSettingsProbeSeed), which measured the stratum's error.
+constexpr std::uint64_t kRefinedPixelSeed = 0x2545f4914f6cdd1dULL;
 
 /// Whether two neighbours' centre rays show alike: the same object, image order and termination.
 bool showAlike(const RayRecord& a, const RayRecord& b)
@@ -41,20 +46,28 @@ double SettingsError::mse() const
 
 double SettingsError::mseBound() const
 {
-  double variance = 0;
-  for (const SettingsStratum& s : this->strata)
+  return this->mseBoundWithout(RefinedStrata{});
+}
+
+double SettingsError::mseBoundWithout(const RefinedStrata& refined) const
+{
+  double mse = 0, variance = 0;
+  for (int k = 0; k < kStrata; ++k)
   {
-    if (s.share <= 0)
+    const SettingsStratum& s = this->strata[k];
+    if (s.share <= 0 || (refined.whole & (1u << k)))
       continue;
     if (s.count <= 0)
       return std::numeric_limits<double>::infinity(); // a stratum nobody probed
+    const double left = k == refined.partial ? 1.0 - refined.fraction : 1.0;
+    const double mean = s.sum / s.count;
+    mse += left * s.share * mean;
     if (s.count >= s.pixels)
       continue; // probed whole: its mean is exact
-    const double mean = s.sum / s.count;
     const double spread = std::max(0.0, s.sum2 / s.count - mean * mean);
-    variance += s.share * s.share * spread / s.count;
+    variance += left * left * s.share * s.share * spread / s.count;
   }
-  return this->mse() + kSettingsConfidence * std::sqrt(variance);
+  return mse + kSettingsConfidence * std::sqrt(variance);
 }
 
 std::size_t SettingsError::probes() const
@@ -182,5 +195,83 @@ SettingsError pooled(const SettingsError& a, const SettingsError& b)
   }
   out.rays = a.rays + b.rays;
   return out;
+}
+
+RefinedStrata strataToRefine(const SettingsError& e, double allowedMse)
+{
+  std::array<int, kStrata> order;
+  for (int k = 0; k < kStrata; ++k)
+    order[static_cast<std::size_t>(k)] = k;
+  auto mean = [&e](int k)
+  {
+    const SettingsStratum& s = e.strata[k];
+    return s.count > 0 ? s.sum / s.count : std::numeric_limits<double>::infinity();
+  };
+  // Worst first; ties (strata probed alike) in stratum order, so the choice is the probes'.
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return mean(a) > mean(b); });
+  RefinedStrata refined;
+  for (int k : order)
+  {
+    if (e.mseBoundWithout(refined) <= allowedMse)
+      break;
+    if (e.strata[k].share <= 0)
+      continue;
+    RefinedStrata whole = refined;
+    whole.whole |= 1u << k;
+    if (e.mseBoundWithout(whole) > allowedMse || e.strata[k].count <= 0)
+    {
+      refined = whole;
+      continue;
+    }
+    // Part of this stratum is enough: the least share, in thousandths, that brings the bound
+    // within (the bound falls as the share grows).
+    int lo = 0, hi = 1000; // the bound at hi/1000 is within, at lo/1000 it is not
+    while (hi - lo > 1)
+    {
+      const int mid = (lo + hi) / 2;
+      RefinedStrata part = refined;
+      part.partial = k;
+      part.fraction = mid / 1000.0;
+      (e.mseBoundWithout(part) <= allowedMse ? hi : lo) = mid;
+    }
+    if (hi == 1000)
+      refined = whole;
+    else
+    {
+      refined.partial = k;
+      refined.fraction = hi / 1000.0;
+    }
+    break;
+  }
+  return refined;
+}
+
+std::vector<std::int32_t> pixelsOfStrata(const std::vector<RayRecord>& frame,
+                                         const RefinedStrata& refined)
+{
+  const std::vector<std::uint8_t> strata = settingsStrata(frame);
+  std::vector<std::int32_t> pixels, partial;
+  for (std::size_t p = 0; p < frame.size(); ++p)
+    if (refined.whole & (1u << strata[p]))
+      pixels.push_back(static_cast<std::int32_t>(p));
+    else if (strata[p] == refined.partial)
+      partial.push_back(static_cast<std::int32_t>(p));
+  if (!partial.empty() && refined.fraction > 0)
+  {
+    for (std::int32_t k : probePixels(partial.size(), refined.fraction, 0, kRefinedPixelSeed))
+      pixels.push_back(partial[static_cast<std::size_t>(k)]);
+    std::sort(pixels.begin(), pixels.end());
+  }
+  return pixels;
+}
+
+SettingsRefinement refinementFor(const SettingsError& settings, const FrameTracer& converged)
+{
+  SettingsRefinement r;
+  r.settings = settings;
+  r.converged = pixelTracerOf(converged);
+  const int side = std::max(1, converged.description().rendering.supersample);
+  r.raysPerPixel = static_cast<double>(side) * side;
+  return r;
 }
 }

@@ -38,6 +38,7 @@
 #ifndef asrt_SettingsError_h
 #define asrt_SettingsError_h
 
+#include "Antialiasing.h"
 #include "PathInterpolation.h"
 #include "RayRecord.h"
 #include "asrtInterpolationModule.h"
@@ -48,6 +49,7 @@
 
 namespace asrt
 {
+class FrameTracer;
 /// Probes drawn in each stratum of a frame (all of it where a stratum is smaller); the sampled
 /// pixels, which hold most of the error and its rare large values, get twice as many, the grid's
 /// and the traced single rays off the edges, which hold little, half as many: 80 a frame, as
@@ -71,6 +73,15 @@ struct SettingsStratum
 };
 
 /// A frame's error against its converged picture, estimated from probes.
+/// The settings' strata a frame traces with the converged rendering: those of `whole` (bit s:
+/// stratum s) entirely, and of stratum `partial` (−1: none) the share `fraction` of its pixels.
+struct RefinedStrata
+{
+  unsigned whole = 0;
+  int partial = -1;
+  double fraction = 0;
+};
+
 struct SettingsError
 {
   SettingsStratum strata[kSettingsStrata];
@@ -83,6 +94,11 @@ struct SettingsError
   std::size_t probes() const;
   /// The bound's PSNR: what the settings are held to reach against the converged picture.
   double psnr() const;
+  /// The bound of what the strata leave where those in `refined` are traced with the converged
+  /// rendering, which leaves their pixels none of the error: a stratum traced whole counts
+  /// nothing, one traced in part (its pixels drawn by hash, independently of its probes) counts
+  /// the part left, 1 − fraction of its mean and of its standard error.
+  double mseBoundWithout(const RefinedStrata& refined) const;
 };
 
 /// The stratum of each of a whole frame's records (row-major, one per pixel, as its pixels'
@@ -113,6 +129,49 @@ ASRTINTERPOLATION_EXPORT SettingsError measureSettingsError(
 
 /// Two keys' probes together (Pooling above): the estimate for a frame between them.
 ASRTINTERPOLATION_EXPORT SettingsError pooled(const SettingsError& a, const SettingsError& b);
+
+/// Raising the rendering where the settings fall short. A target above what the keys' settings
+/// reach cannot be met by re-tracing with them, but the settings' error lies in a few strata (the
+/// sampled edges: a tenth of the pixels, most of the error): those pixels traced with the
+/// converged rendering carry none of it, and the frame can then reach the target. The strata are
+/// re-traced whole, worst probe mean first (the most error removed for each pixel traced, every
+/// pixel costing the converged rendering's rays), where the settings' bound is above
+/// kRefineSettingsAbove of the target's error, until the rest leave at most
+/// kRefinedSettingsShare of it, the other half left to the prediction.
+struct SettingsRefinement
+{
+  SettingsError settings; ///< the keys' error (pooled), by stratum
+  /// The frame at t traced with the converged rendering that judges the target
+  /// (convergedRendering(convergedSideFor(target))); its lists are given the border the keys'
+  /// settings' lists are (completePathFrame).
+  PixelTracer converged;
+  /// The rays it takes a pixel, by which completePathFrame weighs refining against re-tracing:
+  /// that rendering's n × n samples.
+  double raysPerPixel = static_cast<double>(kConvergedSide) * kConvergedSide;
+};
+
+/// The refinement of a frame at t for `targetDb`: the keys' `settings`, and `converged` tracing
+/// with convergedRendering(convergedSideFor(targetDb)) (which must outlive the result).
+ASRTINTERPOLATION_EXPORT SettingsRefinement refinementFor(const SettingsError& settings,
+                                                          const FrameTracer& converged);
+/// Where the settings' bound exceeds this share of the target's error, strata are re-traced
+/// converged: above it the prediction would be held to less than a quarter of the target.
+constexpr double kRefineSettingsAbove = 0.75;
+/// The share of the target's error the settings' strata left unrefined may keep.
+constexpr double kRefinedSettingsShare = 0.5;
+
+/// The strata to trace with the converged rendering for the settings' bound to fall to
+/// `allowedMse` or below: none where it is there already, else the strata by their probes' mean
+/// error, worst first (a stratum with pixels and no probe first of all, its error unknown), as
+/// many whole as it takes, the last of them only in the share it takes (to a thousandth, rounded
+/// up; whole where its error is unknown).
+ASRTINTERPOLATION_EXPORT RefinedStrata strataToRefine(const SettingsError& e, double allowedMse);
+
+/// The pixels (row-major indices) of a whole frame's records in the strata `refined` traces
+/// (settingsStrata): all of its whole strata, and of its partial one the share whose indices
+/// hash lowest (probePixels). In increasing order.
+ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> pixelsOfStrata(
+  const std::vector<RayRecord>& frame, const RefinedStrata& refined);
 }
 
 #endif

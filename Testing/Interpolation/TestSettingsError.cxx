@@ -102,6 +102,117 @@ TEST_F(SettingsErrorRamp, ProbingEveryPixelGivesTheFramesError)
   EXPECT_GT(brute, 0.0);
 }
 
+TEST_F(SettingsErrorRamp, WithoutItsRefinedStrataTheErrorIsTheOtherPixelsAlone)
+{
+  // Every pixel probed: the bound without some strata is the frame's error with those strata's
+  // pixels replaced by their converged records (which leave none), brute force.
+  const std::vector<RayRecord>& key = Keys[1];
+  const std::vector<std::int32_t> all = settingsProbes(key, 2 * key.size());
+  std::vector<RayRecord> probes;
+  for (std::int32_t p : all)
+    probes.push_back(KeyTruth[static_cast<std::size_t>(p)]);
+  const SettingsError e = settingsError(key, all, probes);
+  const std::vector<std::uint8_t> strata = settingsStrata(key);
+  for (unsigned mask = 0; mask < (1u << kSettingsStrata); ++mask)
+  {
+    std::vector<RayRecord> refined = key;
+    const std::vector<std::int32_t> pixels = pixelsOfStrata(key, RefinedStrata{ mask });
+    for (std::int32_t p : pixels)
+      refined[static_cast<std::size_t>(p)] = KeyTruth[static_cast<std::size_t>(p)];
+    const double brute = frameMse(refined, KeyTruth);
+    EXPECT_NEAR(e.mseBoundWithout(RefinedStrata{ mask }), brute, 1e-9 * frameMse(key, KeyTruth))
+      << mask;
+    std::size_t q = 0;
+    for (std::size_t p = 0; p < key.size(); ++p)
+      if (mask & (1u << strata[p]))
+      {
+        ASSERT_LT(q, pixels.size());
+        EXPECT_EQ(pixels[q++], static_cast<std::int32_t>(p));
+      }
+    EXPECT_EQ(q, pixels.size());
+  }
+  EXPECT_EQ(e.mseBoundWithout(RefinedStrata{ (1u << kSettingsStrata) - 1 }), 0.0);
+  // A stratum refined in part: about that share of its pixels, drawn across it, none of another.
+  for (int k = 0; k < kSettingsStrata; ++k)
+  {
+    const double size = static_cast<double>(std::count(strata.begin(), strata.end(), k));
+    for (double fraction : { 0.1, 0.5, 0.9 })
+    {
+      const std::vector<std::int32_t> part = pixelsOfStrata(key, RefinedStrata{ 0, k, fraction });
+      for (std::int32_t p : part)
+        EXPECT_EQ(strata[static_cast<std::size_t>(p)], k);
+      EXPECT_TRUE(std::is_sorted(part.begin(), part.end()));
+      EXPECT_NEAR(static_cast<double>(part.size()), fraction * size, 3.0 * std::sqrt(size) + 1.0)
+        << k << " " << fraction;
+    }
+  }
+}
+
+TEST(SettingsError, TheStrataToRefineAreTheWorstFirstAndNoMoreThanNeeded)
+{
+  // Four strata probed as a frame's are: means 40, 0.1, 2 and 100 levels², shares of a frame.
+  SettingsError e;
+  const double share[kSettingsStrata] = { 0.09, 0.45, 0.44, 0.02 };
+  const double mean[kSettingsStrata] = { 40.0, 0.1, 2.0, 100.0 };
+  for (int k = 0; k < kSettingsStrata; ++k)
+  {
+    SettingsStratum& s = e.strata[k];
+    s.share = share[k];
+    s.pixels = 1000 * share[k];
+    s.count = 20;
+    s.sum = 20 * mean[k];
+    s.sum2 = 20 * mean[k] * mean[k] * 1.5; // a spread: the bound lies above the mean
+  }
+  const double full = e.mseBound();
+  EXPECT_GT(full, e.mse());
+  auto touched = [](const RefinedStrata& r, int k)
+  { return (r.whole & (1u << k)) || (r.partial == k && r.fraction > 0); };
+  for (double allowed : { 0.0, 0.05, 0.5, 1.0, 2.0, 5.0, full, 2 * full })
+  {
+    const RefinedStrata r = strataToRefine(e, allowed);
+    // Enough: the strata left keep the bound within what is allowed (all refined leave none).
+    EXPECT_LE(e.mseBoundWithout(r), allowed) << allowed;
+    EXPECT_TRUE(r.partial < 0 ||
+                (r.fraction > 0 && r.fraction < 1 && !(r.whole & (1u << r.partial))));
+    // Worst first: every stratum refined whole has a mean at least the partial one's, and that
+    // at least every untouched one's.
+    for (int a = 0; a < kSettingsStrata; ++a)
+      for (int b = 0; b < kSettingsStrata; ++b)
+      {
+        if ((r.whole & (1u << a)) && !(r.whole & (1u << b)))
+        {
+          EXPECT_GE(mean[a], mean[b]) << allowed;
+        }
+        if (touched(r, a) && !touched(r, b))
+        {
+          EXPECT_GE(mean[a], mean[b]) << allowed;
+        }
+      }
+    // No more than needed: a thousandth less of the partial stratum, or else the whole stratum
+    // of the least mean left out, exceeds the allowance.
+    RefinedStrata less = r;
+    if (r.partial >= 0)
+      less.fraction -= 0.001;
+    else
+    {
+      int least = -1;
+      for (int k = 0; k < kSettingsStrata; ++k)
+        if ((r.whole & (1u << k)) && (least < 0 || mean[k] < mean[least]))
+          least = k;
+      if (least < 0)
+        continue;
+      less.whole &= ~(1u << least);
+    }
+    EXPECT_GT(e.mseBoundWithout(less), allowed) << allowed;
+  }
+  EXPECT_EQ(strataToRefine(e, full).whole, 0u);
+  EXPECT_LT(strataToRefine(e, full).partial, 0);
+  // A stratum with pixels and no probe is refined first, and whole: its error is unknown.
+  e.strata[1].count = e.strata[1].sum = e.strata[1].sum2 = 0;
+  EXPECT_TRUE(std::isinf(e.mseBound()));
+  EXPECT_TRUE(strataToRefine(e, 1e9).whole & 2u);
+}
+
 TEST_F(SettingsErrorRamp, TheProbesEstimateAndBoundTheFramesError)
 {
   const SettingsError e = measured(1);
@@ -228,6 +339,60 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
     EXPECT_GE(held.retraced, loose.retraced);
     EXPECT_LE(held.estimatedPsnr, settings.psnr());
   }
+}
+
+TEST_F(SettingsErrorRamp, ATargetAboveTheKeysSettingsIsMetByTracingTheirErrorConverged)
+{
+  const SettingsError settings = pooled(measured(1), measured(2));
+  const std::vector<PathKey> path = keyPath();
+  PathOptions options;
+  options.pointIndex = kdTreeIndexFactory();
+  const SceneDescription atT = rampScene(T, Side);
+  // Above the keys' bound by more than their frames miss it by.
+  const double target = settings.psnr() + 3.0;
+  // The picture that judges the target (convergedSideFor: 8 × 8 above 36 dB), which the refined
+  // pixels are traced with; and a denser one, 16 × 16, which nothing here traces with.
+  SceneDescription judge = atT, dense = atT;
+  judge.rendering = convergedRendering(convergedSideFor(target));
+  dense.rendering = convergedRendering(16);
+  const FrameTracer tracer(atT), convergedAtT(judge);
+  const std::vector<RayRecord> judgeTruth = traceFrame(judge), denseTruth = traceFrame(dense);
+  const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), judgeTruth));
+  PathFrame raised = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  PathFrame held = raised;
+  const PathCompletion r = completePathFrame(raised, pixelTracerOf(tracer), target, 0.01,
+                                             refinementFor(settings, convergedAtT));
+  const PathCompletion h = completePathFrame(held, tracer, target, 0.01, settings.mseBound());
+  const double raisedDb = psnrOfMse(frameMse(raised.records, judgeTruth));
+  const double heldDb = psnrOfMse(frameMse(held.records, judgeTruth));
+  const double raisedDense = psnrOfMse(frameMse(raised.records, denseTruth));
+  const double heldDense = psnrOfMse(frameMse(held.records, denseTruth));
+  std::printf("[ settings ] target %.2f dB (keys' bound %.2f, the frame traced at t %.2f against "
+              "its judge): raised %.2f dB against the judge, %.2f against 16x16 (estimated %.2f, "
+              "%zu re-traced, %zu converged, %.0f rays); held %.2f / %.2f dB (estimated %.2f, %zu, "
+              "%.0f rays)\n",
+              target, settings.psnr(), tracedDb, raisedDb, raisedDense, r.estimatedPsnr, r.retraced,
+              r.refined, r.raysTraced, heldDb, heldDense, h.estimatedPsnr, h.retraced,
+              h.raysTraced);
+  EXPECT_GT(r.refined, 0u);
+  EXPECT_EQ(h.refined, 0u);
+  EXPECT_GE(r.estimatedPsnr, target - 1e-9);
+  EXPECT_LT(h.estimatedPsnr, target);
+  // The frame reaches the target against the picture that judges it, and against the denser
+  // one, which the frame traced at t with the keys' settings does not.
+  EXPECT_GE(raisedDb, target - 1.0);
+  EXPECT_GE(raisedDense, target - 1.0);
+  EXPECT_LT(tracedDb, target - 1.0);
+  EXPECT_GT(raisedDense, heldDense + 1.0);
+  // A target the settings reach leaves the rendering alone: the same frame as without.
+  PathFrame within = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  PathFrame plain = within;
+  const PathCompletion w = completePathFrame(within, pixelTracerOf(tracer), 30.0, 0.01,
+                                             refinementFor(settings, convergedAtT));
+  const PathCompletion p = completePathFrame(plain, tracer, 30.0, 0.01, settings.mseBound());
+  EXPECT_EQ(w.refined, 0u);
+  EXPECT_EQ(w.retraced, p.retraced);
+  EXPECT_EQ(frameMse(within.records, plain.records), 0.0);
 }
 
 TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
