@@ -349,7 +349,12 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               "**Plain**: nothing re-traced. **--quality T**: "
               "`completePathFrame` held to the converged picture: the inner keys' own error "
               "against theirs measured by probes traced converged (`measureSettingsError`, the "
-              "the inner keys' probes pooled, its bound in column *settings*). PSNR as mean / "
+              "the inner keys' probes pooled, its bound in column *settings*); where that bound "
+              "falls short of T, the strata holding the keys' error traced with the rendering "
+              "that judges T (`SettingsRefinement`, `convergedSideFor`: 8×8 above 36 dB), as "
+              "`vtkGeodesicPathInterpolator` does by default: *converged*, the share of pixels "
+              "traced so; *rays × traced*, the rays the completion integrated over those of the "
+              "frame traced at s (mean). PSNR as mean / "
               "worst; Spearman of the "
               "estimate against the true error (against the traced frame) over the predicted "
               "pixels, mean / worst; *below T − 1*: frames under T − 1 dB against converged:\n\n",

@@ -291,7 +291,8 @@ struct ProbePair
 /// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
 /// 3rd ed., § 6.3), at least 1 for moved edges (PathMethod::MovedEdge) and at least 1/1024 for the
 /// others (their order of re-tracing kept where every probe came out exact). Edge blends' errors
-/// are rare and large too: at least 1 for them as well, or, where `edgeBlendsRanked` (the
+/// are rare and large too: at least 1 for them as well (linear pixels, at least 1/16), or, where
+/// `edgeBlendsRanked` (the
 /// estimates were weighed by the keys' leave-one-out errors, LeaveOneOut.h), at least 1/16: their
 /// probes still miss the rare large errors at times (bench/REPORT.md, "Movies": without it, frames
 /// of the mass ramp and the Kerr orbit at 40 dB fell 1.4–1.5 dB below their target).

@@ -32,6 +32,8 @@ TEST(EstimateScale, ErrorsProportionalToTheEstimatesGiveTheirRatio)
   // Moved pixels off the edges are scaled as the per-pixel predictions are.
   EXPECT_NEAR(asrt::estimateScale(PathMethod::MovedSurface, probes, EstimateScaling::Ratio), 0.2,
               1e-12);
+  // Linear pixels keep at least a sixteenth; above it, their ratio.
+  EXPECT_NEAR(asrt::estimateScale(PathMethod::Linear, probes, EstimateScaling::Ratio), 0.2, 1e-12);
   // Errors above the estimates are scaled up either way.
   for (ProbePair& q : probes)
     q.error = 3.0 * q.estimate;
@@ -63,6 +65,8 @@ TEST(EstimateScale, ProbesThatAllCameOutExactKeepTheOrder)
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio), 1.0);
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio, true),
             1.0 / 16.0);
+  // So are linear pixels' (two keys alone agree): a sixteenth.
+  EXPECT_EQ(asrt::estimateScale(PathMethod::Linear, probes, EstimateScaling::Ratio), 1.0 / 16.0);
   // No estimate to scale (or no probe): 1.
   EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, std::vector<ProbePair>(8, ProbePair{ 0, 4 }),
                                 EstimateScaling::Ratio),
