@@ -417,6 +417,28 @@ TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
   }
 }
 
+TEST_F(SettingsErrorRamp, ARefinementWithoutAConvergedTracerIsRefused)
+{
+  const std::vector<PathKey> path = keyPath();
+  PathOptions options;
+  options.movedEdges = false;
+  const SceneDescription atT = rampScene(T, Side);
+  const FrameTracer tracer(atT);
+  PathFrame f = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  SettingsRefinement none;
+  none.settings = pooled(measured(1), measured(2));
+  try
+  {
+    completePathFrame(f, pixelTracerOf(tracer), 40.0, 0.01, none);
+    ADD_FAILURE() << "a refinement without a tracer was taken";
+  }
+  catch (const InvalidParameter& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("no converged pixel tracer"), std::string::npos)
+      << e.what();
+  }
+}
+
 TEST(SettingsError, ABadFrameOrProbeListIsRefused)
 {
   std::vector<RayRecord> frame(12);
