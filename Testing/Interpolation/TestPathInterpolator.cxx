@@ -67,6 +67,25 @@ struct Pipeline
   }
 };
 
+/// The ramp's frame at M = 0.72 (time 1.4 between the keys 0.65 … 0.8), traced with the scene's
+/// rendering (supersample 1) or with supersample × supersample filtered samples in every pixel.
+TracedFrame tracedAt072(int supersample)
+{
+  return traceWith(
+    [supersample](vtkGeodesicSource* s)
+    {
+      s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+      s->SetResolution(kSide, kSide);
+      s->SetMass(0.72);
+      if (supersample > 1)
+      {
+        s->SetAntialias("filter");
+        s->SetSupersample(supersample);
+        s->SetGridLattice(1);
+      }
+    });
+}
+
 std::vector<vtkPolyData*> rampKeys(const std::vector<double>& masses)
 {
   std::vector<vtkPolyData*> keys;
@@ -160,25 +179,9 @@ TEST(PathInterpolator, AQualityTargetHoldsAgainstTheConvergedPicture)
 {
   Pipeline p(rampKeys({ 0.65, 0.7, 0.75, 0.8 }));
   const double time = 1.4;
-  const auto traced = [](int supersample)
-  {
-    return traceWith(
-      [supersample](vtkGeodesicSource* s)
-      {
-        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-        s->SetResolution(kSide, kSide);
-        s->SetMass(0.72);
-        if (supersample > 1)
-        {
-          s->SetAntialias("filter");
-          s->SetSupersample(supersample);
-          s->SetGridLattice(1);
-        }
-      });
-  };
-  const std::vector<std::uint8_t> converged = rgbOf(traced(4).image);
+  const std::vector<std::uint8_t> converged = rgbOf(tracedAt072(4).image);
   const double settingsDb =
-    asrt::psnr(view(rgbOf(traced(1).image), kSide, kSide), view(converged, kSide, kSide));
+    asrt::psnr(view(rgbOf(tracedAt072(1).image), kSide, kSide), view(converged, kSide, kSide));
   for (double target : { 30.0, 34.0 })
   {
     p.interpolator->SetQualityTarget(target);
@@ -203,30 +206,14 @@ TEST(PathInterpolator, ATargetAboveTheKeysSettingsRaisesTheRenderingWhereTheyErr
 {
   Pipeline p(rampKeys({ 0.65, 0.7, 0.75, 0.8 }));
   const double time = 1.4;
-  const auto traced = [](int supersample)
-  {
-    return traceWith(
-      [supersample](vtkGeodesicSource* s)
-      {
-        s->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-        s->SetResolution(kSide, kSide);
-        s->SetMass(0.72);
-        if (supersample > 1)
-        {
-          s->SetAntialias("filter");
-          s->SetSupersample(supersample);
-          s->SetGridLattice(1);
-        }
-      });
-  };
   // The converged picture, the one that judges targets above 36 dB (asrt::convergedSideFor:
   // 8 × 8, which the refinement traces with there), and a denser one (16 × 16) nothing traces
   // with.
-  const std::vector<std::uint8_t> converged = rgbOf(traced(4).image);
-  const std::vector<std::uint8_t> judge = rgbOf(traced(8).image);
-  const std::vector<std::uint8_t> dense = rgbOf(traced(16).image);
+  const std::vector<std::uint8_t> converged = rgbOf(tracedAt072(4).image);
+  const std::vector<std::uint8_t> judge = rgbOf(tracedAt072(8).image);
+  const std::vector<std::uint8_t> dense = rgbOf(tracedAt072(16).image);
   const double settingsDb =
-    asrt::psnr(view(rgbOf(traced(1).image), kSide, kSide), view(converged, kSide, kSide));
+    asrt::psnr(view(rgbOf(tracedAt072(1).image), kSide, kSide), view(converged, kSide, kSide));
   // Off: held to about the keys' own bound, with a warning.
   p.interpolator->RaiseRenderingForTargetOff();
   p.interpolator->SetQualityTarget(30.0);
