@@ -87,6 +87,9 @@ Options:
                         rendering ("converged%")
   --against-traced      with --quality: hold the target against the frame traced at each
                         frame's parameters with the key frames' settings instead
+  --keep-settings       with --quality: where the key frames' settings fall short of DB,
+                        re-trace with them only (the frame then holds to about their bound,
+                        with a warning) instead of tracing their error's pixels converged
   --exact               with splats: re-trace the pixels the matching cannot vouch for (holes,
                         ambiguous pixels, and those where A and B disagree); slower, exact there
   --textures DIR        where the scene's relative texture paths lie, for --exact and the
@@ -284,6 +287,7 @@ int runInterpolate(const std::vector<std::string>& args)
                                                  { "method", OptionSpec::Value },
                                                  { "quality", OptionSpec::Value },
                                                  { "against-traced", OptionSpec::Flag },
+                                                 { "keep-settings", OptionSpec::Flag },
                                                  { "textures", OptionSpec::Value },
                                                  { "quiet", OptionSpec::Flag, 'q' },
                                                  { "scenes", OptionSpec::Flag },
@@ -330,6 +334,8 @@ int runInterpolate(const std::vector<std::string>& args)
   }
   if (options.has("against-traced") && !options.has("quality"))
     throw UsageError("--against-traced goes with --quality");
+  if (options.has("keep-settings") && !options.has("quality"))
+    throw UsageError("--keep-settings goes with --quality");
   const int fps = options.positiveInteger("fps").value_or(10);
   const std::string prefix = outputPrefix(options, "interpolated");
   const std::string moviePath = options.get("movie", prefix + ".ogv");
@@ -375,6 +381,7 @@ int runInterpolate(const std::vector<std::string>& args)
     along->SetNumberOfIntermediateFrames(intermediate);
     along->SetQualityTarget(quality);
     along->SetHoldToConverged(!options.has("against-traced"));
+    along->SetRaiseRenderingForTarget(!options.has("keep-settings"));
     along->SetTextureDirectory(options.get("textures", scenesDirectory()).c_str());
     messages.watchAlgorithm(along);
     along->UpdateInformation();
@@ -442,6 +449,15 @@ int runInterpolate(const std::vector<std::string>& args)
   std::printf("\n");
   for (const std::string& line : sequence.lines)
     std::printf("%s\n", line.c_str());
+  // The filters' warnings (a target above what the keys' settings reach, with --keep-settings),
+  // each said once, however many frames repeated it.
+  std::vector<std::string> said;
+  for (const std::string& w : messages.warnings())
+    if (std::find(said.begin(), said.end(), w) == said.end())
+    {
+      said.push_back(w);
+      std::fprintf(stderr, "asrt interpolate: warning: %s\n", w.c_str());
+    }
   std::printf("  wrote %s-%03d.png ... %s-%03d.png (and .vti)\n", prefix.c_str(), 0, prefix.c_str(),
               count - 1);
   std::printf("  wrote %s (ParaView time series of %d frames)\n", (prefix + ".pvd").c_str(), count);

@@ -434,8 +434,8 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
                            "converged picture around t (their bound: "
                         << this->LastSettingsPsnr
                         << " dB): re-tracing with them holds the frame to within about 1 dB of "
-                           "that; key frames traced with a better rendering (the accurate preset, "
-                           "a supersample) raise it");
+                           "that; RaiseRenderingForTarget, or key frames traced with a better "
+                           "rendering (the accurate preset, a supersample), raise it");
       asrt::SceneDescription atT = in.Shading;
       asrt::applyParameters(p, atT);
       if (in.Scenes[a].integrator.method != in.Scenes[a + 1].integrator.method)

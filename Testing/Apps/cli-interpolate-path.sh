@@ -27,11 +27,24 @@ step "key frames are themselves"
 "$asrt" trace m0.7.json -r 64x64 --formats png -q -o truth-0.7 > /dev/null
 "$check" "path/interpolated-002.png:truth-0.7.png>=100"
 
+step "40 dB, above the key frames' settings: their error traced converged, or held with --keep-settings"
+"$expect" 0 "converged%" -- "$asrt" interpolate --scenes m0.65.json m0.7.json m0.75.json \
+  m0.8.json -r 64x64 -n 1 --quality 40 -q -o raised/
+# The picture that judges 40 dB: 8 x 8 filtered samples a pixel (asrt::convergedSideFor).
+"$asrt" trace m0.725.json -r 64x64 --antialias filter --supersample 8 --formats png -q \
+  -o conv8-0.725 > /dev/null
+"$check" "raised/interpolated-003.png:conv8-0.725.png>=39"
+"$expect" 0 "is above what the key frames' settings reach" -- "$asrt" interpolate --scenes \
+  m0.65.json m0.7.json m0.75.json m0.8.json -r 64x64 -n 1 --quality 40 --keep-settings -q \
+  -o kept/
+
 step "misused options are refused before anything is traced"
 "$expect" 2 "--quality goes with --method path" -- "$asrt" interpolate --scenes m0.65.json \
   m0.7.json --method splats --quality 35 -o bad/
 "$expect" 2 "--exact goes with --method splats" -- "$asrt" interpolate --scenes m0.65.json \
   m0.7.json --quality 35 --exact -o bad/
+"$expect" 2 "--keep-settings goes with --quality" -- "$asrt" interpolate --scenes m0.65.json \
+  m0.7.json --keep-settings -o bad/
 "$expect" 2 "--quality: the target must lie in \(0, 100\] dB" -- "$asrt" interpolate --scenes \
   m0.65.json m0.7.json --quality 0 -o bad/
 "$expect" 2 "--quality: the target must lie in \(0, 100\] dB" -- "$asrt" interpolate --scenes \
