@@ -18,8 +18,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 namespace
 {
 using namespace asrt::cli;
@@ -78,32 +76,12 @@ int report(const char* command, const char* kind, const std::string& message, in
   }
   return finishParallelRun(code);
 }
-
-/// OpenMP threads that wait passively between parallel regions. libgomp's default is to spin for
-/// a while before sleeping, which burns CPU on every core while the main thread works alone (a
-/// movie's store reads, interpolation and file writing between traced passes), a share of a movie's
-/// CPU for no gain in wall time (bench/REPORT.md, the movies). libgomp reads
-/// OMP_WAIT_POLICY once, while it loads, before main, so the program runs itself again with it
-/// set. A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is left alone, and if the program cannot
-/// run itself again it goes on as it is.
-void waitPassivelyBetweenParallelRegions(char* argv[])
-{
-#ifdef __linux__
-  if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT"))
-    return;
-  if (setenv("OMP_WAIT_POLICY", "passive", 1) != 0)
-    return;
-  execv("/proc/self/exe", argv);
-  unsetenv("OMP_WAIT_POLICY");
-#else
-  (void)argv;
-#endif
-}
 }
 
-int main(int argc, char* argv[])
+/// The program, run by the `asrt` launcher (AsrtLauncher.cxx) once it has set OpenMP's wait
+/// policy and loaded this library.
+extern "C" __attribute__((visibility("default"))) int asrtProgramMain(int argc, char* argv[])
 {
-  waitPassivelyBetweenParallelRegions(argv);
   if (argc < 2)
   {
     usage(stderr);

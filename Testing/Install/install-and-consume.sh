@@ -33,10 +33,16 @@ expect_files "$prefix" "$(installed_files)"
 asrt=$prefix/$ASRT_INSTALL_BINDIR/asrt
 readelf -d "$asrt" | grep -E '(RUNPATH|RPATH).*\$ORIGIN' > /dev/null ||
   fail "$asrt has no \$ORIGIN-relative RUNPATH"
-ldd "$asrt" > "$work/asrt.ldd"
+# The launcher loads the program's library (libasrtProgram) through that RUNPATH, and the library
+# the ASRT libraries through its own.
+program=$prefix/$ASRT_INSTALL_LIBDIR/libasrtProgram.so
+[ -f "$program" ] || fail "$program is not installed"
+readelf -d "$program" | grep -E '(RUNPATH|RPATH).*\$ORIGIN' > /dev/null ||
+  fail "$program has no \$ORIGIN-relative RUNPATH"
+ldd "$program" > "$work/asrt.ldd"
 if grep libasrt "$work/asrt.ldd" | grep -v -F "=> $prefix/" > /dev/null; then
   cat "$work/asrt.ldd"
-  fail "$asrt loads ASRT libraries from outside the prefix"
+  fail "$program loads ASRT libraries from outside the prefix"
 fi
 scene=$prefix/$ASRT_INSTALL_DATADIR/asrt/scenes/fig1-cylinders.json
 run "$work/trace.log" "$asrt" trace "$scene" -r 32x32 -q --formats png -o "$work/out/installed-asrt"
