@@ -6,9 +6,9 @@
 // movie's store reads, interpolation and file writing between traced passes), a share of a
 // movie's CPU for no gain in wall time (bench/REPORT.md, the movies). libgomp reads
 // OMP_WAIT_POLICY once, as it loads. This launcher links none of the program's libraries: it sets
-// the policy, then loads them, so they start once. (The program used to run itself again with the
-// policy set, which started all of its libraries twice: 0.07 s of CPU for `asrt --version`
-// against 0.03 s.) A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is left alone.
+// the policy, then loads them, so they start once (running the program itself again with the
+// policy set started all of its libraries twice). A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT
+// is left alone.
 #include <dlfcn.h>
 
 #include <cstdio>
