@@ -291,11 +291,11 @@ struct ProbePair
 /// sqrt(Σ (error − R·estimate)² / (n − 1) / n) / mean estimate (Cochran, Sampling Techniques,
 /// 3rd ed., § 6.3), at least 1 for moved edges (PathMethod::MovedEdge) and at least 1/1024 for the
 /// others (their order of re-tracing kept where every probe came out exact). Edge blends' errors
-/// are rare and large too: at least 1 for them as well (linear pixels, at least 1/16), or, where
-/// `edgeBlendsRanked` (the
+/// are rare and large too: at least 1 for them as well, or, where `edgeBlendsRanked` (the
 /// estimates were weighed by the keys' leave-one-out errors, LeaveOneOut.h), at least 1/16: their
 /// probes still miss the rare large errors at times (bench/REPORT.md, "Movies": without it, frames
-/// of the mass ramp and the Kerr orbit at 40 dB fell 1.4–1.5 dB below their target).
+/// of the mass ramp and the Kerr orbit at 40 dB fell 1.4–1.5 dB below their target). So do linear
+/// pixels' (two keys alone agree): at least 1/16 for them.
 /// AtLeastOne: R, at least 1.
 /// 1 where the probes' estimates sum to 0 (or there are none).
 ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,
@@ -371,9 +371,10 @@ struct SettingsRefinement; // SettingsError.h
 /// As above, held to the converged picture through `refinement.settings` (its bound the
 /// settingsMse above). Where that bound is above kRefineSettingsAbove of the target's error, which
 /// re-tracing with the keys' settings could not make up, the pixels of the strata holding it
-/// (strataToRefine, chosen on the frame once its must-retrace pixels and probes are traced) are
-/// traced with `refinement.converged` and carry none of it; the prediction is then held to the
-/// target less what the other strata leave.
+/// (strataToRefine, chosen on the frame once its must-retrace pixels and probes are traced, for
+/// the fewest rays with the re-tracing the prediction then needs) are traced with
+/// `refinement.converged` and carry none of it; the prediction is then held to the target less
+/// what the other strata leave. Throws InvalidParameter for a refinement without a tracer.
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
   PathFrame& frame, const PixelTracer& trace, double targetDb, double probeFraction,
   const SettingsRefinement& refinement, EstimateScaling scaling = EstimateScaling::Ratio);

@@ -72,7 +72,6 @@ struct SettingsStratum
   double pixels = 0; ///< of the frame (the keys' mean when pooled): a stratum probed whole is exact
 };
 
-/// A frame's error against its converged picture, estimated from probes.
 /// The settings' strata a frame traces with the converged rendering: those of `whole` (bit s:
 /// stratum s) entirely, and of stratum `partial` (−1: none) the share `fraction` of its pixels.
 struct RefinedStrata
@@ -82,6 +81,7 @@ struct RefinedStrata
   double fraction = 0;
 };
 
+/// A frame's error against its converged picture, estimated from probes.
 struct SettingsError
 {
   SettingsStratum strata[kSettingsStrata];
@@ -133,11 +133,12 @@ ASRTINTERPOLATION_EXPORT SettingsError pooled(const SettingsError& a, const Sett
 /// Raising the rendering where the settings fall short. A target above what the keys' settings
 /// reach cannot be met by re-tracing with them, but the settings' error lies in a few strata (the
 /// sampled edges: a tenth of the pixels, most of the error): those pixels traced with the
-/// converged rendering carry none of it, and the frame can then reach the target. The strata are
-/// re-traced whole, worst probe mean first (the most error removed for each pixel traced, every
-/// pixel costing the converged rendering's rays), where the settings' bound is above
-/// kRefineSettingsAbove of the target's error, until the rest leave at most
-/// kRefinedSettingsShare of it, the other half left to the prediction.
+/// converged rendering that judges the target carry none of it, and the frame can then reach the
+/// target. Where the settings' bound is above kRefineSettingsAbove of the target's error,
+/// completePathFrame traces strata so, worst probe mean first (the most error removed for each
+/// pixel traced, every pixel costing that rendering's rays), the last in part (strataToRefine),
+/// for the share of the target's error left to the settings that costs the fewest rays with the
+/// re-tracing the prediction then needs.
 struct SettingsRefinement
 {
   SettingsError settings; ///< the keys' error (pooled), by stratum
@@ -150,15 +151,14 @@ struct SettingsRefinement
   double raysPerPixel = static_cast<double>(kConvergedSide) * kConvergedSide;
 };
 
-/// The refinement of a frame at t for `targetDb`: the keys' `settings`, and `converged` tracing
-/// with convergedRendering(convergedSideFor(targetDb)) (which must outlive the result).
+/// The refinement of a frame with the keys' `settings`, traced by `converged` (the frame at t with
+/// the rendering that judges the target, convergedRendering(convergedSideFor(target)); it must
+/// outlive the result), whose rays a pixel are that rendering's samples.
 ASRTINTERPOLATION_EXPORT SettingsRefinement refinementFor(const SettingsError& settings,
                                                           const FrameTracer& converged);
 /// Where the settings' bound exceeds this share of the target's error, strata are re-traced
 /// converged: above it the prediction would be held to less than a quarter of the target.
 constexpr double kRefineSettingsAbove = 0.75;
-/// The share of the target's error the settings' strata left unrefined may keep.
-constexpr double kRefinedSettingsShare = 0.5;
 
 /// The strata to trace with the converged rendering for the settings' bound to fall to
 /// `allowedMse` or below: none where it is there already, else the strata by their probes' mean
