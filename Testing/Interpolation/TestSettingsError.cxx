@@ -77,6 +77,13 @@ protected:
     const SettingsError e = settingsError(frame, probes, truth);
     return { std::move(probes), e };
   }
+  /// The frame at T predicted from the four keys, moved edges included (before any re-trace).
+  static PathFrame predictedAtT()
+  {
+    PathOptions options;
+    options.pointIndex = kdTreeIndexFactory();
+    return interpolateAlongPath(keyPath(), T, Side, Side, *rampScene(T, Side).scene, options);
+  }
   /// The settings' error of key k, measured with probes traced at the converged rendering.
   static SettingsError measured(int k)
   {
@@ -315,9 +322,6 @@ TEST_F(SettingsErrorRamp, UnsampledEdgesAreAStratumOfTheirOwn)
 TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
 {
   const SettingsError settings = pooled(measured(1), measured(2));
-  const std::vector<PathKey> path = keyPath();
-  PathOptions options;
-  options.pointIndex = kdTreeIndexFactory();
   const SceneDescription atT = rampScene(T, Side);
   const FrameTracer tracer(atT);
   const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), Truth));
@@ -325,7 +329,7 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
               T, tracedDb, settings.psnr());
   for (double target : { 30.0, 35.0, tracedDb })
   {
-    PathFrame against = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+    PathFrame against = predictedAtT();
     PathFrame plain = against;
     const PathCompletion held =
       completePathFrame(against, tracer, target, 0.01, settings.mseBound());
@@ -344,9 +348,6 @@ TEST_F(SettingsErrorRamp, AQualityTargetHoldsAgainstTheConvergedPicture)
 TEST_F(SettingsErrorRamp, ATargetAboveTheKeysSettingsIsMetByTracingTheirErrorConverged)
 {
   const SettingsError settings = pooled(measured(1), measured(2));
-  const std::vector<PathKey> path = keyPath();
-  PathOptions options;
-  options.pointIndex = kdTreeIndexFactory();
   const SceneDescription atT = rampScene(T, Side);
   // Above the keys' bound by more than their frames miss it by.
   const double target = settings.psnr() + 3.0;
@@ -358,7 +359,7 @@ TEST_F(SettingsErrorRamp, ATargetAboveTheKeysSettingsIsMetByTracingTheirErrorCon
   const FrameTracer tracer(atT), convergedAtT(judge);
   const std::vector<RayRecord> judgeTruth = traceFrame(judge), denseTruth = traceFrame(dense);
   const double tracedDb = psnrOfMse(frameMse(traceFrame(atT), judgeTruth));
-  PathFrame raised = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  PathFrame raised = predictedAtT();
   PathFrame held = raised;
   const PathCompletion r = completePathFrame(raised, pixelTracerOf(tracer), target, 0.01,
                                              refinementFor(settings, convergedAtT));
@@ -385,7 +386,7 @@ TEST_F(SettingsErrorRamp, ATargetAboveTheKeysSettingsIsMetByTracingTheirErrorCon
   EXPECT_LT(tracedDb, target - 1.0);
   EXPECT_GT(raisedDense, heldDense + 1.0);
   // A target the settings reach leaves the rendering alone: the same frame as without.
-  PathFrame within = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  PathFrame within = predictedAtT();
   PathFrame plain = within;
   const PathCompletion w = completePathFrame(within, pixelTracerOf(tracer), 30.0, 0.01,
                                              refinementFor(settings, convergedAtT));
@@ -419,12 +420,8 @@ TEST_F(SettingsErrorRamp, ASettingsErrorBelowZeroOrNotFiniteIsRefused)
 
 TEST_F(SettingsErrorRamp, ARefinementWithoutAConvergedTracerIsRefused)
 {
-  const std::vector<PathKey> path = keyPath();
-  PathOptions options;
-  options.movedEdges = false;
-  const SceneDescription atT = rampScene(T, Side);
-  const FrameTracer tracer(atT);
-  PathFrame f = interpolateAlongPath(path, T, Side, Side, *atT.scene, options);
+  const FrameTracer tracer(rampScene(T, Side));
+  PathFrame f = predictedAtT();
   SettingsRefinement none;
   none.settings = pooled(measured(1), measured(2));
   try
