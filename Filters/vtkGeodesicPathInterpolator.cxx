@@ -443,8 +443,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
       atT.rendering = asrt::scatteredPixelRendering(atT.rendering);
       const asrt::FrameTracer tracer(atT);
       asrt::PathCompletion done;
-      if (raise &&
-          settings.mseBound() > asrt::kRefineSettingsAbove * asrt::mseOfPsnr(this->QualityTarget))
+      if (raise && asrt::settingsFallShort(settings, this->QualityTarget))
       {
         // The rendering that judges the target (convergedSideFor): the refined pixels carry none
         // of the error it measures.

@@ -333,13 +333,11 @@ PixelTracer pixelTracerOf(const FrameTracer& tracer)
 namespace
 {
 /// The predicted pixels not traced yet, worst calibrated estimate first (ties by index), and what
-/// re-tracing the first k of them leaves: left[k], squared colour errors summed over the pixels
-/// and channels, perMse of which make a mean squared error per channel.
+/// re-tracing the first k of them leaves: mse[k], a mean squared error per channel over the frame.
 struct UntracedOrder
 {
   std::vector<std::int32_t> rest;
-  std::vector<double> left;
-  double perMse = 1;
+  std::vector<double> mse;
 };
 
 UntracedOrder untracedOrder(const std::vector<char>& traced,
@@ -378,8 +376,9 @@ UntracedOrder untracedOrder(const std::vector<char>& traced,
                            std::lower_bound(out.rest.begin(), out.rest.end(), probes[q], worse) -
                            out.rest.begin()),
                          methods[static_cast<std::size_t>(probes[q])], probeError[q] });
-  out.left = remainingError(out.rest, calibrated, methods, placed);
-  out.perMse = 3.0 * static_cast<double>(n);
+  out.mse = remainingError(out.rest, calibrated, methods, placed);
+  for (double& e : out.mse)
+    e /= 3.0 * static_cast<double>(n);
   return out;
 }
 
@@ -388,7 +387,7 @@ UntracedOrder untracedOrder(const std::vector<char>& traced,
 std::size_t fewestWithin(const UntracedOrder& u, double budgetMse)
 {
   for (std::size_t k = 0; k <= u.rest.size(); ++k)
-    if (u.left[k] / u.perMse <= budgetMse)
+    if (u.mse[k] <= budgetMse)
       return k;
   return u.rest.size();
 }
@@ -401,26 +400,33 @@ constexpr double kSettingsShares[] = { 0.25, 0.375, 0.5, 0.625, kRefineSettingsA
 /// The strata to trace converged: of the shares above, the one for which tracing them and then
 /// re-tracing, with the keys' settings, the predicted pixels the rest of the target needs
 /// (`untraced`, before any is refined) takes the fewest rays by estimate (`raysPerRetraced` a
-/// re-traced pixel, as the frame's first pixels took; the converged rendering's a refined one).
+/// re-traced pixel, as the frame's first pixels took; the converged rendering's a refined one, a
+/// partly refined stratum counted by its share). `strata`: the frame's (settingsStrata).
 RefinedStrata cheapestRefinement(const SettingsRefinement& refinement,
-                                 const std::vector<RayRecord>& records,
+                                 const std::vector<std::uint8_t>& strata,
                                  const UntracedOrder& untraced, double targetMse,
                                  double raysPerRetraced)
 {
+  double pixels[kSettingsStrata] = {};
+  for (std::uint8_t k : strata)
+    pixels[k] += 1;
   RefinedStrata best;
   double bestRays = std::numeric_limits<double>::infinity();
   for (double share : kSettingsShares)
   {
-    const RefinedStrata strata = strataToRefine(refinement.settings, share * targetMse);
-    const double left = refinement.settings.mseBoundWithout(strata);
+    const RefinedStrata r = strataToRefine(refinement.settings, share * targetMse);
+    double refined = r.partial >= 0 ? r.fraction * pixels[r.partial] : 0.0;
+    for (int k = 0; k < kSettingsStrata; ++k)
+      refined += (r.whole & (1u << k)) ? pixels[k] : 0.0;
+    const double left = refinement.settings.mseBoundWithout(r);
     const double rays =
-      static_cast<double>(pixelsOfStrata(records, strata).size()) * refinement.raysPerPixel +
+      refined * refinement.raysPerPixel +
       static_cast<double>(fewestWithin(untraced, std::max(targetMse - left, 0.25 * targetMse))) *
         raysPerRetraced;
     if (rays < bestRays)
     {
       bestRays = rays;
-      best = strata;
+      best = r;
     }
   }
   return best;
@@ -551,14 +557,15 @@ PathCompletion completeFrame(PathFrame& frame, const PixelTracer& tracePixels, d
   const double targetMse = mseOfPsnr(targetDb);
   double settingsLeft = settingsMse;
   UntracedOrder untraced = untracedOrder(traced, methods, calibrated, probes, probeError);
-  if (refinement && settingsMse > kRefineSettingsAbove * targetMse)
+  if (refinement && settingsFallShort(refinement->settings, targetDb))
   {
     const double raysPerRetraced =
       done.retraced > 0 ? done.raysTraced / static_cast<double>(done.retraced) : 1.0;
-    const RefinedStrata strata =
-      cheapestRefinement(*refinement, frame.records, untraced, targetMse, raysPerRetraced);
-    traceList(pixelsOfStrata(frame.records, strata), true);
-    settingsLeft = refinement->settings.mseBoundWithout(strata);
+    const std::vector<std::uint8_t> strata = settingsStrata(frame.records);
+    const RefinedStrata refined =
+      cheapestRefinement(*refinement, strata, untraced, targetMse, raysPerRetraced);
+    traceList(pixelsOfStrata(strata, refined), true);
+    settingsLeft = refinement->settings.mseBoundWithout(refined);
     untraced = untracedOrder(traced, methods, calibrated, probes, probeError);
   }
   // The frame's error against the converged picture is what the prediction leaves against the
@@ -568,7 +575,7 @@ PathCompletion completeFrame(PathFrame& frame, const PixelTracer& tracePixels, d
   const double budget = std::max(targetMse - settingsLeft, 0.25 * targetMse);
   const std::size_t count = fewestWithin(untraced, budget);
   const std::vector<std::int32_t>& rest = untraced.rest;
-  done.estimatedPsnr = psnrOfMse(untraced.left[count] / untraced.perMse + settingsLeft);
+  done.estimatedPsnr = psnrOfMse(untraced.mse[count] + settingsLeft);
   trace(std::vector<std::int32_t>(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(count)));
   return done;
 }

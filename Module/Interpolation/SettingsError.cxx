@@ -246,12 +246,22 @@ RefinedStrata strataToRefine(const SettingsError& e, double allowedMse)
   return refined;
 }
 
+bool settingsFallShort(const SettingsError& settings, double targetDb)
+{
+  return settings.mseBound() > kRefineSettingsAbove * mseOfPsnr(targetDb);
+}
+
 std::vector<std::int32_t> pixelsOfStrata(const std::vector<RayRecord>& frame,
                                          const RefinedStrata& refined)
 {
-  const std::vector<std::uint8_t> strata = settingsStrata(frame);
+  return pixelsOfStrata(settingsStrata(frame), refined);
+}
+
+std::vector<std::int32_t> pixelsOfStrata(const std::vector<std::uint8_t>& strata,
+                                         const RefinedStrata& refined)
+{
   std::vector<std::int32_t> pixels, partial;
-  for (std::size_t p = 0; p < frame.size(); ++p)
+  for (std::size_t p = 0; p < strata.size(); ++p)
     if (refined.whole & (1u << strata[p]))
       pixels.push_back(static_cast<std::int32_t>(p));
     else if (strata[p] == refined.partial)

@@ -160,6 +160,11 @@ ASRTINTERPOLATION_EXPORT SettingsRefinement refinementFor(const SettingsError& s
 /// converged: above it the prediction would be held to less than a quarter of the target.
 constexpr double kRefineSettingsAbove = 0.75;
 
+/// Whether a frame with the keys' `settings` needs their error's strata refined to reach
+/// `targetDb`: their bound is above kRefineSettingsAbove of the target's error (completePathFrame
+/// refines then; a caller may skip making the converged tracer otherwise).
+ASRTINTERPOLATION_EXPORT bool settingsFallShort(const SettingsError& settings, double targetDb);
+
 /// The strata to trace with the converged rendering for the settings' bound to fall to
 /// `allowedMse` or below: none where it is there already, else the strata by their probes' mean
 /// error, worst first (a stratum with pixels and no probe first of all, its error unknown), as
@@ -172,6 +177,9 @@ ASRTINTERPOLATION_EXPORT RefinedStrata strataToRefine(const SettingsError& e, do
 /// hash lowest (probePixels). In increasing order.
 ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> pixelsOfStrata(
   const std::vector<RayRecord>& frame, const RefinedStrata& refined);
+/// As above, of a frame whose strata (settingsStrata) are given.
+ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> pixelsOfStrata(
+  const std::vector<std::uint8_t>& strata, const RefinedStrata& refined);
 }
 
 #endif
