@@ -373,6 +373,44 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   bar.finish("-> " + prefix + (settings.png ? "-*.png" : settings.vti ? "-*.vti" : ""));
 }
 
+/// The line that says which rendering the movie was made with, where it was changed for the
+/// target; `choosingRays` were traced to measure it (counted in the report's rays).
+void printRenderingChoice(const RenderingChoice& choice, double quality, double choosingRays)
+{
+  using Change = RenderingChoice::Change;
+  const std::string enough = formatNumber(quality + 1);
+  if (choice.change == Change::Kept)
+  {
+    if (std::isfinite(choice.reach))
+      std::printf("rendering: the default, which reaches %.1f dB against the converged picture "
+                  "on the first and last frames; at most %d rays a pixel would reach %.1f there "
+                  "(its probes' bound; %s needed)\n",
+                  choice.defaultReach, kLoweredRaysPerPixel, choice.reach, enough.c_str());
+    return;
+  }
+  if (choice.change == Change::Lowered)
+    std::printf("rendering: at most %d rays a pixel between the first and last frames, since at "
+                "that cap they reach %.1f dB against the converged picture (%s needed; the "
+                "default: %.1f dB; %.0f rays traced for the two frames and the measures, counted "
+                "below); --max-rays chooses another\n",
+                kLoweredRaysPerPixel, choice.reach, enough.c_str(), choice.defaultReach,
+                choosingRays);
+  else if (choice.change == Change::Raised)
+    std::printf("rendering: at most %d rays a pixel, since the default settings reach %.1f dB "
+                "against the converged picture on the first and last frames and that cap %.1f "
+                "(%s needed; %.0f rays traced to measure it, counted below); --max-rays or "
+                "--preset chooses another\n",
+                kRaisedRaysPerPixel, choice.defaultReach, choice.reach, enough.c_str(),
+                choosingRays);
+  else
+    std::printf("rendering: the accurate preset, since the default settings reach %.1f dB "
+                "against the converged picture on the first and last frames, and at most %d "
+                "rays a pixel %.1f (%s needed; %.0f rays traced to measure it, counted below); "
+                "--preset chooses another\n",
+                choice.defaultReach, kRaisedRaysPerPixel, choice.reach, enough.c_str(),
+                choosingRays);
+}
+
 /// `extraRays`: traced before this maker's movie (the first and last frames that measured the
 /// default rendering's reach, when it was then `raised` to the accurate preset).
 void printReport(MovieMaker& maker, const std::vector<MovieFrameReport>& reports, double quality,
@@ -535,23 +573,23 @@ int runMovie(const std::vector<std::string>& args)
     };
   }
   auto maker = std::make_unique<MovieMaker>(frames, path.parameter, store.get(), making);
-  // A target the default rendering does not reach, when no rendering was asked for: the movie is
-  // made with the accurate preset (MovieMaker::withRaisedRendering).
+  // When no rendering was asked for, the rendering is chosen for the target: a cheaper adaptive cap
+  // where it reaches it, a dearer one or the accurate preset where the default does not
+  // (MovieMaker::withRenderingForTarget).
   const bool renderingAsked =
     std::any_of(kRenderingOptions.begin(), kRenderingOptions.end(),
                 [&options](const char* name) { return options.has(name); });
   const bool judged = !renderingAsked && maker->judgesRendering();
-  double defaultReach = std::numeric_limits<double>::infinity(), choosingRays = 0;
-  bool raised = false;
+  double choosingRays = 0;
+  RenderingChoice choice;
   std::vector<MovieFrameReport> reports;
   try
   {
     if (judged && !settings.plan)
-      if (auto higher = maker->withRaisedRendering(source, path, defaultReach))
+      if (auto other = maker->withRenderingForTarget(source, path, choice))
       {
         choosingRays = maker->raysTraced();
-        raised = true;
-        maker = std::move(higher);
+        maker = std::move(other);
       }
     const MoviePlan& plan = maker->plan();
     if (settings.plan)
@@ -559,9 +597,11 @@ int runMovie(const std::vector<std::string>& args)
       printPlan(plan, maker->frames(), path.parameter);
       if (judged)
         std::printf("rendering: the default, planned without tracing; the movie measures what it "
-                    "reaches on the first and last frames and, below %s dB, is made with the "
-                    "accurate preset instead\n",
-                    formatNumber(settings.quality + 1).c_str());
+                    "reaches on the first and last frames: at %s dB or more, it is made at %d "
+                    "rays a pixel where that reaches %s dB too; below, at %d where that does, "
+                    "else with the accurate preset\n",
+                    formatNumber(settings.quality + 1).c_str(), kLoweredRaysPerPixel,
+                    formatNumber(settings.quality + 1).c_str(), kRaisedRaysPerPixel);
       return kOk;
     }
     makeFrames(*maker, settings, files, movie.get(), prefix, reports);
@@ -579,14 +619,10 @@ int runMovie(const std::vector<std::string>& args)
   std::printf("movie of %zu frames along the %s, quality target %s dB%s\n", frames.size(),
               path.parameter.c_str(), formatNumber(settings.quality).c_str(),
               store ? ", accumulated in the store" : "");
-  if (raised)
-    std::printf(
-      "rendering: the accurate preset, since the default settings reach %.1f dB against "
-      "the converged picture on the first and last frames (%.0f rays traced to measure it, "
-      "counted below); "
-      "--preset chooses another\n",
-      defaultReach, choosingRays);
-  printReport(*maker, reports, settings.quality, choosingRays, raised);
+  printRenderingChoice(choice, settings.quality, choosingRays);
+  printReport(*maker, reports, settings.quality, choosingRays,
+              choice.change == RenderingChoice::Change::Raised ||
+                choice.change == RenderingChoice::Change::Accurate);
   std::vector<std::string> wrote;
   char last[32];
   std::snprintf(last, sizeof last, "-%03zu", frames.size() - 1);

@@ -142,6 +142,9 @@ struct MovieMaker::Internals
   /// Records of whole frames let go, their memory reused for the next frame traced: fresh memory
   /// costs its first touch (the kernel clears every page), memory used before does not.
   std::vector<RayRecord> spare;
+  /// Whole frames adopted from another maker that traced them in this run (adoptWhole): reported
+  /// as traced, though the store holds them.
+  std::set<int> madeByAnother;
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -306,23 +309,57 @@ struct MovieMaking
         this->progress());
       if (this->cancelled())
         throw MovieCancelled();
-      const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      // A frame with too many failed rays is no picture of its scene: neither used nor stored.
-      if (maker.Settings.checkTraced)
-        maker.Settings.checkTraced(records, k);
       // The tracer's count: on the adaptive grid the records leave out border rays a block traced
       // for a pixel that the block owning it filled (FrameTracer::raysIntegrated).
-      rays = static_cast<double>(tracer.raysIntegrated());
-      held = raysOf(records);
-      maker.RaysTraced += rays;
-      if (maker.Store)
-      {
-        in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records, seconds);
-        if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty())
-          this->keepPictures(k, maker.Settings.encodePictures(records));
-      }
+      return this->keepMade(k, std::move(records), static_cast<double>(tracer.raysIntegrated()),
+                            std::chrono::steady_clock::now() - t0);
     }
+    return this->keepWhole(k, std::move(records), rays, held);
+  }
+
+  /// Whole frame k made by this movie (traced, or anti-aliased again), `rays` integrated in
+  /// `took`: checked, counted, stored with its pictures, and kept.
+  const std::vector<RayRecord>& keepMade(int k, std::vector<RayRecord> records, double rays,
+                                         std::chrono::steady_clock::duration took)
+  {
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    // A frame with too many failed rays is no picture of its scene: neither used nor stored.
+    if (maker.Settings.checkTraced)
+      maker.Settings.checkTraced(records, k);
+    const double held = raysOf(records);
+    maker.RaysTraced += rays;
+    if (maker.Store)
+    {
+      in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records,
+                                   std::chrono::duration<double>(took).count());
+      if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty())
+        this->keepPictures(k, maker.Settings.encodePictures(records));
+    }
+    return this->keepWhole(k, std::move(records), rays, held);
+  }
+
+  /// Whole frame k anti-aliased again from `from`, the same frame traced with the rendering
+  /// `fromRendering` (FrameTracer::antialiasAgain): checked, counted, stored and kept as a frame
+  /// this movie traced, for the rays of its sampled pixels alone.
+  const std::vector<RayRecord>& derivedWhole(int k, const std::vector<RayRecord>& from,
+                                             const AntialiasOptions& fromRendering)
+  {
+    in.lastUse[k] = ++in.uses;
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    const FrameTracer tracer(this->withTextures(f));
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<RayRecord> records = from;
+    tracer.antialiasAgain(records, fromRendering, this->progress());
+    if (this->cancelled())
+      throw MovieCancelled();
+    return this->keepMade(k, std::move(records), static_cast<double>(tracer.raysIntegrated()),
+                          std::chrono::steady_clock::now() - t0);
+  }
+
+  /// Keeps whole frame k, counted once among the movie's whole frames.
+  const std::vector<RayRecord>& keepWhole(int k, std::vector<RayRecord> records, double rays,
+                                          double held)
+  {
     if (in.wholeCounted.insert(k).second)
     {
       maker.RaysOfMovie += rays;
@@ -502,9 +539,31 @@ struct MovieMaking
     };
   }
 
-  /// Whole frame k's own error against its converged picture: its probes (settingsProbes) traced
-  /// with the converged rendering, or read where they were traced before, and stored as a subset
-  /// of the frame's scene at that rendering. With `storeOnly`, probes not known are NotServed.
+  /// The converged records of whole frame k's probes `probes` (settingsProbes of its records):
+  /// traced with the converged rendering, or read where they were traced before, and stored as a
+  /// subset of the frame's scene at that rendering. With `storeOnly`, probes not known are
+  /// NotServed.
+  std::vector<RayRecord> convergedProbes(int k, const std::vector<std::int32_t>& probes,
+                                         bool storeOnly)
+  {
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    std::vector<std::pair<int, int>> pixels;
+    for (std::int32_t p : probes)
+      pixels.emplace_back(p % maker.Width, p / maker.Width);
+    SceneDescription subset = f.identity;
+    subset.subset = pixelSubsetId(pixels);
+    subset.rendering = convergedRendering();
+    if (auto found = this->known(k, subset, pixels))
+      return std::move(*found);
+    if (storeOnly)
+      throw NotServed();
+    SceneDescription d = this->withTextures(f);
+    d.rendering = convergedRendering();
+    return this->tracedSubset(FrameTracer(d), pixels, subset).records;
+  }
+
+  /// Whole frame k's own error against its converged picture: its probes (settingsProbes) against
+  /// their converged records (convergedProbes). With `storeOnly`, probes not known are NotServed.
   const SettingsError& settingsOf(int k, bool storeOnly)
   {
     const auto kept = in.settings.find(k);
@@ -515,24 +574,46 @@ struct MovieMaking
     if (!maker.Settings.holdToConverged || isConvergedRendering(f.identity.rendering))
       return in.settings.emplace(k, SettingsError{}).first->second;
     const std::vector<std::int32_t> probes = settingsProbes(records);
+    const std::vector<RayRecord> converged = this->convergedProbes(k, probes, storeOnly);
+    return in.settings.emplace(k, settingsError(records, probes, converged)).first->second;
+  }
+
+  /// Whole frame k's own error against its converged picture at the rendering of `lowered` (the
+  /// same frame at another adaptive cap): its probes anti-aliased again from the frame's records
+  /// (FrameTracer::antialiasAgain; read where that was done before, else done and stored as a
+  /// subset of `lowered`'s scene) against their converged records.
+  SettingsError settingsAt(int k, const MovieFrame& lowered)
+  {
+    const std::vector<RayRecord>& records = this->whole(k);
+    const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+    const std::vector<std::int32_t> probes = settingsProbes(records);
+    const std::vector<RayRecord> converged = this->convergedProbes(k, probes, false);
     std::vector<std::pair<int, int>> pixels;
     for (std::int32_t p : probes)
       pixels.emplace_back(p % maker.Width, p / maker.Width);
-    SceneDescription subset = f.identity;
+    // The probes' records read their edge neighbours' centre rays, the frame's own.
+    std::vector<JacobianSample> border;
+    for (const auto& [i, j] : edgeNeighbours(pixels, maker.Width, maker.Height))
+      border.push_back(jacobianSample(records[static_cast<std::size_t>(j) * maker.Width + i]));
+    SceneDescription subset = lowered.identity;
     subset.subset = pixelSubsetId(pixels);
-    subset.rendering = convergedRendering();
-    std::vector<RayRecord> converged;
+    subset.subset.border = borderDigest(border);
+    std::vector<RayRecord> probed;
     if (auto found = this->known(k, subset, pixels))
-      converged = std::move(*found);
-    else if (storeOnly)
-      throw NotServed();
+      probed = std::move(*found);
     else
     {
-      SceneDescription d = this->withTextures(f);
-      d.rendering = convergedRendering();
-      converged = this->tracedSubset(FrameTracer(d), pixels, subset).records;
+      const auto t0 = std::chrono::steady_clock::now();
+      const FrameTracer tracer(this->withTextures(lowered));
+      probed = tracer.antialiasAgain(records, f.identity.rendering, probes);
+      const double rays = static_cast<double>(tracer.raysIntegrated());
+      maker.RaysTraced += rays;
+      maker.RaysOfMovie += rays;
+      if (maker.Store)
+        storeFrame(*maker.Store, maker.Settings, subset, probed,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
-    return in.settings.emplace(k, settingsError(records, probes, converged)).first->second;
+    return settingsError(records, probes, probed, converged);
   }
 
   /// Frame k interpolated between `keys` (the nearest of them around it), completed to the target
@@ -935,27 +1016,69 @@ double MovieMaker::settingsReach(int k)
   return psnrOfMse(making.settingsOf(k, false).mse());
 }
 
-bool MovieMaker::judgesRendering() const
+double MovieMaker::settingsReachAt(int k, const MovieFrame& other, bool bound)
 {
-  return this->Settings.holdToConverged &&
-         this->Frames.front().identity.rendering == AntialiasOptions();
+  this->plan(); // as settingsReach
+  MovieMaking making{ *this, *this->Impl };
+  const SettingsError error = making.settingsAt(k, other);
+  return bound ? error.psnr() : psnrOfMse(error.mse());
 }
 
-std::unique_ptr<MovieMaker> MovieMaker::withRaisedRendering(vtkGeodesicSource* source,
-                                                            const MoviePath& path, double& reach)
+void MovieMaker::deriveWhole(MovieMaker& from, int k)
 {
-  reach = std::numeric_limits<double>::infinity();
-  if (!this->judgesRendering())
-    return nullptr;
-  reach = std::min(this->settingsReach(0),
-                   this->settingsReach(static_cast<int>(this->Frames.size()) - 1));
-  if (!(reach < this->Settings.quality + 1.0))
-    return nullptr;
-  // The accurate preset's keys hold 40 dB on the bench's four paths (bench/REPORT.md, "T = 40
-  // held on all four paths").
-  source->SetIntegrationPreset("accurate");
-  return std::make_unique<MovieMaker>(movieFrames(source, path), this->Parameter, this->Store,
-                                      this->Settings);
+  const std::size_t at = static_cast<std::size_t>(k);
+  if (k < 0 || at >= this->Frames.size() || at >= from.Frames.size() || from.Width != this->Width ||
+      from.Height != this->Height)
+    throw InvalidParameter("frame " + std::to_string(k) + " cannot be derived: the movies differ");
+  if (this->Impl->whole.count(k))
+    return;
+  // Stored before (this movie made again): read when it is needed, as any stored frame.
+  if (this->Store)
+    if (const std::optional<std::int64_t> id = this->Store->findFrame(this->Frames[at].identity))
+    {
+      this->Frames[at].storedId = id;
+      return;
+    }
+  MovieMaking source{ from, *from.Impl };
+  const std::vector<RayRecord>& records = source.whole(k);
+  MovieMaking making{ *this, *this->Impl };
+  making.derivedWhole(k, records, from.Frames[at].identity.rendering);
+}
+
+void MovieMaker::adoptWhole(MovieMaker& from, int k)
+{
+  const std::size_t at = static_cast<std::size_t>(k);
+  if (k < 0 || at >= this->Frames.size() || at >= from.Frames.size() || from.Width != this->Width ||
+      from.Height != this->Height)
+    throw InvalidParameter("frame " + std::to_string(k) + " cannot be adopted: the movies differ");
+  Internals &a = *from.Impl, &b = *this->Impl;
+  MovieMaking making{ from, a };
+  making.whole(k); // kept, read or traced, as from would make it
+  if (!from.Frames[at].storedId)
+    b.madeByAnother.insert(k); // traced for from's movie this run: not reused
+  this->Frames[at] = from.Frames[at];
+  b.whole[k] = a.whole.at(k);
+  b.lastUse[k] = ++b.uses;
+  const double rays = a.wholeRays.at(k);
+  b.wholeRays[k] = rays;
+  b.wholeHeldRays[k] = a.wholeHeldRays.at(k);
+  if (const auto id = a.storedIds.find(k); id != a.storedIds.end())
+    b.storedIds[k] = id->second;
+  if (const auto settings = a.settings.find(k); settings != a.settings.end())
+    b.settings[k] = settings->second;
+  if (const auto fingerprint = a.fingerprints.find(k); fingerprint != a.fingerprints.end())
+    b.fingerprints[k] = fingerprint->second;
+  if (const auto pictures = a.pictures.find(k); pictures != a.pictures.end())
+  {
+    b.pictures[k] = pictures->second;
+    b.pictureOrder.push_back(k);
+  }
+  if (b.wholeCounted.insert(k).second)
+  {
+    this->RaysOfMovie += rays;
+    this->RaysOfKeys += rays;
+    ++this->WholeCount;
+  }
 }
 
 std::vector<RayRecord> MovieMaker::frame(int k, MovieFrameReport& report)
@@ -1024,7 +1147,7 @@ void MovieMaker::reportWhole(int k, MovieFrameReport& report) const
   const auto settings = this->Impl->settings.find(k);
   if (settings != this->Impl->settings.end())
     report.settingsPsnr = report.estimatedPsnr = settings->second.psnr();
-  if (this->Frames[static_cast<std::size_t>(k)].storedId)
+  if (this->Frames[static_cast<std::size_t>(k)].storedId && !this->Impl->madeByAnother.count(k))
     report.raysReused = rays;
   else
   {

@@ -192,6 +192,39 @@ struct MovieSettings
   std::function<std::vector<std::string>(const std::vector<RayRecord>&)> encodePictures;
 };
 
+/// The adaptive cap a movie lowers its rendering to where the default reaches its target with
+/// room to spare (MovieMaker::withRenderingForTarget): a 2 × 2 pattern, whose even side lets the
+/// default frames' probes be anti-aliased again at it (FrameTracer::antialiasAgain). On the
+/// bench's movies at 200 × 200 it costs 0.87–0.91 of the default's CPU a frame and scores 3.5–4
+/// dB lower against converged frames (bench/REPORT.md, "Movies").
+constexpr int kLoweredRaysPerPixel = 5;
+
+/// The adaptive cap a movie raises its rendering to where the default does not reach its target
+/// (MovieMaker::withRenderingForTarget), before the accurate preset: a 4 × 4 pattern, even as
+/// kLoweredRaysPerPixel's. On the bench's movies at 200 × 200 it scores 42.6–48.8 dB against
+/// converged frames, above the accurate preset's 39.8–45.7, for about 0.7 of its CPU a frame
+/// (bench/REPORT.md, "Movies").
+constexpr int kRaisedRaysPerPixel = 17;
+
+/// How a movie's rendering was chosen for its target (MovieMaker::withRenderingForTarget).
+struct RenderingChoice
+{
+  enum class Change
+  {
+    Kept,    ///< the default rendering (or one asked for, not judged)
+    Lowered, ///< kLoweredRaysPerPixel between the first and last frames
+    Raised,  ///< kRaisedRaysPerPixel
+    Accurate ///< the accurate preset
+  };
+  Change change = Change::Kept;
+  /// What the default rendering reaches against the converged picture: the lower of the first
+  /// and last frames' estimates (infinite where not judged).
+  double defaultReach = std::numeric_limits<double>::infinity();
+  /// What the adaptive cap chosen (Lowered, Raised) reaches, as defaultReach; for Accurate, what
+  /// kRaisedRaysPerPixel reached (infinite where it was not measured).
+  double reach = std::numeric_limits<double>::infinity();
+};
+
 /// One movie: its plan, made once, and its frames, each made on demand.
 class ASRTFILTERS_EXPORT MovieMaker
 {
@@ -216,14 +249,25 @@ public:
   /// Whether the movie's rendering is judged against its target: held to converged, and its
   /// frames' rendering the default one (a rendering asked for is kept).
   bool judgesRendering() const;
-  /// Where the movie's default rendering does not reach its target against the converged picture
-  /// (what its first and last frames' probes measure it to reach, below the target plus 1 dB;
-  /// both are keys of every plan, made whole here, traced and stored or read): the same movie
-  /// with `source`, the frames' source as movieFrames took them along `path`, set to the
-  /// accurate preset. Null where the rendering reaches the target or is not judged. `reach`
-  /// gets what it reaches (infinite where not judged).
-  std::unique_ptr<MovieMaker> withRaisedRendering(vtkGeodesicSource* source, const MoviePath& path,
-                                                  double& reach);
+  /// The movie at the rendering its target asks for, where it is judged (judgesRendering): what
+  /// the default rendering reaches against the converged picture is measured on the first and
+  /// last frames (both are keys of every plan, made whole here, traced and stored or read; their
+  /// probes traced converged, SettingsError.h), and so is what the adaptive caps
+  /// kLoweredRaysPerPixel and kRaisedRaysPerPixel would reach (the same probes anti-aliased again
+  /// at each cap, FrameTracer::antialiasAgain, a few hundred rays). A rendering is enough where it
+  /// reaches the target plus 1 dB: the default and the higher cap by their probes' estimate, the
+  /// lower cap by their bound (SettingsError::psnr), so that the default is left for a cheaper
+  /// rendering only where the probes vouch for it.
+  ///  - The default enough, and the lower cap too (with `lower`): the same movie at the lower cap,
+  ///    its first and last frames the ones made here (adopted).
+  ///  - The default not enough (with `raise`): the same movie at the higher cap where that is
+  ///    enough, its first and last frames anti-aliased again from the ones made here; else with
+  ///    the accurate preset.
+  /// Null where the default is kept; `source` (the frames' source as movieFrames took them along
+  /// `path`) is left set to the rendering returned. `choice` says what was chosen and measured.
+  std::unique_ptr<MovieMaker> withRenderingForTarget(vtkGeodesicSource* source,
+                                                     const MoviePath& path, RenderingChoice& choice,
+                                                     bool raise = true, bool lower = true);
 
   /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
   /// traces whole frames, they are made coarse first and the plan learns from each
@@ -282,6 +326,19 @@ private:
   /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
   /// whole and its probes, traced and stored or read, as the movie would.
   double settingsReach(int k);
+  /// What frame k's settings would reach at the rendering of `other` (frame k at another
+  /// adaptive cap): its estimate as settingsReach gives it, or with `bound` its bound
+  /// (SettingsError::psnr). Frame k is made whole as settingsReach makes it, its probes
+  /// anti-aliased again.
+  double settingsReachAt(int k, const MovieFrame& other, bool bound);
+  /// Frame k anti-aliased again from `from`'s (a maker of the same movie at another adaptive cap,
+  /// FrameTracer::antialiasAgain), made by `from` if it has not made it; nothing where this movie
+  /// has it, or the store does.
+  void deriveWhole(MovieMaker& from, int k);
+  /// Takes frame k from `from` (a maker of the same movie at another rendering): its identity, its
+  /// records (made by `from` if it has not made them) and what `from` measured of it, counted as
+  /// this movie's.
+  void adoptWhole(MovieMaker& from, int k);
   struct Internals;
   std::vector<MovieFrame> Frames;
   std::string Parameter;

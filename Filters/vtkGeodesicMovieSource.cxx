@@ -40,8 +40,9 @@ struct vtkGeodesicMovieSource::Internals
   vtkSmartPointer<vtkGeodesicSource> Source;
   asrt::MoviePath Path;
   bool RenderingChecked = false; ///< whether the rendering was judged against the target
-  bool RenderingRaised = false;
-  double ChoosingRays = 0; ///< traced by the maker of the default rendering before it was raised
+  bool RenderingRaised = false, RenderingLowered = false;
+  /// Traced by the maker of the default rendering before it was raised or lowered.
+  double ChoosingRays = 0;
 };
 
 vtkGeodesicMovieSource::vtkGeodesicMovieSource()
@@ -150,7 +151,7 @@ int vtkGeodesicMovieSource::RequestInformation(vtkInformation*, vtkInformationVe
     {
       in.Maker.reset();
       in.Store.reset();
-      in.RenderingChecked = in.RenderingRaised = false;
+      in.RenderingChecked = in.RenderingRaised = in.RenderingLowered = false;
       in.ChoosingRays = 0;
       this->RaysTraced = 0;
       const std::string parameter = text(this->PathParameter);
@@ -286,6 +287,7 @@ int vtkGeodesicMovieSource::RequestData(vtkInformation*, vtkInformationVector**,
     asrt::addDoubleField(fd, "PathParameter", { in.Maker->frames()[k].s });
     asrt::addCountField(fd, "FrameIndex", k);
     asrt::addCountField(fd, "RenderingRaised", in.RenderingRaised ? 1 : 0);
+    asrt::addCountField(fd, "RenderingLowered", in.RenderingLowered ? 1 : 0);
     image->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), static_cast<double>(k));
     this->UpdateProgress(1.0);
   }
@@ -303,14 +305,17 @@ void vtkGeodesicMovieSource::JudgeRendering()
   Internals& in = *this->Impl;
   if (in.RenderingChecked)
     return;
-  double reach = 0;
-  if (this->RaiseRenderingForTarget)
-    if (auto higher = in.Maker->withRaisedRendering(in.Source, in.Path, reach))
-    {
-      in.ChoosingRays = in.Maker->raysTraced();
-      in.Maker = std::move(higher);
-      in.RenderingRaised = true;
-    }
+  asrt::RenderingChoice choice;
+  if (auto other = in.Maker->withRenderingForTarget(in.Source, in.Path, choice,
+                                                    this->RaiseRenderingForTarget != 0,
+                                                    this->LowerRenderingForTarget != 0))
+  {
+    in.ChoosingRays = in.Maker->raysTraced();
+    in.Maker = std::move(other);
+    in.RenderingRaised = choice.change == asrt::RenderingChoice::Change::Raised ||
+                         choice.change == asrt::RenderingChoice::Change::Accurate;
+    in.RenderingLowered = choice.change == asrt::RenderingChoice::Change::Lowered;
+  }
   in.RenderingChecked = true;
 }
 
@@ -340,6 +345,7 @@ void vtkGeodesicMovieSource::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "QualityTarget: " << this->QualityTarget << "\n";
   os << indent << "HoldToConverged: " << this->HoldToConverged << "\n";
   os << indent << "RaiseRenderingForTarget: " << this->RaiseRenderingForTarget << "\n";
+  os << indent << "LowerRenderingForTarget: " << this->LowerRenderingForTarget << "\n";
   os << indent << "Resolution: " << this->Resolution[0] << " " << this->Resolution[1] << "\n";
   os << indent << "StoreConnection: " << (text(this->StoreConnection).empty() ? "(none)" : "(set)")
      << "\n";

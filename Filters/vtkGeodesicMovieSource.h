@@ -95,14 +95,26 @@ public:
   ///@}
 
   ///@{
-  /// Whether a target the scene's rendering does not reach makes the movie with the accurate
-  /// preset, as asrt movie does (on, the default): held to converged, and the scene's rendering
-  /// the default one, the first frame requested measures what it reaches on the first and last
-  /// frames (MovieMaker::withRaisedRendering), and below the target plus 1 dB the movie is made
-  /// with the accurate preset. The field RenderingRaised says which.
+  /// Whether a target the scene's rendering does not reach raises the movie's rendering, as asrt
+  /// movie does (on, the default): held to converged, and the scene's rendering the default one,
+  /// the first frame requested measures what it reaches on the first and last frames
+  /// (MovieMaker::withRenderingForTarget), and below the target plus 1 dB the movie is made at
+  /// the adaptive cap asrt::kRaisedRaysPerPixel where that reaches it, else with the accurate
+  /// preset. The field RenderingRaised says which.
   vtkSetMacro(RaiseRenderingForTarget, vtkTypeBool);
   vtkGetMacro(RaiseRenderingForTarget, vtkTypeBool);
   vtkBooleanMacro(RaiseRenderingForTarget, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /// Whether a target the scene's default rendering reaches with room to spare makes the movie at
+  /// the cheaper adaptive cap asrt::kLoweredRaysPerPixel, as asrt movie does (on, the default):
+  /// where that cap still reaches the target plus 1 dB on the first and last frames (their probes
+  /// anti-aliased again at it, MovieMaker::withRenderingForTarget), the frames between are made at
+  /// it, the two ends kept as traced. The field RenderingLowered says which.
+  vtkSetMacro(LowerRenderingForTarget, vtkTypeBool);
+  vtkGetMacro(LowerRenderingForTarget, vtkTypeBool);
+  vtkBooleanMacro(LowerRenderingForTarget, vtkTypeBool);
   ///@}
 
   ///@{
@@ -148,7 +160,8 @@ protected:
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   /// Once per maker: the rendering judged against the target, and raised where it falls short
-  /// (RaiseRenderingForTarget).
+  /// (RaiseRenderingForTarget) or lowered where a cheaper one reaches it
+  /// (LowerRenderingForTarget).
   void JudgeRendering();
 
   char* SceneFileName = nullptr;
@@ -161,6 +174,7 @@ protected:
   double QualityTarget = 35.0;
   vtkTypeBool HoldToConverged = 1;
   vtkTypeBool RaiseRenderingForTarget = 1;
+  vtkTypeBool LowerRenderingForTarget = 1;
   int Resolution[2] = { 0, 0 };
   char* StoreConnection = nullptr;
   char* StoreLabel = nullptr;

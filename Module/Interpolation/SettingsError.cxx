@@ -135,11 +135,15 @@ std::vector<std::int32_t> settingsProbes(const std::vector<RayRecord>& frame,
 
 SettingsError settingsError(const std::vector<RayRecord>& frame,
                             const std::vector<std::int32_t>& probes,
+                            const std::vector<RayRecord>& probed,
                             const std::vector<RayRecord>& converged)
 {
   if (converged.size() != probes.size())
     invalid(std::to_string(converged.size()) + " converged records for " +
             std::to_string(probes.size()) + " probes");
+  if (probed.size() != probes.size())
+    invalid(std::to_string(probed.size()) + " probed records for " + std::to_string(probes.size()) +
+            " probes");
   SettingsError out;
   const std::vector<std::uint8_t> strata = settingsStrata(frame);
   for (std::uint8_t s : strata)
@@ -151,7 +155,7 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
     if (probes[q] < 0 || static_cast<std::size_t>(probes[q]) >= frame.size())
       invalid("probe " + std::to_string(probes[q]) + " lies outside the frame of " +
               std::to_string(frame.size()) + " pixels");
-    const RayRecord& r = frame[static_cast<std::size_t>(probes[q])];
+    const RayRecord& r = probed[q];
     // Per channel, in double: colorError2's float would round a frame's sum.
     const double e = (255.0 * (r.color - converged[q].color)).squaredNorm() / 3.0;
     SettingsStratum& s = out.strata[strata[static_cast<std::size_t>(probes[q])]];
@@ -160,6 +164,22 @@ SettingsError settingsError(const std::vector<RayRecord>& frame,
     s.sum2 += e * e;
   }
   return out;
+}
+
+SettingsError settingsError(const std::vector<RayRecord>& frame,
+                            const std::vector<std::int32_t>& probes,
+                            const std::vector<RayRecord>& converged)
+{
+  std::vector<RayRecord> probed;
+  probed.reserve(probes.size());
+  for (std::int32_t p : probes)
+  {
+    if (p < 0 || static_cast<std::size_t>(p) >= frame.size())
+      invalid("probe " + std::to_string(p) + " lies outside the frame of " +
+              std::to_string(frame.size()) + " pixels");
+    probed.push_back(frame[static_cast<std::size_t>(p)]);
+  }
+  return settingsError(frame, probes, probed, converged);
 }
 
 SettingsError measureSettingsError(const std::vector<RayRecord>& frame, int width, int height,

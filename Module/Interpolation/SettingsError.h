@@ -119,6 +119,13 @@ ASRTINTERPOLATION_EXPORT std::vector<std::int32_t> settingsProbes(
 ASRTINTERPOLATION_EXPORT SettingsError settingsError(const std::vector<RayRecord>& frame,
                                                      const std::vector<std::int32_t>& probes,
                                                      const std::vector<RayRecord>& converged);
+/// As above, the records at the probes given apart (`probed`, in the probes' order), the strata
+/// `frame`'s: the same frame at another adaptive cap (FrameTracer::antialiasAgain), which samples
+/// the same pixels and so has the same strata, measured without making it whole.
+ASRTINTERPOLATION_EXPORT SettingsError settingsError(const std::vector<RayRecord>& frame,
+                                                     const std::vector<std::int32_t>& probes,
+                                                     const std::vector<RayRecord>& probed,
+                                                     const std::vector<RayRecord>& converged);
 
 /// The probes of `frame` (width × height records) traced by `converged` (the frame's scene with
 /// a converged rendering), and the estimate. Throws InvalidParameter for a frame of another

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <string>
 #include <tuple>
 
 namespace asrt
@@ -452,5 +453,80 @@ bool FrameTracer::antialias(std::vector<RayRecord>& records,
     }
   }
   return !stop;
+}
+
+namespace
+{
+/// Throws InvalidParameter unless the whole frame `frame` traced with `from` can be anti-aliased
+/// again into `to`'s (FrameTracer::antialiasAgain).
+void checkAntialiasAgain(const std::vector<RayRecord>& frame, const AntialiasOptions& from,
+                         const AntialiasOptions& to, int width, int height)
+{
+  const auto refuse = [](const std::string& why)
+  { throw InvalidParameter("anti-aliasing a traced frame again: " + why); };
+  AntialiasOptions same = from;
+  same.maxRaysPerPixel = to.maxRaysPerPixel;
+  if (same != to)
+    refuse("the renderings differ in more than maxRaysPerPixel");
+  if (to.mode != AntialiasMode::Adaptive || to.supersample > 1)
+    refuse("the rendering is not adaptive sampling without a supersample");
+  if (adaptivePatternSide(from.maxRaysPerPixel) < 2)
+    refuse("the frame was traced with maxRaysPerPixel " + std::to_string(from.maxRaysPerPixel) +
+           ", which samples no pixel");
+  const int side = adaptivePatternSide(to.maxRaysPerPixel);
+  if (side < 2 || side % 2 != 0)
+    refuse("maxRaysPerPixel " + std::to_string(to.maxRaysPerPixel) + " gives a pattern of side " +
+           std::to_string(side) + ", not an even side of 2 or more");
+  const std::size_t w = static_cast<std::size_t>(width);
+  if (frame.size() != w * static_cast<std::size_t>(height))
+    refuse("the frame has " + std::to_string(frame.size()) + " records for " +
+           std::to_string(width) + " x " + std::to_string(height) + " pixels");
+  for (std::size_t k = 0; k < frame.size(); ++k)
+    if (frame[k].i != static_cast<int>(k % w) || frame[k].j != static_cast<int>(k / w))
+      refuse("record " + std::to_string(k) + " is not pixel (" + std::to_string(k % w) + ", " +
+             std::to_string(k / w) + ")");
+}
+}
+
+bool FrameTracer::antialiasAgain(std::vector<RayRecord>& frame, const AntialiasOptions& tracedWith,
+                                 const std::function<bool(double)>& progress) const
+{
+  checkAntialiasAgain(frame, tracedWith, this->Desc.rendering, this->Desc.camera.width,
+                      this->Desc.camera.height);
+  return this->antialias(frame, {}, progress);
+}
+
+std::vector<RayRecord> FrameTracer::antialiasAgain(const std::vector<RayRecord>& frame,
+                                                   const AntialiasOptions& tracedWith,
+                                                   const std::vector<std::int32_t>& pixels,
+                                                   std::vector<JacobianSample>* border) const
+{
+  const int width = this->Desc.camera.width, height = this->Desc.camera.height;
+  checkAntialiasAgain(frame, tracedWith, this->Desc.rendering, width, height);
+  std::vector<unsigned char> asked(frame.size(), 0);
+  std::vector<RayRecord> records;
+  records.reserve(pixels.size());
+  for (const std::int32_t p : pixels)
+  {
+    if (p < 0 || static_cast<std::size_t>(p) >= frame.size())
+      throw InvalidParameter("anti-aliasing a traced frame again: pixel index " +
+                             std::to_string(p) + " lies outside the frame");
+    if (asked[static_cast<std::size_t>(p)]++)
+      throw InvalidParameter("anti-aliasing a traced frame again: pixel index " +
+                             std::to_string(p) + " is given twice");
+    records.push_back(frame[static_cast<std::size_t>(p)]);
+  }
+  // The judgement and the footprints' quadratic maps read the 4 edge neighbours' centre rays.
+  std::vector<std::pair<int, int>> ij;
+  ij.reserve(pixels.size());
+  for (const RayRecord& r : records)
+    ij.emplace_back(r.i, r.j);
+  std::vector<JacobianSample> neighbours;
+  for (const auto& [i, j] : edgeNeighbours(ij, width, height))
+    neighbours.push_back(jacobianSample(frame[static_cast<std::size_t>(j) * width + i]));
+  this->antialias(records, neighbours);
+  if (border)
+    *border = std::move(neighbours);
+  return records;
 }
 }

@@ -141,6 +141,27 @@ public:
                  const std::vector<JacobianSample>& neighbours = {},
                  const std::function<bool(double)>& progress = nullptr) const;
 
+  /// A whole frame traced with the rendering `tracedWith`, anti-aliased again into this tracer's
+  /// frame: bit for bit the frame traceRows would trace, for the extra rays of its sampled pixels
+  /// and edge midpoints alone. It holds where the two renderings differ only in the adaptive cap
+  /// and this one's pattern has an even side (adaptivePatternSide): adaptive sampling judges a
+  /// pixel by centre rays and edge midpoints alone, the same at any cap of two or more rays a
+  /// side, and a pattern of even side takes no colour from the centre ray, whose colour the
+  /// first anti-aliasing overwrote. `frame` is whole and row-major, as traceRows gives it. Throws
+  /// InvalidParameter otherwise, naming what differs; returns false if `progress` asked to stop
+  /// (the colours are then incomplete).
+  bool antialiasAgain(std::vector<RayRecord>& frame, const AntialiasOptions& tracedWith,
+                      const std::function<bool(double)>& progress = nullptr) const;
+  /// As above, for the pixels of `frame` at the indices `pixels` alone (each once): their records
+  /// as the whole frame anti-aliased again would give them, bit for bit, in the order given,
+  /// judged against their edge neighbours' centre rays in `frame`, which `border` (if given)
+  /// receives (those not among `pixels`, sorted by pixel). Throws InvalidParameter as above, and
+  /// for an index outside the frame or given twice.
+  std::vector<RayRecord> antialiasAgain(const std::vector<RayRecord>& frame,
+                                        const AntialiasOptions& tracedWith,
+                                        const std::vector<std::int32_t>& pixels,
+                                        std::vector<JacobianSample>* border = nullptr) const;
+
   /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left. The rows just outside
   /// the band are traced too (and dropped) so that the Jacobians and the anti-aliasing of a band
   /// are those of the whole frame: pieces assemble into exactly the single-piece frame.

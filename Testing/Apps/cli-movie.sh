@@ -4,7 +4,8 @@
 # frame this script traces itself at that frame's parameters; the same movie again traces no ray
 # and writes the same bytes (the movie file too); twice the frames on the same path reuses every
 # old frame and traces fewer rays than its new frames would take traced directly; a target the
-# default rendering does not reach raises it to the accurate preset; and the refusals, each with
+# default rendering does not reach raises it (to 17 rays a pixel, or the accurate preset), one a
+# cheaper cap reaches lowers it between the first and last frames; and the refusals, each with
 # its exit code and nothing written.
 # Usage: cli-movie.sh ASRT CHECKER EXPECT SCENES_DIR WORK_DIR
 set -euo pipefail
@@ -100,8 +101,9 @@ for k in 0 1 2 3 4 5 6; do
   cmp "held/fig4-mass-start-00$k.png" "held-again/fig4-mass-start-00$k.png"
 done
 
-step "a target the default rendering does not reach: the accurate preset; a rendering asked for is kept"
-# At 32x32 the default rendering reaches about 31 dB against the converged pictures.
+step "a target neither the default rendering nor 17 rays a pixel reach: the accurate preset; a rendering asked for is kept"
+# At 32x32 the default rendering reaches about 30 dB against the converged pictures, 17 rays a
+# pixel about 38.
 raise=(--ramp mass=0.65:0.8 -n 3 -r 32x32 --quality 40 -q)
 "$expect" 0 "rendering: the accurate preset, since the default settings reach [0-9.]+ dB" -- \
   "$asrt" movie "$scene" "${raise[@]}" -o raised/ > /dev/null
@@ -113,6 +115,43 @@ for k in 0 2; do cmp "raised/fig4-mass-start-00$k.png" "accurate-00$k.png"; done
 out="$("$asrt" movie "$scene" "${raise[@]}" --preset balanced -o kept/)"
 if grep -q "^rendering:" <<< "$out"; then echo "a rendering asked for was raised" >&2; exit 1; fi
 for k in 0 2; do cmp "kept/fig4-mass-start-00$k.png" "balanced-00$k.png"; done
+
+step "a target a cheaper cap reaches: the frames between the ends at 5 rays a pixel"
+# At 32x32 the default rendering reaches about 30 dB against the converged pictures, 5 rays a pixel
+# about 25 (its probes' bound).
+low=(--ramp mass=0.65:0.8 -n 5 -r 32x32 --quality 20 -q --store)
+out="$("$expect" 0 "rendering: at most 5 rays a pixel between the first and last frames" -- \
+  "$asrt" movie "$scene" "${low[@]}" -o lowered/)"
+echo "$out"
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:5 -r 32x32 --formats png -q -o low-default > /dev/null
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:5 -r 32x32 --max-rays 5 --formats png -q \
+  -o low-cap5 > /dev/null
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:5 -r 32x32 --antialias filter --supersample 4 \
+  --grid 1 --formats png -q -o low-converged > /dev/null
+for k in 0 1 2 3 4; do
+  "$check" "lowered/fig4-mass-start-00$k.png:low-converged-00$k.png>=19"
+done
+# The ends, traced at the default rendering to judge it, stay the movie's; the frames between
+# traced whole are the cheaper cap's.
+for k in 0 4; do cmp "lowered/fig4-mass-start-00$k.png" "low-default-00$k.png"; done
+between="$(awk '$1 ~ /^[1-3]$/ && ($3 == "key" || $3 == "traced") { print $1 }' <<< "$out")"
+test -n "$between" || { echo "no frame between the ends traced whole" >&2; exit 1; }
+for k in $between; do cmp "lowered/fig4-mass-start-00$k.png" "low-cap5-00$k.png"; done
+"$expect" 0 "rays traced: 0$" -- "$asrt" movie "$scene" "${low[@]}" -o lowered-again/ > /dev/null
+for k in 0 1 2 3 4; do
+  cmp "lowered/fig4-mass-start-00$k.png" "lowered-again/fig4-mass-start-00$k.png"
+done
+
+step "a target the default misses and 17 rays a pixel reach: the movie at that cap"
+high=(--ramp mass=0.65:0.8 -n 3 -r 32x32 --quality 30 -q --store)
+"$expect" 0 "rendering: at most 17 rays a pixel, since the default settings reach" -- \
+  "$asrt" movie "$scene" "${high[@]}" -o high/ > /dev/null
+"$asrt" trace "$scene" --sweep mass=0.65:0.8:3 -r 32x32 --max-rays 17 --formats png -q \
+  -o cap17 > /dev/null
+# The ends anti-aliased again from the default's: the frames traced at that cap, bit for bit.
+for k in 0 2; do cmp "high/fig4-mass-start-00$k.png" "cap17-00$k.png"; done
+"$expect" 0 "rays traced: 0$" -- "$asrt" movie "$scene" "${high[@]}" -o high-again/ > /dev/null
+for k in 0 1 2; do cmp "high/fig4-mass-start-00$k.png" "high-again/fig4-mass-start-00$k.png"; done
 
 step "twice the frames on the same path: the old frames reused whole, only the new ones traced"
 out="$("$expect" 0 "rays traced: [1-9][0-9]*$" -- "$asrt" movie "$scene" --ramp mass=0.65:0.8 -n 13 \

@@ -5,6 +5,7 @@
 #include "FiltersTestUtilities.h"
 #include "vtkGeodesicMovieSource.h"
 
+#include "GeodesicMovie.h"
 #include "MoviePlan.h"
 
 #include "vtkCallbackCommand.h"
@@ -372,6 +373,76 @@ TEST(MovieSource, ATargetTheScenesRenderingDoesNotReachRaisesItToTheAccuratePres
   ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
   EXPECT_EQ(fieldOf(low, "RenderingRaised"), 0.0);
   EXPECT_EQ(colours(low), tracedAt(kTo, nullptr));
+}
+
+TEST(MovieSource, ATargetACheaperCapReachesLowersTheRenderingBetweenTheEnds)
+{
+  vtkNew<vtkGeodesicMovieSource> movie;
+  vtkNew<MessageCatcher> catcher;
+  watch(movie, catcher);
+  configure(movie);
+  movie->HoldToConvergedOn();
+  movie->SetNumberOfFrames(5);
+  movie->SetResolution(24, 24);
+  movie->SetQualityTarget(20); // the default rendering reaches about 31 dB at this size
+  auto tracedAt = [](double mass, int maxRays, bool converged)
+  {
+    vtkNew<vtkGeodesicSource> source;
+    source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+    source->SetResolution(24, 24);
+    source->SetMass(mass);
+    if (maxRays)
+      source->SetMaxRaysPerPixel(maxRays);
+    if (converged)
+    {
+      source->SetIntegrationPreset("accurate");
+      source->SetSupersample(4);
+    }
+    source->Update();
+    return colours(source->GetOutput());
+  };
+  const double step = (kTo - kFrom) / 4;
+  std::vector<vtkSmartPointer<vtkImageData>> frames;
+  for (int k = 0; k < 5; ++k)
+    frames.push_back(frameAt(movie, k));
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  for (int k = 0; k < 5; ++k)
+  {
+    EXPECT_EQ(fieldOf(frames[k], "RenderingLowered"), 1.0) << "frame " << k;
+    EXPECT_EQ(fieldOf(frames[k], "RenderingRaised"), 0.0) << "frame " << k;
+    // Every frame meets the target against the converged picture the test traces.
+    EXPECT_GE(psnrOf(colours(frames[k]), tracedAt(kFrom + k * step, 0, true)), 19.0)
+      << "frame " << k;
+  }
+  // The ends, traced to judge the rendering, stay as the default rendering traced them; the
+  // frames between that the plan traces whole are the cheaper cap's.
+  EXPECT_EQ(colours(frames[0]), tracedAt(kFrom, 0, false));
+  EXPECT_EQ(colours(frames[4]), tracedAt(kTo, 0, false));
+  int whole = 0;
+  for (int k = 1; k < 4; ++k)
+  {
+    const int method = movie->GetPlannedMethod(k);
+    if (method == static_cast<int>(asrt::FrameMethod::Key) ||
+        method == static_cast<int>(asrt::FrameMethod::Traced))
+    {
+      ++whole;
+      EXPECT_EQ(colours(frames[k]), tracedAt(kFrom + k * step, asrt::kLoweredRaysPerPixel, false))
+        << "frame " << k;
+      EXPECT_NE(colours(frames[k]), tracedAt(kFrom + k * step, 0, false)) << "frame " << k;
+    }
+  }
+  EXPECT_GT(whole, 0);
+
+  // Off, or at a target the cheaper cap does not reach with room to spare, the default stays.
+  movie->LowerRenderingForTargetOff();
+  const vtkSmartPointer<vtkImageData> kept = frameAt(movie, 2);
+  EXPECT_EQ(fieldOf(kept, "RenderingLowered"), 0.0);
+  movie->LowerRenderingForTargetOn();
+  movie->RaiseRenderingForTargetOff();
+  movie->SetQualityTarget(30);
+  const vtkSmartPointer<vtkImageData> near = frameAt(movie, 2);
+  ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
+  EXPECT_EQ(fieldOf(near, "RenderingLowered"), 0.0);
 }
 
 TEST(MovieSource, AnAbortStopsTheFrameAndTheNextRequestMakesIt)

@@ -468,6 +468,97 @@ TEST(Antialiasing, FramesAreTheSameAtAnyThreadCountAndInAnySplit)
   }
 }
 
+TEST(Antialiasing, AFrameAntialiasedAgainAtALowerEvenCapIsThatCapsFrameBitForBit)
+{
+  // Fig. 1 on the adaptive grid (the default lattice): its cylinders' edges are sampled, and most
+  // centre rays interpolated. Traced at the default cap of 9 rays and anti-aliased again at 5 (a
+  // 2 × 2 pattern), the frame is the one traced at 5, every record, for the rays of its sampled
+  // pixels and edge midpoints alone.
+  const int W = 128, H = 96;
+  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
+                                     [](const std::string& path) { return readPngTexture(path); });
+  d.camera.width = W;
+  d.camera.height = H;
+  SceneDescription lower = d;
+  lower.rendering.maxRaysPerPixel = 5;
+  const FrameTracer traced(d), direct(lower);
+  const std::vector<RayRecord> before = traced.traceRows(0, H);
+  const std::vector<RayRecord> truth = direct.traceRows(0, H);
+  std::vector<RayRecord> again = before;
+  long sampled = 0, interpolated = 0, extraRays = 0;
+  for (const RayRecord& r : truth)
+  {
+    sampled += r.raysPerPixel > 2; // more than the centre ray and the midpoints charged to it
+    interpolated += !r.traced;
+    extraRays += r.raysPerPixel - (r.traced ? 1 : 0);
+  }
+  EXPECT_GT(sampled, 50);
+  EXPECT_GT(interpolated, W * H / 4);
+  const FrameTracer antialiasing(lower);
+  ASSERT_TRUE(antialiasing.antialiasAgain(again, d.rendering));
+  // The sampled pixels' rays and the edge midpoints, and no centre ray.
+  EXPECT_EQ(antialiasing.raysIntegrated(), extraRays);
+  EXPECT_LT(antialiasing.raysIntegrated(), direct.raysIntegrated() / 2);
+  ASSERT_EQ(again.size(), truth.size());
+  long changed = 0;
+  auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  for (std::size_t k = 0; k < truth.size(); ++k)
+  {
+    const RayRecord &a = truth[k], &b = again[k];
+    ASSERT_EQ(a.i, b.i);
+    ASSERT_EQ(a.j, b.j);
+    EXPECT_EQ(a.raysPerPixel, b.raysPerPixel) << "pixel " << a.i << ", " << a.j;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(a.color[c], b.color[c]) << "pixel " << a.i << ", " << a.j;
+    EXPECT_TRUE(same(a.u, b.u) && same(a.dudi, b.dudi) && same(a.dvdj, b.dvdj));
+    changed += before[k].color != b.color;
+  }
+  EXPECT_GT(changed, sampled / 2); // the two caps do give other colours where they sample
+
+  // Scattered pixels alone, judged against their neighbours in the frame: the same records.
+  std::vector<std::int32_t> some;
+  for (std::int32_t p = 5; p < W * H; p += 7)
+    some.push_back(p);
+  std::vector<JacobianSample> border;
+  const std::vector<RayRecord> piece =
+    FrameTracer(lower).antialiasAgain(before, d.rendering, some, &border);
+  ASSERT_EQ(piece.size(), some.size());
+  EXPECT_FALSE(border.empty());
+  for (std::size_t q = 0; q < some.size(); ++q)
+  {
+    const RayRecord &a = truth[static_cast<std::size_t>(some[q])], &b = piece[q];
+    ASSERT_EQ(a.i, b.i);
+    ASSERT_EQ(a.j, b.j);
+    EXPECT_EQ(a.raysPerPixel, b.raysPerPixel) << "pixel " << a.i << ", " << a.j;
+    EXPECT_EQ(a.color, b.color) << "pixel " << a.i << ", " << a.j;
+  }
+
+  // Renderings it cannot derive are refused by name.
+  auto refusal = [&](const AntialiasOptions& to, const AntialiasOptions& from)
+  {
+    SceneDescription t = d;
+    t.rendering = to;
+    std::vector<RayRecord> frame = truth;
+    try
+    {
+      FrameTracer(t).antialiasAgain(frame, from);
+    }
+    catch (const InvalidParameter& e)
+    {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  AntialiasOptions other = lower.rendering, single = d.rendering;
+  other.gridLattice = 1;
+  EXPECT_NE(refusal(other, d.rendering).find("more than maxRaysPerPixel"), std::string::npos);
+  EXPECT_NE(refusal(d.rendering, lower.rendering).find("not an even side"), std::string::npos);
+  single.maxRaysPerPixel = 1;
+  EXPECT_NE(refusal(lower.rendering, single).find("samples no pixel"), std::string::npos);
+  EXPECT_THROW(FrameTracer(lower).antialiasAgain(before, d.rendering, { 3, 3 }), InvalidParameter);
+  EXPECT_THROW(FrameTracer(lower).antialiasAgain(before, d.rendering, { W * H }), InvalidParameter);
+}
+
 TEST(Antialiasing, BadRenderingOptionsAreRefusedNamingTheField)
 {
   const std::string head =
