@@ -142,9 +142,10 @@ struct MovieMaker::Internals
   /// Records of whole frames let go, their memory reused for the next frame traced: fresh memory
   /// costs its first touch (the kernel clears every page), memory used before does not.
   std::vector<RayRecord> spare;
-  /// Whole frames adopted from another maker that traced them in this run (adoptWhole): reported
-  /// as traced, though the store holds them.
-  std::set<int> madeByAnother;
+  /// Whole frames made in this run (traced, or anti-aliased again; by this maker, or by the one it
+  /// adopted them from, adoptWhole): reported as made, though the store holds them by the time
+  /// the plan looks (the rendering's judgement makes the first and last frames before it).
+  std::set<int> madeNow;
 };
 
 MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, RayStore* store,
@@ -328,6 +329,7 @@ struct MovieMaking
       maker.Settings.checkTraced(records, k);
     const double held = raysOf(records);
     maker.RaysTraced += rays;
+    in.madeNow.insert(k);
     if (maker.Store)
     {
       in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records,
@@ -1009,16 +1011,25 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
   this->Impl->keysMade = true;
 }
 
+void MovieMaker::lookUpStored(int k)
+{
+  MovieFrame& f = this->Frames[static_cast<std::size_t>(k)];
+  if (this->Store && !this->Plan && !f.storedId && !this->Impl->storedIds.count(k))
+    f.storedId = this->Store->findFrame(f.identity);
+}
+
 double MovieMaker::settingsReach(int k)
 {
-  this->plan(); // the stored frames looked up: a stored frame is read, not traced again
+  // Not the plan: a movie made at another rendering would leave it unused, and planning a
+  // movie over stored frames makes the frames the store serves.
+  this->lookUpStored(k);
   MovieMaking making{ *this, *this->Impl };
   return psnrOfMse(making.settingsOf(k, false).mse());
 }
 
 double MovieMaker::settingsReachAt(int k, const MovieFrame& other, bool bound)
 {
-  this->plan(); // as settingsReach
+  this->lookUpStored(k);
   MovieMaking making{ *this, *this->Impl };
   const SettingsError error = making.settingsAt(k, other);
   return bound ? error.psnr() : psnrOfMse(error.mse());
@@ -1054,8 +1065,8 @@ void MovieMaker::adoptWhole(MovieMaker& from, int k)
   Internals &a = *from.Impl, &b = *this->Impl;
   MovieMaking making{ from, a };
   making.whole(k); // kept, read or traced, as from would make it
-  if (!from.Frames[at].storedId)
-    b.madeByAnother.insert(k); // traced for from's movie this run: not reused
+  if (a.madeNow.count(k))
+    b.madeNow.insert(k);
   this->Frames[at] = from.Frames[at];
   b.whole[k] = a.whole.at(k);
   b.lastUse[k] = ++b.uses;
@@ -1147,12 +1158,14 @@ void MovieMaker::reportWhole(int k, MovieFrameReport& report) const
   const auto settings = this->Impl->settings.find(k);
   if (settings != this->Impl->settings.end())
     report.settingsPsnr = report.estimatedPsnr = settings->second.psnr();
-  if (this->Frames[static_cast<std::size_t>(k)].storedId && !this->Impl->madeByAnother.count(k))
+  if (this->Frames[static_cast<std::size_t>(k)].storedId && !this->Impl->madeNow.count(k))
     report.raysReused = rays;
   else
   {
     report.raysTraced = rays;
     report.shareRetraced = 1;
+    if (report.method == FrameMethod::Reused) // stored by now, but made in this run
+      report.method = FrameMethod::Key;
   }
 }
 

@@ -326,6 +326,9 @@ private:
   /// estimated (not bounded) from its probes traced converged (SettingsError.h). Makes frame k
   /// whole and its probes, traced and stored or read, as the movie would.
   double settingsReach(int k);
+  /// Frame k's storedId looked up before the plan is (which looks up every frame's): a stored
+  /// frame is read, not traced again.
+  void lookUpStored(int k);
   /// What frame k's settings would reach at the rendering of `other` (frame k at another
   /// adaptive cap): its estimate as settingsReach gives it, or with `bound` its bound
   /// (SettingsError::psnr). Frame k is made whole as settingsReach makes it, its probes
