@@ -546,7 +546,7 @@ struct MovieMaking
   /// subset of the frame's scene at that rendering. With `storeOnly`, probes not known are
   /// NotServed.
   std::vector<RayRecord> convergedProbes(int k, const std::vector<std::int32_t>& probes,
-                                         bool storeOnly)
+                                         bool storeOnly, int side = kConvergedSide)
   {
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     std::vector<std::pair<int, int>> pixels;
@@ -554,13 +554,13 @@ struct MovieMaking
       pixels.emplace_back(p % maker.Width, p / maker.Width);
     SceneDescription subset = f.identity;
     subset.subset = pixelSubsetId(pixels);
-    subset.rendering = convergedRendering();
+    subset.rendering = convergedRendering(side);
     if (auto found = this->known(k, subset, pixels))
       return std::move(*found);
     if (storeOnly)
       throw NotServed();
     SceneDescription d = this->withTextures(f);
-    d.rendering = convergedRendering();
+    d.rendering = convergedRendering(side);
     return this->tracedSubset(FrameTracer(d), pixels, subset).records;
   }
 
@@ -576,7 +576,8 @@ struct MovieMaking
     if (!maker.Settings.holdToConverged || isConvergedRendering(f.identity.rendering))
       return in.settings.emplace(k, SettingsError{}).first->second;
     const std::vector<std::int32_t> probes = settingsProbes(records);
-    const std::vector<RayRecord> converged = this->convergedProbes(k, probes, storeOnly);
+    const std::vector<RayRecord> converged =
+      this->convergedProbes(k, probes, storeOnly, settingsReferenceSide(f.identity.rendering));
     return in.settings.emplace(k, settingsError(records, probes, converged)).first->second;
   }
 
@@ -589,7 +590,8 @@ struct MovieMaking
     const std::vector<RayRecord>& records = this->whole(k);
     const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
     const std::vector<std::int32_t> probes = settingsProbes(records);
-    const std::vector<RayRecord> converged = this->convergedProbes(k, probes, false);
+    const std::vector<RayRecord> converged =
+      this->convergedProbes(k, probes, false, settingsReferenceSide(lowered.identity.rendering));
     std::vector<std::pair<int, int>> pixels;
     for (std::int32_t p : probes)
       pixels.emplace_back(p % maker.Width, p / maker.Width);

@@ -224,7 +224,7 @@ struct vtkGeodesicPathInterpolator::Internals
         this->KeyError[k] = asrt::SettingsError{};
       else
       {
-        d.rendering = asrt::convergedRendering();
+        d.rendering = asrt::convergedRendering(asrt::settingsReferenceSide(d.rendering));
         const asrt::FrameTracer converged(d);
         const asrt::CameraParameters& c = d.camera;
         this->KeyError[k] = asrt::measureSettingsError(this->Records[k], c.width, c.height,

@@ -33,7 +33,9 @@
 //    mostly miss them and then underestimate, and 4 × 4's own error is the margin that covers
 //    it. At --quality 40 on that orbit, 31 frames against 8 × 8: probes against 4 × 4, every
 //    frame 39.7 dB or more; against 8 × 8, one frame 38.4 dB, its keys' bound 43 dB where they
-//    score 41.
+//    score 41. A rendering whose adaptive pattern is 4 × 4 (17 rays a pixel) is measured
+//    against 8 × 8 instead (settingsReferenceSide): against 4 × 4 its sampled pixels would be
+//    the reference's own samples.
 //  - Units. Mean squared error per channel in levels² of 255, as psnrOfMse takes it.
 #ifndef asrt_SettingsError_h
 #define asrt_SettingsError_h

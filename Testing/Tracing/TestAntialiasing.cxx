@@ -559,6 +559,45 @@ TEST(Antialiasing, AFrameAntialiasedAgainAtALowerEvenCapIsThatCapsFrameBitForBit
   EXPECT_THROW(FrameTracer(lower).antialiasAgain(before, d.rendering, { W * H }), InvalidParameter);
 }
 
+TEST(Antialiasing, ARenderingSampledOnTheConvergedPatternIsMeasuredAgainstAnother)
+{
+  // At 17 rays a pixel adaptive sampling takes a 4 x 4 pattern, the converged rendering's own:
+  // its sampled pixels are the reference's samples, and their error against it all but vanishes,
+  // though against 16 x 16 samples (the truth, traced here) it does not. Against 8 x 8, the
+  // reference settingsReferenceSide gives it, the error is seen.
+  const int W = 64, H = 48;
+  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
+                                     [](const std::string& path) { return readPngTexture(path); });
+  d.camera.width = W;
+  d.camera.height = H;
+  AntialiasOptions cap17 = d.rendering;
+  cap17.maxRaysPerPixel = 17;
+  EXPECT_EQ(settingsReferenceSide(cap17), 2 * kConvergedSide);
+  EXPECT_EQ(settingsReferenceSide(d.rendering), kConvergedSide); // 3 x 3
+  AntialiasOptions cap5 = d.rendering;
+  cap5.maxRaysPerPixel = 5;
+  EXPECT_EQ(settingsReferenceSide(cap5), kConvergedSide); // 2 x 2
+  const std::vector<RayRecord> frame = traceFrame(d, cap17);
+  const std::vector<RayRecord> four = traceFrame(d, convergedRendering(kConvergedSide));
+  const std::vector<RayRecord> eight =
+    traceFrame(d, convergedRendering(settingsReferenceSide(cap17)));
+  const std::vector<RayRecord> truth = traceFrame(d, convergedRendering(16));
+  double against4 = 0, against8 = 0, againstTruth = 0;
+  long sampled = 0;
+  for (std::size_t k = 0; k < frame.size(); ++k)
+  {
+    if (frame[k].raysPerPixel < 16)
+      continue;
+    ++sampled;
+    against4 += (frame[k].color - four[k].color).squaredNorm();
+    against8 += (frame[k].color - eight[k].color).squaredNorm();
+    againstTruth += (frame[k].color - truth[k].color).squaredNorm();
+  }
+  ASSERT_GT(sampled, 50);
+  EXPECT_LT(against4, 0.25 * againstTruth);
+  EXPECT_GT(against8, 0.5 * againstTruth);
+}
+
 TEST(Antialiasing, BadRenderingOptionsAreRefusedNamingTheField)
 {
   const std::string head =
