@@ -195,15 +195,16 @@ struct MovieSettings
 /// The adaptive cap a movie lowers its rendering to where the default reaches its target with
 /// room to spare (MovieMaker::withRenderingForTarget): a 2 × 2 pattern, whose even side lets the
 /// default frames' probes be anti-aliased again at it (FrameTracer::antialiasAgain). On the
-/// bench's movies at 200 × 200 it costs 0.87–0.91 of the default's CPU a frame and scores 3.5–4
-/// dB lower against converged frames (bench/REPORT.md, "Movies").
+/// bench's movies at 200 × 200 it costs 0.84–0.90 of the default's CPU a frame and scores
+/// 3.2–3.8 dB lower against converged frames (bench/REPORT.md, "Movies").
 constexpr int kLoweredRaysPerPixel = 5;
 
 /// The adaptive cap a movie raises its rendering to where the default does not reach its target
 /// (MovieMaker::withRenderingForTarget), before the accurate preset: a 4 × 4 pattern, even as
-/// kLoweredRaysPerPixel's. On the bench's movies at 200 × 200 it scores 42.6–48.8 dB against
-/// converged frames, above the accurate preset's 39.8–45.7, for about 0.7 of its CPU a frame
-/// (bench/REPORT.md, "Movies").
+/// kLoweredRaysPerPixel's. On the bench's mass ramp and Fig. 1's orbit at 200 × 200 it scores
+/// 42.1 and 40.4 dB mean against 8 × 8 references, 0.9–1.0 dB below the accurate preset, for
+/// 0.61–0.64 of its CPU (bench/REPORT.md, "Movies"; against 4 × 4 it would seem better than
+/// the accurate preset: settingsReferenceSide).
 constexpr int kRaisedRaysPerPixel = 17;
 
 /// How a movie's rendering was chosen for its target (MovieMaker::withRenderingForTarget).
