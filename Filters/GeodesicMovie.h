@@ -336,12 +336,12 @@ private:
   /// anti-aliased again.
   double settingsReachAt(int k, const MovieFrame& other, bool bound);
   /// Frame k anti-aliased again from `from`'s (a maker of the same movie at another adaptive cap,
-  /// FrameTracer::antialiasAgain), made by `from` if it has not made it; nothing where this movie
-  /// has it, or the store does.
+  /// FrameTracer::antialiasAgain), made by `from` if it has not made it, its records moved out of
+  /// `from`; nothing where this movie has it, or the store does.
   void deriveWhole(MovieMaker& from, int k);
   /// Takes frame k from `from` (a maker of the same movie at another rendering): its identity, its
-  /// records (made by `from` if it has not made them) and what `from` measured of it, counted as
-  /// this movie's.
+  /// records (made by `from` if it has not made them, moved out of it) and what `from` measured of
+  /// it, counted as this movie's.
   void adoptWhole(MovieMaker& from, int k);
   struct Internals;
   std::vector<MovieFrame> Frames;
