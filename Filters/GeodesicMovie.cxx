@@ -595,12 +595,10 @@ struct MovieMaking
     for (std::int32_t p : probes)
       pixels.emplace_back(p % maker.Width, p / maker.Width);
     // The probes' records read their edge neighbours' centre rays, the frame's own.
-    std::vector<JacobianSample> border;
-    for (const auto& [i, j] : edgeNeighbours(pixels, maker.Width, maker.Height))
-      border.push_back(jacobianSample(records[static_cast<std::size_t>(j) * maker.Width + i]));
     SceneDescription subset = lowered.identity;
     subset.subset = pixelSubsetId(pixels);
-    subset.subset.border = borderDigest(border);
+    subset.subset.border =
+      borderDigest(edgeNeighbourSamples(records, maker.Width, maker.Height, pixels));
     std::vector<RayRecord> probed;
     if (auto found = this->known(k, subset, pixels))
       probed = std::move(*found);

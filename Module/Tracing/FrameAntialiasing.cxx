@@ -498,8 +498,7 @@ bool FrameTracer::antialiasAgain(std::vector<RayRecord>& frame, const AntialiasO
 
 std::vector<RayRecord> FrameTracer::antialiasAgain(const std::vector<RayRecord>& frame,
                                                    const AntialiasOptions& tracedWith,
-                                                   const std::vector<std::int32_t>& pixels,
-                                                   std::vector<JacobianSample>* border) const
+                                                   const std::vector<std::int32_t>& pixels) const
 {
   const int width = this->Desc.camera.width, height = this->Desc.camera.height;
   checkAntialiasAgain(frame, tracedWith, this->Desc.rendering, width, height);
@@ -521,12 +520,7 @@ std::vector<RayRecord> FrameTracer::antialiasAgain(const std::vector<RayRecord>&
   ij.reserve(pixels.size());
   for (const RayRecord& r : records)
     ij.emplace_back(r.i, r.j);
-  std::vector<JacobianSample> neighbours;
-  for (const auto& [i, j] : edgeNeighbours(ij, width, height))
-    neighbours.push_back(jacobianSample(frame[static_cast<std::size_t>(j) * width + i]));
-  this->antialias(records, neighbours);
-  if (border)
-    *border = std::move(neighbours);
+  this->antialias(records, edgeNeighbourSamples(frame, width, height, ij));
   return records;
 }
 }

@@ -169,6 +169,18 @@ std::vector<std::pair<int, int>> edgeNeighbours(const std::vector<std::pair<int,
   return halo;
 }
 
+std::vector<JacobianSample> edgeNeighbourSamples(const std::vector<RayRecord>& frame, int width,
+                                                 int height,
+                                                 const std::vector<std::pair<int, int>>& pixels)
+{
+  std::vector<JacobianSample> border;
+  for (const auto& [i, j] : edgeNeighbours(pixels, width, height))
+    border.push_back(
+      jacobianSample(frame.at(static_cast<std::size_t>(j) * static_cast<std::size_t>(width) +
+                              static_cast<std::size_t>(i))));
+  return border;
+}
+
 namespace
 {
 /// The pixels of the border samples, sorted.

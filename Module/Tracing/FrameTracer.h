@@ -34,6 +34,13 @@ constexpr long kParallelRecords = 16384;
 ASRTTRACING_EXPORT std::vector<std::pair<int, int>> edgeNeighbours(
   const std::vector<std::pair<int, int>>& pixels, int width, int height);
 
+/// The centre rays, in a whole frame's records (row-major, width × height), of the edge neighbours
+/// of `pixels` (edgeNeighbours, in its order): the border beside which those pixels' records are
+/// the frame's own (FrameTracer::tracePixelsBeside, FrameTracer::antialiasAgain).
+ASRTTRACING_EXPORT std::vector<JacobianSample> edgeNeighbourSamples(
+  const std::vector<RayRecord>& frame, int width, int height,
+  const std::vector<std::pair<int, int>>& pixels);
+
 /// The edge neighbours of `pixels` (edgeNeighbours) that FrameTracer::tracePixelsBeside traces:
 /// those `border` gives no sample for.
 ASRTTRACING_EXPORT std::vector<std::pair<int, int>> neighboursToTrace(
@@ -154,13 +161,11 @@ public:
                       const std::function<bool(double)>& progress = nullptr) const;
   /// As above, for the pixels of `frame` at the indices `pixels` alone (each once): their records
   /// as the whole frame anti-aliased again would give them, bit for bit, in the order given,
-  /// judged against their edge neighbours' centre rays in `frame`, which `border` (if given)
-  /// receives (those not among `pixels`, sorted by pixel). Throws InvalidParameter as above, and
-  /// for an index outside the frame or given twice.
+  /// judged against their edge neighbours' centre rays in `frame` (edgeNeighbourSamples). Throws
+  /// InvalidParameter as above, and for an index outside the frame or given twice.
   std::vector<RayRecord> antialiasAgain(const std::vector<RayRecord>& frame,
                                         const AntialiasOptions& tracedWith,
-                                        const std::vector<std::int32_t>& pixels,
-                                        std::vector<JacobianSample>* border = nullptr) const;
+                                        const std::vector<std::int32_t>& pixels) const;
 
   /// All pixels of rows [rowBegin, rowEnd), row-major from the bottom-left. The rows just outside
   /// the band are traced too (and dropped) so that the Jacobians and the anti-aliasing of a band
