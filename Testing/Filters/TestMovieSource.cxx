@@ -100,6 +100,25 @@ std::string methodOf(vtkImageData* image)
   return a && a->GetNumberOfValues() == 1 ? a->GetValue(0) : std::string();
 }
 
+/// The colours of Figs. 4-5's scene at `mass` traced by a vtkGeodesicSource at 24x24, with the
+/// preset, cap and supersample given where they are not empty or 0.
+std::vector<unsigned char> coloursAt24(double mass, const std::string& preset, int maxRays,
+                                       int supersample)
+{
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
+  source->SetResolution(24, 24);
+  source->SetMass(mass);
+  if (!preset.empty())
+    source->SetIntegrationPreset(preset.c_str());
+  if (maxRays)
+    source->SetMaxRaysPerPixel(maxRays);
+  if (supersample)
+    source->SetSupersample(supersample);
+  source->Update();
+  return colours(source->GetOutput());
+}
+
 double fieldOf(vtkImageData* image, const char* name)
 {
   vtkDataArray* a = image->GetFieldData()->GetArray(name);
@@ -340,16 +359,7 @@ TEST(MovieSource, ATargetTheScenesRenderingDoesNotReachRaisesItToTheAccuratePres
   movie->SetResolution(24, 24);
   movie->SetQualityTarget(40); // the default rendering reaches about 31 dB at this size
   auto tracedAt = [](double mass, const char* preset)
-  {
-    vtkNew<vtkGeodesicSource> source;
-    source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-    source->SetResolution(24, 24);
-    source->SetMass(mass);
-    if (preset)
-      source->SetIntegrationPreset(preset);
-    source->Update();
-    return colours(source->GetOutput());
-  };
+  { return coloursAt24(mass, preset ? preset : "", 0, 0); };
   // The last frame is a key of every plan: the frame traced with the rendering chosen.
   const vtkSmartPointer<vtkImageData> raised = frameAt(movie, 2);
   ASSERT_TRUE(catcher->Errors.empty()) << catcher->AllErrors();
@@ -386,21 +396,7 @@ TEST(MovieSource, ATargetACheaperCapReachesLowersTheRenderingBetweenTheEnds)
   movie->SetResolution(24, 24);
   movie->SetQualityTarget(20); // the default rendering reaches about 31 dB at this size
   auto tracedAt = [](double mass, int maxRays, bool converged)
-  {
-    vtkNew<vtkGeodesicSource> source;
-    source->SetSceneFileName(scenePath("fig4-mass-start.json").c_str());
-    source->SetResolution(24, 24);
-    source->SetMass(mass);
-    if (maxRays)
-      source->SetMaxRaysPerPixel(maxRays);
-    if (converged)
-    {
-      source->SetIntegrationPreset("accurate");
-      source->SetSupersample(4);
-    }
-    source->Update();
-    return colours(source->GetOutput());
-  };
+  { return converged ? coloursAt24(mass, "accurate", 0, 4) : coloursAt24(mass, "", maxRays, 0); };
   const double step = (kTo - kFrom) / 4;
   std::vector<vtkSmartPointer<vtkImageData>> frames;
   for (int k = 0; k < 5; ++k)

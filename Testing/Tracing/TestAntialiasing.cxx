@@ -91,6 +91,17 @@ std::string dataDir()
     .string();
 }
 
+/// Fig. 1's scene (strongly lensed: its edges are where anti-aliasing works), its textures read,
+/// at w × h.
+SceneDescription fig1At(int w, int h)
+{
+  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
+                                     [](const std::string& path) { return readPngTexture(path); });
+  d.camera.width = w;
+  d.camera.height = h;
+  return d;
+}
+
 AntialiasOptions options(AntialiasMode mode, int cap = 16, int supersample = 1)
 {
   AntialiasOptions o;
@@ -219,10 +230,7 @@ TEST(Antialiasing, SamplesAtTheirToleranceLandWithinAFewHundredthsOfAPixel)
   // through the tight frame's Jacobian ∂(u, v)/∂(i, j). The view is Fig. 1's, strongly lensed:
   // the floor and the cylinders near the shadow, where an integration error grows fastest.
   const int W = 96, H = 64;
-  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
-                                     [](const std::string& path) { return readPngTexture(path); });
-  d.camera.width = W;
-  d.camera.height = H;
+  SceneDescription d = fig1At(W, H);
   d.camera.viewAngle = 12; // the shadow and the photon ring fill the frame
   AntialiasOptions one = options(AntialiasMode::None);
   SceneDescription tight = d, loose = d;
@@ -264,10 +272,7 @@ TEST(Antialiasing, EachTargetIsJudgedByAConvergedPictureWellBelowItsError)
   EXPECT_GE(convergedSideFor(60.0), convergedSideFor(40.0));
   EXPECT_LE(convergedSideFor(100.0), 32); // the most a rendering may take
   const int N = 96;
-  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
-                                     [](const std::string& path) { return readPngTexture(path); });
-  d.camera.width = N;
-  d.camera.height = N;
+  SceneDescription d = fig1At(N, N);
   const std::vector<RayRecord> truth = traceFrame(d, convergedRendering(16));
   auto psnrOf = [&](int side)
   { return -20.0 * std::log10(rmsDifference(traceFrame(d, convergedRendering(side)), truth)); };
@@ -475,10 +480,7 @@ TEST(Antialiasing, AFrameAntialiasedAgainAtALowerEvenCapIsThatCapsFrameBitForBit
   // 2 × 2 pattern), the frame is the one traced at 5, every record, for the rays of its sampled
   // pixels and edge midpoints alone.
   const int W = 128, H = 96;
-  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
-                                     [](const std::string& path) { return readPngTexture(path); });
-  d.camera.width = W;
-  d.camera.height = H;
+  SceneDescription d = fig1At(W, H);
   SceneDescription lower = d;
   lower.rendering.maxRaysPerPixel = 5;
   const FrameTracer traced(d), direct(lower);
@@ -567,10 +569,7 @@ TEST(Antialiasing, ARenderingSampledOnTheConvergedPatternIsMeasuredAgainstAnothe
   // though against 16 x 16 samples (the truth, traced here) it does not. Against 8 x 8, the
   // reference settingsReferenceSide gives it, the error is seen.
   const int W = 64, H = 48;
-  SceneDescription d = loadSceneFile(dataDir() + "/scenes/fig1-cylinders.json",
-                                     [](const std::string& path) { return readPngTexture(path); });
-  d.camera.width = W;
-  d.camera.height = H;
+  SceneDescription d = fig1At(W, H);
   AntialiasOptions cap17 = d.rendering;
   cap17.maxRaysPerPixel = 17;
   EXPECT_EQ(settingsReferenceSide(cap17), 2 * kConvergedSide);
