@@ -295,7 +295,9 @@ struct ProbePair
 /// estimates were weighed by the keys' leave-one-out errors, LeaveOneOut.h), at least 1/16: their
 /// probes still miss the rare large errors at times (bench/REPORT.md, "Movies": without it, frames
 /// of the mass ramp and the Kerr orbit at 40 dB fell 1.4–1.5 dB below their target). So do linear
-/// pixels' (two keys alone agree): at least 1/16 for them.
+/// pixels' (two keys alone agree): at least 1/16 for them. Every way at least 3/n for n probes:
+/// n probes that erred little do not show its large errors to be rarer than that (the rule of
+/// three).
 /// AtLeastOne: R, at least 1.
 /// 1 where the probes' estimates sum to 0 (or there are none).
 ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<ProbePair>& probes,

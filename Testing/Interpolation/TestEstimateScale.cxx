@@ -52,21 +52,28 @@ TEST(EstimateScale, TheRaisedRatioIsTheRatioPlusTwoOfItsStandardErrors)
               1.0 + 2.0 * std::sqrt(14.0 / 6.0) / 2.0, 1e-12);
 }
 
-TEST(EstimateScale, ProbesThatAllCameOutExactKeepTheOrder)
+TEST(EstimateScale, ProbesThatAllCameOutExactBoundTheRateOfErrorsTheyMissed)
 {
-  // No error seen: the least scale, above 0, so that the estimates still order the pixels.
+  // No error seen in 32 probes: a way whose errors strike 3 pixels in 32 would show none in them
+  // about one time in twenty, so the scale stays at 3 / 32 (the rule of three), above 0, and the
+  // estimates still order the pixels.
   std::vector<ProbePair> probes(32, ProbePair{ 5.0, 0.0 });
   const double s = asrt::estimateScale(PathMethod::Cubic, probes, EstimateScaling::Ratio);
-  EXPECT_GT(s, 0.0);
-  EXPECT_LT(s, 0.01);
+  EXPECT_EQ(s, 3.0 / 32.0);
+  // More probes narrow it.
+  const std::vector<ProbePair> many(300, ProbePair{ 5.0, 0.0 });
+  EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, many, EstimateScaling::Ratio), 3.0 / 300.0);
   // Edge blends' errors are rare and large: a sample that saw none of them scales them by 1, or,
   // where the keys' leave-one-out errors rank them, by a sixteenth (an edge a quarter of a pixel
-  // off), not by the least scale.
+  // off), or the rule of three's rate where that is more, not by the least scale.
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio), 1.0);
   EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, probes, EstimateScaling::Ratio, true),
+            3.0 / 32.0);
+  EXPECT_EQ(asrt::estimateScale(PathMethod::EdgeBlend, many, EstimateScaling::Ratio, true),
             1.0 / 16.0);
-  // So are linear pixels' (two keys alone agree): a sixteenth.
-  EXPECT_EQ(asrt::estimateScale(PathMethod::Linear, probes, EstimateScaling::Ratio), 1.0 / 16.0);
+  // So are linear pixels' (two keys alone agree): a sixteenth, or the rule of three's rate.
+  EXPECT_EQ(asrt::estimateScale(PathMethod::Linear, probes, EstimateScaling::Ratio), 3.0 / 32.0);
+  EXPECT_EQ(asrt::estimateScale(PathMethod::Linear, many, EstimateScaling::Ratio), 1.0 / 16.0);
   // No estimate to scale (or no probe): 1.
   EXPECT_EQ(asrt::estimateScale(PathMethod::Cubic, std::vector<ProbePair>(8, ProbePair{ 0, 4 }),
                                 EstimateScaling::Ratio),
