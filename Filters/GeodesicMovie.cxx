@@ -1,25 +1,13 @@
 #include "GeodesicMovieMaking.h"
 
 #include "ErrorEstimate.h"
-#include "FrameTracer.h"
-#include "GeodesicSceneLoading.h"
-#include "LeaveOneOut.h"
-#include "PathInterpolation.h"
 #include "RayStore.h"
 #include "RecordAllocation.h"
-#include "RetraceRays.h"
-#include "RowBands.h"
 #include "SceneFile.h"
 #include "SettingsError.h"
-#include "vtkGeodesicSource.h"
-
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <deque>
 #include <map>
 #include <set>
 #include <utility>
