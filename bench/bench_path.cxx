@@ -15,7 +15,8 @@
 // side of the converged frames, 8: point samples in the study, filtered ones in the paths table),
 // ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above), ASRT_BENCH_PATH_DUMP (a
 // directory: each study frame's pixels, their way of predicting, estimate, true error, surfaces
-// and the keys' leave-one-out error, as CSV).
+// and the keys' leave-one-out error, as CSV, and the preview, plain, traced and converged pictures
+// as raw RGB).
 // Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
@@ -702,6 +703,34 @@ void runRampStudy(double tStart)
                          int(plain.records[p].termination), int(f.traced[p].termination),
                          loo.empty() ? 0.0 : double(loo[p]));
           std::fclose(out);
+        }
+        // The pictures themselves, raw 8-bit RGB rows from the bottom: the preview, the plain
+        // frame, the frame traced at t and its converged reference.
+        const std::pair<const char*, const std::vector<std::uint8_t>*> pictures[] = {
+          { "preview", &previewRgb }, { "plain", &plainRgb }, { "traced", &f.tracedRgb },
+          { "converged", &f.reference }
+        };
+        // The inner pair of keys around the frame, as traced.
+        const std::size_t inner = static_cast<std::size_t>(
+          std::upper_bound(s.begin(), s.end(), f.mass) - s.begin());
+        for (std::size_t k : { inner - 1, inner })
+        {
+          const std::vector<std::uint8_t> rgb = rgbOf(keys[k]);
+          std::snprintf(name, sizeof name, "%s/h%g-M%.4f-key%zu.rgb", dump, h, f.mass, k - inner + 1);
+          if (FILE* out = std::fopen(name, "wb"))
+          {
+            std::fwrite(rgb.data(), 1, rgb.size(), out);
+            std::fclose(out);
+          }
+        }
+        for (const auto& [what, rgb] : pictures)
+        {
+          std::snprintf(name, sizeof name, "%s/h%g-M%.4f-%s.rgb", dump, h, f.mass, what);
+          if (FILE* out = std::fopen(name, "wb"))
+          {
+            std::fwrite(rgb->data(), 1, rgb->size(), out);
+            std::fclose(out);
+          }
         }
       }
       const std::vector<std::int32_t> byEstimate32 = retraceOrder(plain.estimate);
