@@ -707,16 +707,19 @@ void runRampStudy(double tStart)
         // The pictures themselves, raw 8-bit RGB rows from the bottom: the preview, the plain
         // frame, the frame traced at t and its converged reference.
         const std::pair<const char*, const std::vector<std::uint8_t>*> pictures[] = {
-          { "preview", &previewRgb }, { "plain", &plainRgb }, { "traced", &f.tracedRgb },
+          { "preview", &previewRgb },
+          { "plain", &plainRgb },
+          { "traced", &f.tracedRgb },
           { "converged", &f.reference }
         };
         // The inner pair of keys around the frame, as traced.
-        const std::size_t inner = static_cast<std::size_t>(
-          std::upper_bound(s.begin(), s.end(), f.mass) - s.begin());
+        const std::size_t inner =
+          static_cast<std::size_t>(std::upper_bound(s.begin(), s.end(), f.mass) - s.begin());
         for (std::size_t k : { inner - 1, inner })
         {
           const std::vector<std::uint8_t> rgb = rgbOf(keys[k]);
-          std::snprintf(name, sizeof name, "%s/h%g-M%.4f-key%zu.rgb", dump, h, f.mass, k - inner + 1);
+          std::snprintf(name, sizeof name, "%s/h%g-M%.4f-key%zu.rgb", dump, h, f.mass,
+                        k - inner + 1);
           if (FILE* out = std::fopen(name, "wb"))
           {
             std::fwrite(rgb.data(), 1, rgb.size(), out);
