@@ -285,19 +285,11 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
   tools::ProgressBar bar("movie of " + std::to_string(n) + " frames",
                          settings.quiet ? tools::ProgressBar::Style::Silent
                                         : tools::ProgressBar::Style::Automatic);
-  // The plan learns as its keys are made, so their count is known only at the end.
-  double steps = static_cast<double>(maker.plan().keys().size() + static_cast<std::size_t>(n));
-  double done = 0;
+  tools::FrameCount counted(n);
   bool keysMade = false;
   const auto makeKeys = [&]
   {
-    maker.makeKeys(
-      [&]
-      {
-        steps = std::max(steps, ++done + n);
-        bar.update(done / steps);
-      });
-    steps = done + n;
+    maker.makeKeys([&](int k) { bar.update(counted.made(k)); });
     keysMade = true;
   };
   const std::vector<std::string> formats = pictureFormats(settings);
@@ -360,7 +352,7 @@ void makeFrames(MovieMaker& maker, const MovieOptions& settings, tools::AtomicFi
       maker.storePictures(k, formats, made, report);
     }
     stopIfInterrupted();
-    bar.update(++done / steps);
+    bar.update(counted.made(k));
   }
   if (settings.vti)
     series.write(files.add(prefix + ".pvd"));

@@ -243,7 +243,7 @@ const MoviePlan& MovieMaker::plan()
   return *this->Plan;
 }
 
-void MovieMaker::makeKeys(const std::function<void()>& afterEach)
+void MovieMaker::makeKeys(const std::function<void(int frame)>& afterEach)
 {
   if (this->Impl->keysMade)
     return;
@@ -271,7 +271,7 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
       making.whole(k);
       const double rays = this->Impl->wholeRays.at(k);
       if (afterEach)
-        afterEach();
+        afterEach(k);
       return rays;
     };
     keyMaking.measureShare = [&](int i, int, int)
@@ -295,7 +295,7 @@ void MovieMaker::makeKeys(const std::function<void()>& afterEach)
     making.keepWholeWithinBudget({});
     making.whole(k);
     if (afterEach)
-      afterEach();
+      afterEach(k);
   }
   this->Impl->keysMade = true;
 }

@@ -270,12 +270,13 @@ public:
                                                      const MoviePath& path, RenderingChoice& choice,
                                                      bool raise = true, bool lower = true);
 
-  /// Makes (or reads) every key frame of the plan, calling `afterEach` after each. When the plan
+  /// Makes (or reads) every key frame of the plan, calling `afterEach` with the frame after each
+  /// one it traces (those stored are read when a frame needs them, unannounced). When the plan
   /// traces whole frames, they are made coarse first and the plan learns from each
   /// (planProgressively): the rays it took, and the share that interpolating it between the whole
   /// frames around it would have re-traced, measured against its own records. The plan is final
   /// afterwards (frame() makes the keys first if this was not called).
-  void makeKeys(const std::function<void()>& afterEach = {});
+  void makeKeys(const std::function<void(int frame)>& afterEach = {});
   /// Frame k's records, one per pixel in pixel order (record p is pixel (p mod width, p / width)).
   /// Key frames are traced or read once and kept; an interpolated frame's re-traced pixels are
   /// read from the store (or the memory cache) when they were traced before.

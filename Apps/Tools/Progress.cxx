@@ -9,6 +9,8 @@
 #include <csignal>
 #include <cstdio>
 #include <ctime>
+#include <stdexcept>
+#include <string>
 
 namespace asrt
 {
@@ -170,6 +172,33 @@ void ProgressBar::draw(double fraction, bool final)
     std::fprintf(stderr, "%s: %d%% (%.1f s)\n", this->Label.c_str(),
                  static_cast<int>(fraction * 100.0 + 0.5), seconds);
   this->Drawn = true;
+}
+
+FrameCount::FrameCount(int frames)
+{
+  if (frames < 1)
+    throw std::invalid_argument("FrameCount: a movie has at least one frame, got " +
+                                std::to_string(frames));
+  this->Made.assign(static_cast<std::size_t>(frames), 0);
+}
+
+double FrameCount::made(int k)
+{
+  if (k < 0 || static_cast<std::size_t>(k) >= this->Made.size())
+    throw std::out_of_range("FrameCount: frame " + std::to_string(k) + " outside [0, " +
+                            std::to_string(this->Made.size()) + ")");
+  unsigned char& seen = this->Made[static_cast<std::size_t>(k)];
+  if (!seen)
+  {
+    seen = 1;
+    ++this->Count;
+  }
+  return this->share();
+}
+
+double FrameCount::share() const
+{
+  return static_cast<double>(this->Count) / static_cast<double>(this->Made.size());
 }
 }
 }

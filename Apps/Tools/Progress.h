@@ -65,6 +65,26 @@ private:
   vtkSmartPointer<vtkCommand> Command;
   std::vector<std::pair<vtkSmartPointer<vtkAlgorithm>, unsigned long>> Observed;
 };
+
+/// The share of a movie's frames made, for its progress bar: each frame counts once, when it is
+/// made, whether it is traced whole while the plan makes its keys or interpolated (or written from
+/// its stored pictures) when its turn comes; writing a frame made before adds nothing. Counting
+/// each frame's writing as a step of its own put half of the bar after the last ray where the plan
+/// traced every frame (960×540, 31 frames: 50 % at 38.3 s, done at 38.5 s).
+class FrameCount
+{
+public:
+  /// Throws std::invalid_argument for fewer than one frame.
+  explicit FrameCount(int frames);
+  /// Counts frame k, unless it was counted before, and returns the share made. Throws
+  /// std::out_of_range for a frame outside [0, frames).
+  double made(int k);
+  double share() const;
+
+private:
+  std::vector<unsigned char> Made;
+  int Count = 0;
+};
 }
 }
 

@@ -830,6 +830,29 @@ TEST(Progress, LinesAreSparseAndEndWithTheTime)
   EXPECT_EQ(text.find('\r'), std::string::npos) << "carriage returns outside a terminal";
 }
 
+TEST(Progress, AMovieCountsEachFrameOnceWhicheverWayItIsMade)
+{
+  // Frames 0, 4 and 8 traced whole while the keys are made, then all nine written in order.
+  asrt::tools::FrameCount made(9);
+  EXPECT_DOUBLE_EQ(made.share(), 0.0);
+  for (int k : { 0, 8, 4 })
+    made.made(k);
+  EXPECT_DOUBLE_EQ(made.share(), 3.0 / 9.0);
+  double last = made.share();
+  for (int k = 0; k < 9; ++k)
+  {
+    const double share = made.made(k);
+    // Writing a frame made before adds nothing; making one adds a ninth.
+    const bool before = k == 0 || k == 4 || k == 8;
+    EXPECT_DOUBLE_EQ(share, last + (before ? 0.0 : 1.0 / 9.0)) << "frame " << k;
+    last = share;
+  }
+  EXPECT_DOUBLE_EQ(made.share(), 1.0);
+  EXPECT_THROW(made.made(9), std::out_of_range);
+  EXPECT_THROW(made.made(-1), std::out_of_range);
+  EXPECT_THROW(asrt::tools::FrameCount(0), std::invalid_argument);
+}
+
 TEST(Progress, BarRedrawsInPlaceAndSilentSaysNothing)
 {
   const std::string bar = stderrOf(

@@ -25,6 +25,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -875,6 +876,38 @@ TEST(StorePipeline, AMovieKeepingNoSpareFrameInMemoryReadsItsKeysAgainAndMakesTh
   EXPECT_EQ(tight.raysTraced(), kept.raysTraced());
   settings.keptFrameBytes = -1;
   EXPECT_THROW(ramp.movie(settings), asrt::InvalidParameter);
+}
+
+TEST(StorePipeline, MakingTheKeysAnnouncesEachFrameItTracesOnce)
+{
+  // What a progress bar counts: the frames the plan traces whole while it makes its keys.
+  RampMovies ramp(9);
+  const asrt::MovieSettings settings = rampSettings();
+  asrt::MovieMaker movie = ramp.movie(settings);
+  std::vector<int> announced;
+  movie.makeKeys([&announced](int k) { announced.push_back(k); });
+  // The truth: the frames each report says were traced whole.
+  std::vector<int> whole;
+  for (int k = 0; k < 9; ++k)
+  {
+    asrt::MovieFrameReport report;
+    movie.frame(k, report);
+    if (report.method == asrt::FrameMethod::Key || report.method == asrt::FrameMethod::Traced)
+      whole.push_back(k);
+  }
+  ASSERT_GT(whole.size(), 1u);
+  ASSERT_LT(whole.size(), 9u) << "the movie interpolates no frame: nothing tells them apart";
+  std::vector<int> sorted = announced;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_TRUE(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end())
+    << "a frame announced twice";
+  EXPECT_EQ(sorted, whole);
+  // The same movie over the store: its keys are read, none traced, none announced.
+  asrt::MovieMaker again = ramp.movie(settings);
+  int announcedAgain = 0;
+  again.makeKeys([&announcedAgain](int) { ++announcedAgain; });
+  EXPECT_EQ(announcedAgain, 0);
+  EXPECT_EQ(again.raysTraced(), 0.0);
 }
 
 TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAndStoresThem)
