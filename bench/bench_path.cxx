@@ -704,28 +704,15 @@ void runRampStudy(double tStart)
                          loo.empty() ? 0.0 : double(loo[p]));
           std::fclose(out);
         }
-        // The pictures themselves, raw 8-bit RGB rows from the bottom: the preview, the plain
-        // frame, the frame traced at t and its converged reference.
-        const std::pair<const char*, const std::vector<std::uint8_t>*> pictures[] = {
-          { "preview", &previewRgb },
-          { "plain", &plainRgb },
-          { "traced", &f.tracedRgb },
-          { "converged", &f.reference }
-        };
-        // The inner pair of keys around the frame, as traced.
+        // The pictures, raw 8-bit RGB rows from the bottom: the preview, the plain frame, the
+        // frame traced at t, its converged reference, and the inner pair of keys as traced.
         const std::size_t inner =
           static_cast<std::size_t>(std::upper_bound(s.begin(), s.end(), f.mass) - s.begin());
-        for (std::size_t k : { inner - 1, inner })
-        {
-          const std::vector<std::uint8_t> rgb = rgbOf(keys[k]);
-          std::snprintf(name, sizeof name, "%s/h%g-M%.4f-key%zu.rgb", dump, h, f.mass,
-                        k - inner + 1);
-          if (FILE* out = std::fopen(name, "wb"))
-          {
-            std::fwrite(rgb.data(), 1, rgb.size(), out);
-            std::fclose(out);
-          }
-        }
+        const std::vector<std::uint8_t> key0 = rgbOf(keys[inner - 1]), key1 = rgbOf(keys[inner]);
+        const std::pair<const char*, const std::vector<std::uint8_t>*> pictures[] = {
+          { "preview", &previewRgb },    { "plain", &plainRgb }, { "traced", &f.tracedRgb },
+          { "converged", &f.reference }, { "key0", &key0 },      { "key1", &key1 }
+        };
         for (const auto& [what, rgb] : pictures)
         {
           std::snprintf(name, sizeof name, "%s/h%g-M%.4f-%s.rgb", dump, h, f.mass, what);
