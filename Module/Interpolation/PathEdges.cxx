@@ -441,6 +441,16 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
     *nearShadow = colorError2(halfContrast, Color::Zero());
   return true;
 }
+
+/// The squared colour difference (levels² of 255, summed over the channels) between `color` and
+/// the nearer of the inner keys' (a, a + 1) colours at pixel p.
+float awayFromInnerKeys(const std::vector<PathKey>& keys, std::size_t a, std::int32_t p,
+                        const Color& color)
+{
+  const std::size_t k = static_cast<std::size_t>(p);
+  return std::min(colorError2(color, (*keys[a].records)[k].color),
+                  colorError2(color, (*keys[a + 1].records)[k].color));
+}
 }
 
 std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
@@ -526,6 +536,11 @@ std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, 
       if (own->objectId == e.record.objectId && own->termination == e.record.termination)
         e.record = *own;
     }
+    // Across an edge the pixel shows at t what one of the inner keys shows there, give or take
+    // the texture's motion: a colour far from both is one the prediction made up (a blend, or a
+    // third surface), an error of its own beside the edge's misplacement, which adds.
+    if (!e.oneSurface)
+      e.estimate += awayFromInnerKeys(keys, a, pixels[static_cast<std::size_t>(q)], e.record.color);
   }
   return out;
 }

@@ -7,11 +7,13 @@
 #include "FrameTracer.h"
 #include "KdTreeIndex.h"
 #include "PathInterpolation.h"
+#include "RampScene.h"
 #include "SceneFile.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -195,6 +197,49 @@ TEST_F(PathEdges, MovedSurfacePixelsLieOffTheEdgesOfTheTracedFrame)
   ASSERT_GT(count[0], 20.0);
   EXPECT_GE(off[1], 0.9 * count[1]);
   EXPECT_LE(off[0], 0.5 * count[0]);
+}
+
+// Across an edge the pixel shows at t what one of the inner keys shows there: on the mass ramp
+// (keys 0.055 M apart, strongly lensed), the moved-edge pixels whose predicted colour is far from
+// both keys' colours there carry more of the error against the frame traced at t than those near
+// one, and their estimate counts that distance.
+TEST(PathEdgesOnTheRamp, AMovedEdgeFarFromBothInnerKeysColoursIsEstimatedSo)
+{
+  constexpr int side = 96;
+  constexpr double t = 0.6225;
+  std::vector<std::vector<RayRecord>> keys;
+  std::vector<PathKey> path;
+  for (double s : { 0.54, 0.595, 0.65, 0.705 })
+    keys.push_back(FrameTracer(asrt::testing::rampScene(s, side)).traceRows(0, side));
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    path.push_back({ 0.54 + 0.055 * static_cast<double>(k), &keys[k] });
+  const SceneDescription atT = asrt::testing::rampScene(t, side);
+  const std::vector<RayRecord> truth = FrameTracer(atT).traceRows(0, side);
+  PathOptions options;
+  options.pointIndex = kdTreeIndexFactory();
+  options.leaveOneOut = false; // the estimates as predicted, not yet weighed by the keys' errors
+  const PathFrame f = interpolateAlongPath(path, t, side, side, *atT.scene, options);
+  const std::vector<RayRecord>&ka = keys[1], &kb = keys[2]; // 0.595 and 0.65 bracket t
+  std::vector<std::pair<double, double>> awayAndError;
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+  {
+    if (f.method[p] != static_cast<std::uint8_t>(PathMethod::MovedEdge))
+      continue;
+    const Color& c = f.records[p].color;
+    const double away = std::min(colorError2(c, ka[p].color), colorError2(c, kb[p].color));
+    EXPECT_GE(f.estimate[p], 0.999 * away) << "pixel " << p;
+    awayAndError.emplace_back(away, colorError2(c, truth[p].color));
+  }
+  ASSERT_GT(awayAndError.size(), 200u);
+  std::sort(awayAndError.begin(), awayAndError.end());
+  const std::size_t half = awayAndError.size() / 2;
+  double near = 0, far = 0;
+  for (std::size_t k = 0; k < awayAndError.size(); ++k)
+    (k < half ? near : far) += awayAndError[k].second;
+  std::printf("[ edges ] %zu moved-edge pixels' error against the traced frame: %.0f levels² in "
+              "the half nearer a key's colour, %.0f in the half farther\n",
+              awayAndError.size(), near, far);
+  EXPECT_GT(far, 2.0 * near);
 }
 
 TEST_F(PathEdges, AFrameMeetsItsTargetReTracingLessThanWithoutMovedEdges)
