@@ -175,6 +175,12 @@ struct MovieSettings
   /// and at most a quarter of the memory a read may take (defaultMemoryLimit). Frames not stored
   /// (no store) are always kept.
   double keptFrameBytes = 0;
+  /// Without a store, the most the whole frames' records may hold together (0: the memory a read
+  /// may take, defaultMemoryLimit()): they are all kept, since none can be read back. A frame to
+  /// trace whole beyond it is refused before it is traced (InvalidParameter, naming --store), where
+  /// the kernel would otherwise kill the process (a 61-frame movie at 1920×1080 traced whole needs
+  /// about 36 GB).
+  double unstoredFrameBytes = 0;
   /// Asked during traces: true stops the movie (MovieCancelled).
   std::function<bool()> cancelled;
   /// Called with the fraction done of a whole frame being traced.

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace asrt
 {
@@ -139,6 +140,8 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
   }
   else
   {
+    if (!maker.Store)
+      this->requireRoomForWhole(k);
     const FrameTracer tracer(this->withTextures(f));
     const auto t0 = std::chrono::steady_clock::now();
     // A band at a time into records faulted in at once (allocateRecords): tracing the whole
@@ -239,6 +242,27 @@ void MovieMaking::keepPictures(int k, std::vector<std::string> bytes)
   }
   in.pictures[k] = std::move(bytes);
   in.pictureOrder.push_back(k);
+}
+
+void MovieMaking::requireRoomForWhole(int k) const
+{
+  const double frameBytes =
+    static_cast<double>(maker.Width) * maker.Height * static_cast<double>(sizeof(RayRecord));
+  double bytes = frameBytes;
+  for (const auto& kept : in.whole)
+    bytes += static_cast<double>(kept.second.size() * sizeof(RayRecord));
+  const double limit = maker.Settings.unstoredFrameBytes > 0 ? maker.Settings.unstoredFrameBytes
+                                                             : defaultMemoryLimit();
+  if (bytes <= limit)
+    return;
+  std::ostringstream os;
+  os.precision(3);
+  os << "tracing frame " << k << " whole would keep " << in.whole.size() + 1
+     << " frames' records in memory, since without a store none can be let go: " << bytes / 1e9
+     << " GB (" << frameBytes / 1e6 << " MB a frame at " << maker.Width << " x " << maker.Height
+     << "), more than the " << limit / 1e9
+     << " GB allowed; with --store they are let go and read back when needed";
+  throw InvalidParameter(os.str());
 }
 
 void MovieMaking::keepWholeWithinBudget(const std::set<int>& inUse)

@@ -136,6 +136,9 @@ struct MovieMaking
   /// earliest let go beyond a quarter of the memory a read may take (their frames are then made
   /// from their records at their turn, read back from the store).
   void keepPictures(int k, std::vector<std::string> bytes);
+  /// Without a store: throws InvalidParameter if tracing frame k whole would take the whole
+  /// frames kept past MovieSettings::unstoredFrameBytes.
+  void requireRoomForWhole(int k) const;
 
   /// Lets go of the least recently used whole frames that are stored, but not of `inUse`, until
   /// those kept fit in MovieSettings::keptFrameBytes (a movie's keys at 1920×1080 would not fit
