@@ -244,13 +244,22 @@ void MovieMaking::keepPictures(int k, std::vector<std::string> bytes)
   in.pictureOrder.push_back(k);
 }
 
-void MovieMaking::requireRoomForWhole(int k) const
+double MovieMaking::frameBytes() const
 {
-  const double frameBytes =
-    static_cast<double>(maker.Width) * maker.Height * static_cast<double>(sizeof(RayRecord));
-  double bytes = frameBytes;
+  return static_cast<double>(maker.Width) * maker.Height * static_cast<double>(sizeof(RayRecord));
+}
+
+double MovieMaking::wholeBytes() const
+{
+  double bytes = 0;
   for (const auto& kept : in.whole)
     bytes += static_cast<double>(kept.second.size() * sizeof(RayRecord));
+  return bytes;
+}
+
+void MovieMaking::requireRoomForWhole(int k) const
+{
+  const double bytes = this->wholeBytes() + this->frameBytes();
   const double limit = maker.Settings.unstoredFrameBytes > 0 ? maker.Settings.unstoredFrameBytes
                                                              : defaultMemoryLimit();
   if (bytes <= limit)
@@ -259,27 +268,23 @@ void MovieMaking::requireRoomForWhole(int k) const
   os.precision(3);
   os << "tracing frame " << k << " whole would keep " << in.whole.size() + 1
      << " frames' records in memory, since without a store none can be let go: " << bytes / 1e9
-     << " GB (" << frameBytes / 1e6 << " MB a frame at " << maker.Width << " x " << maker.Height
-     << "), more than the " << limit / 1e9
+     << " GB (" << this->frameBytes() / 1e6 << " MB a frame at " << maker.Width << " x "
+     << maker.Height << "), more than the " << limit / 1e9
      << " GB allowed; with --store they are let go and read back when needed";
   throw InvalidParameter(os.str());
 }
 
 void MovieMaking::keepWholeWithinBudget(const std::set<int>& inUse)
 {
-  double bytes = 0;
-  for (const auto& [k, records] : in.whole)
-    bytes += static_cast<double>(records.size() * sizeof(RayRecord));
+  double bytes = this->wholeBytes();
   // By default at most a quarter of the memory a read may take, and at most 4 frames beyond the
   // first GiB: what a frame being made uses (its keys, the frames around a frame measured), with
   // room to spare. More costs memory a frame is not read back for (the pictures of a whole frame
   // are made as it is traced), and fresh memory costs its first touch.
-  const double frameBytes =
-    static_cast<double>(maker.Width) * maker.Height * static_cast<double>(sizeof(RayRecord));
   const double budget =
     maker.Settings.keptFrameBytes > 0
       ? maker.Settings.keptFrameBytes
-      : std::min(defaultMemoryLimit() / 4, std::max(double(1 << 30), 4 * frameBytes));
+      : std::min(defaultMemoryLimit() / 4, std::max(double(1 << 30), 4 * this->frameBytes()));
   while (bytes > budget)
   {
     int oldest = -1;

@@ -139,6 +139,9 @@ struct MovieMaking
   /// Without a store: throws InvalidParameter if tracing frame k whole would take the whole
   /// frames kept past MovieSettings::unstoredFrameBytes.
   void requireRoomForWhole(int k) const;
+  /// The bytes of one whole frame's records, and of the whole frames kept now.
+  double frameBytes() const;
+  double wholeBytes() const;
 
   /// Lets go of the least recently used whole frames that are stored, but not of `inUse`, until
   /// those kept fit in MovieSettings::keptFrameBytes (a movie's keys at 1920×1080 would not fit
