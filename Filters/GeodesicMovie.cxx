@@ -69,6 +69,10 @@ MovieMaker::MovieMaker(std::vector<MovieFrame> frames, std::string parameter, Ra
   if (!(this->Settings.keptFrameBytes >= 0.0))
     throw InvalidParameter("keptFrameBytes: the bytes of frames kept must be 0 or more, got " +
                            formatParameter(this->Settings.keptFrameBytes));
+  if (!(this->Settings.unstoredFrameBytes >= 0.0))
+    throw InvalidParameter(
+      "unstoredFrameBytes: the bytes of frames kept unstored must be 0 or more, got " +
+      formatParameter(this->Settings.unstoredFrameBytes));
   this->Width = this->Frames.front().identity.camera.width;
   this->Height = this->Frames.front().identity.camera.height;
   for (const MovieFrame& f : this->Frames)
@@ -287,10 +291,11 @@ void MovieMaker::makeKeys(const std::function<void(int frame)>& afterEach)
       planProgressively(s, stored, pixels, this->Impl->share, keyMaking, movieCostPrior(pixels));
     this->Plan = wholeMoviePlan(planned, open, this->Frames.size(), this->Impl->recorded);
   }
-  // Every key traced; those stored are read when a frame needs them.
+  // Every key traced; those stored are read when a frame needs them, and those made and let go
+  // without a store traced again then.
   for (int k : this->plan().keys())
   {
-    if (this->Impl->whole.count(k) > 0 || making.storedId(k))
+    if (this->Impl->whole.count(k) > 0 || making.storedId(k) || this->Impl->wholeRays.count(k))
       continue;
     making.keepWholeWithinBudget({});
     making.whole(k);
@@ -445,6 +450,11 @@ const std::vector<RayRecord>& MovieMaker::madeFrame(int k, MovieFrameReport& rep
   return records;
 }
 
+std::size_t MovieMaker::wholeFramesKept() const
+{
+  return this->Impl->whole.size();
+}
+
 void MovieMaker::reportWhole(int k, MovieFrameReport& report) const
 {
   const double rays = this->Impl->wholeRays.at(k);
@@ -468,7 +478,7 @@ std::optional<std::vector<std::string>> MovieMaker::storedPictures(
   if (k < 0 || k >= static_cast<int>(this->Frames.size()))
     throw InvalidParameter("frame " + std::to_string(k) + " of a movie of " +
                            std::to_string(this->Frames.size()) + " frames");
-  if (!this->Store || formats.empty())
+  if (formats.empty())
     return std::nullopt;
   const MoviePlan& plan = this->plan(); // the stored and the recorded frames looked up
   const auto early =
@@ -486,6 +496,8 @@ std::optional<std::vector<std::string>> MovieMaker::storedPictures(
     this->storePictures(k, formats, bytes, report);
     return bytes;
   }
+  if (!this->Store)
+    return std::nullopt;
   const MovieMaking making{ *this, *this->Impl };
   const std::optional<PictureOrigin> origin = making.pictureOrigin(k);
   if (!origin)

@@ -172,14 +172,13 @@ struct MovieSettings
   /// The bytes of whole frames' records kept in memory beyond those a frame in the making uses;
   /// the least recently used frames that are stored leave first and are read again when needed
   /// (at 1920×1080 a frame's records take about 550 MB). 0: a GiB or 4 frames, whichever is more,
-  /// and at most a quarter of the memory a read may take (defaultMemoryLimit). Frames not stored
-  /// (no store) are always kept.
+  /// and at most a quarter of the memory a read may take (defaultMemoryLimit).
   double keptFrameBytes = 0;
-  /// Without a store, the most the whole frames' records may hold together (0: the memory a read
-  /// may take, defaultMemoryLimit()): they are all kept, since none can be read back. A frame to
-  /// trace whole beyond it is refused before it is traced (InvalidParameter, naming --store), where
-  /// the kernel would otherwise kill the process (a 61-frame movie at 1920×1080 traced whole needs
-  /// about 36 GB).
+  /// As keptFrameBytes, for the whole frames not stored (no store), which cannot be read back: the
+  /// least recently used leave first, those that no interpolated frame is made from before the
+  /// others, and a frame let go is traced again if it is needed again (a 61-frame movie at
+  /// 1920×1080 traced whole would need about 36 GB). 0: 2 GiB or 8 frames, whichever is more, and
+  /// at most half the memory a read may take.
   double unstoredFrameBytes = 0;
   /// Asked during traces: true stops the movie (MovieCancelled).
   std::function<bool()> cancelled;
@@ -188,12 +187,13 @@ struct MovieSettings
   /// Called with every whole frame traced, before it is stored or used (e.g. to refuse one with
   /// too many failed rays by throwing).
   std::function<void(const std::vector<RayRecord>&, int frame)> checkTraced;
-  /// With a store: the pictures (`pictureFormats`, as storedPictures() is asked for them) of each
-  /// whole frame this movie traces, encoded as soon as it is traced. storedPictures() then hands
-  /// them out and stores them, so that the frame's records need not be kept, or read back from
-  /// the store, until the frame's turn comes (at 1920×1080 a frame's records are about 550 MB, its
-  /// PNG under 1 MB, its VTI about 25 MB). Pictures kept beyond a quarter of the memory a read may
-  /// take are let go, the earliest first: those frames are made from their records again.
+  /// The pictures (`pictureFormats`, as storedPictures() is asked for them) of each whole frame
+  /// this movie traces, encoded as soon as it is traced. storedPictures() then hands them out (and
+  /// stores them, with a store), so that the frame's records need not be kept, read back from the
+  /// store or traced again, until the frame's turn comes (at 1920×1080 a frame's records are about
+  /// 550 MB, its PNG under 1 MB, its VTI about 25 MB). Pictures kept beyond a quarter of the memory
+  /// a read may take are let go, the earliest first: those frames are made from their records
+  /// again.
   std::vector<std::string> pictureFormats;
   std::function<std::vector<std::string>(const std::vector<RayRecord>&)> encodePictures;
 };
@@ -296,12 +296,12 @@ public:
   /// Frame k's pictures in `formats` (each an encoding and its version, e.g. "png.1"), as a movie
   /// stored them after making the frame (storePictures): of its whole stored frame, or, for a frame
   /// the store records as interpolated by this movie's recipe between stored frames of this movie,
-  /// made between exactly those (RayStore::readPicture). Null without a store, for a frame that is
-  /// neither, or where any format is missing: then frame() makes it. Otherwise `report` is what
-  /// frame() reported when it made the frame, its rays counted as read, and neither its keys nor
-  /// its re-traced pixels are read. Once the keys are made (makeKeys), the pictures a whole frame
-  /// traced by this movie got then (MovieSettings::encodePictures) are handed out, with the report
-  /// frame() gives, and stored.
+  /// made between exactly those (RayStore::readPicture). Null for a frame that is neither, or
+  /// where any format is missing: then frame() makes it. Otherwise `report` is what frame()
+  /// reported when it made the frame, its rays counted as read, and neither its keys nor its
+  /// re-traced pixels are read. Once the keys are made (makeKeys), the pictures a whole frame
+  /// traced by this movie got then (MovieSettings::encodePictures) are handed out, once, with the
+  /// report frame() gives, and stored; without a store, they are all it hands out.
   std::optional<std::vector<std::string>> storedPictures(int k,
                                                          const std::vector<std::string>& formats,
                                                          MovieFrameReport& report);
@@ -319,6 +319,9 @@ public:
   /// Rays of the whole frames made and how many (for the rays a whole frame takes).
   double raysOfKeys() const { return this->RaysOfKeys; }
   int wholeCount() const { return this->WholeCount; }
+  /// The whole frames whose records are in memory now (MovieSettings::keptFrameBytes and
+  /// unstoredFrameBytes bound them).
+  std::size_t wholeFramesKept() const;
 
 private:
   friend struct MovieMaking;

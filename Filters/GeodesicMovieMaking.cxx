@@ -140,8 +140,6 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
   }
   else
   {
-    if (!maker.Store)
-      this->requireRoomForWhole(k);
     const FrameTracer tracer(this->withTextures(f));
     const auto t0 = std::chrono::steady_clock::now();
     // A band at a time into records faulted in at once (allocateRecords): tracing the whole
@@ -185,12 +183,12 @@ const std::vector<RayRecord>& MovieMaking::keepMade(int k, std::vector<RayRecord
   maker.RaysTraced += rays;
   in.madeNow.insert(k);
   if (maker.Store)
-  {
     in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records,
                                  std::chrono::duration<double>(took).count());
-    if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty())
-      this->keepPictures(k, maker.Settings.encodePictures(records));
-  }
+  // Made once: a frame traced again after it was let go (no store) has its pictures already.
+  if (maker.Settings.encodePictures && !maker.Settings.pictureFormats.empty() &&
+      in.encoded.insert(k).second)
+    this->keepPictures(k, maker.Settings.encodePictures(records));
   return this->keepWhole(k, std::move(records), rays, held);
 }
 
@@ -257,21 +255,22 @@ double MovieMaking::wholeBytes() const
   return bytes;
 }
 
-void MovieMaking::requireRoomForWhole(int k) const
+std::set<int> MovieMaking::keysOfInterpolated() const
 {
-  const double bytes = this->wholeBytes() + this->frameBytes();
-  const double limit = maker.Settings.unstoredFrameBytes > 0 ? maker.Settings.unstoredFrameBytes
-                                                             : defaultMemoryLimit();
-  if (bytes <= limit)
-    return;
-  std::ostringstream os;
-  os.precision(3);
-  os << "tracing frame " << k << " whole would keep " << in.whole.size() + 1
-     << " frames' records in memory, since without a store none can be let go: " << bytes / 1e9
-     << " GB (" << this->frameBytes() / 1e6 << " MB a frame at " << maker.Width << " x "
-     << maker.Height << "), more than the " << limit / 1e9
-     << " GB allowed; with --store they are let go and read back when needed";
-  throw InvalidParameter(os.str());
+  std::set<int> keys;
+  if (!in.keysMade)
+    return keys;
+  const MoviePlan& plan = maker.plan();
+  for (std::size_t k = 0; k < plan.frames.size(); ++k)
+  {
+    if (plan.frames[k].method != FrameMethod::Interpolated)
+      continue;
+    const auto recorded = in.recorded.find(static_cast<int>(k));
+    for (int key : keysAround(recorded != in.recorded.end() ? recorded->second : plan.keys(),
+                              static_cast<int>(k)))
+      keys.insert(key);
+  }
+  return keys;
 }
 
 void MovieMaking::keepWholeWithinBudget(const std::set<int>& inUse)
@@ -285,13 +284,31 @@ void MovieMaking::keepWholeWithinBudget(const std::set<int>& inUse)
     maker.Settings.keptFrameBytes > 0
       ? maker.Settings.keptFrameBytes
       : std::min(defaultMemoryLimit() / 4, std::max(double(1 << 30), 4 * this->frameBytes()));
-  while (bytes > budget)
+  // Frames not stored cannot be read back: one let go is traced again if it is needed again. So
+  // they get more room by default: 2 GiB or 8 frames, at most half the memory a read may take.
+  const double unstoredBudget =
+    maker.Settings.unstoredFrameBytes > 0
+      ? maker.Settings.unstoredFrameBytes
+      : std::min(defaultMemoryLimit() / 2, std::max(2.0 * (1 << 30), 8 * this->frameBytes()));
+  const std::set<int> keys = this->keysOfInterpolated();
+  // The least recently used frame that may go: stored ones while above the budget; then, above
+  // the unstored budget, those not stored, the frames no interpolated frame needs first.
+  const auto leastRecent = [&](bool stored, bool spareKeys)
   {
     int oldest = -1;
     for (const auto& [k, records] : in.whole)
-      if (!inUse.count(k) && this->storedId(k) &&
-          (oldest < 0 || in.lastUse[k] < in.lastUse[oldest]))
+      if (!inUse.count(k) && this->storedId(k).has_value() == stored &&
+          !(spareKeys && keys.count(k)) && (oldest < 0 || in.lastUse[k] < in.lastUse[oldest]))
         oldest = k;
+    return oldest;
+  };
+  while (bytes > std::min(budget, unstoredBudget))
+  {
+    int oldest = bytes > budget ? leastRecent(true, false) : -1;
+    if (oldest < 0 && bytes > unstoredBudget)
+      oldest = leastRecent(false, true);
+    if (oldest < 0 && bytes > unstoredBudget)
+      oldest = leastRecent(false, false);
     if (oldest < 0)
       return;
     bytes -= static_cast<double>(in.whole[oldest].size() * sizeof(RayRecord));

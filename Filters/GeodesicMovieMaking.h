@@ -88,6 +88,7 @@ struct MovieMaker::Internals
   /// (MovieSettings::encodePictures), until storedPictures() hands them out.
   std::map<int, std::vector<std::string>> pictures;
   std::deque<int> pictureOrder; ///< the frames of `pictures`, as they were traced
+  std::set<int> encoded;        ///< the frames whose pictures were encoded when traced, each once
   /// Records of whole frames let go, their memory reused for the next frame traced: fresh memory
   /// costs its first touch (the kernel clears every page), memory used before does not.
   std::vector<RayRecord> spare;
@@ -136,17 +137,19 @@ struct MovieMaking
   /// earliest let go beyond a quarter of the memory a read may take (their frames are then made
   /// from their records at their turn, read back from the store).
   void keepPictures(int k, std::vector<std::string> bytes);
-  /// Without a store: throws InvalidParameter if tracing frame k whole would take the whole
-  /// frames kept past MovieSettings::unstoredFrameBytes.
-  void requireRoomForWhole(int k) const;
   /// The bytes of one whole frame's records, and of the whole frames kept now.
   double frameBytes() const;
   double wholeBytes() const;
 
-  /// Lets go of the least recently used whole frames that are stored, but not of `inUse`, until
-  /// those kept fit in MovieSettings::keptFrameBytes (a movie's keys at 1920×1080 would not fit
-  /// in memory together). Called where no reference to a kept frame is held.
+  /// Lets go of the least recently used whole frames, but not of `inUse`: those stored until the
+  /// frames kept fit in MovieSettings::keptFrameBytes (a movie's keys at 1920×1080 would not fit
+  /// in memory together), those not stored (no store: they are traced again if needed again)
+  /// until they fit in MovieSettings::unstoredFrameBytes, the keys of interpolated frames last.
+  /// Called where no reference to a kept frame is held.
   void keepWholeWithinBudget(const std::set<int>& inUse);
+  /// Once the keys are made, the keys that the plan's interpolated frames are made between; none
+  /// before.
+  std::set<int> keysOfInterpolated() const;
 
   /// Records of a subset that was traced before: in memory, or in the store.
   std::optional<std::vector<RayRecord>> known(int k, const SceneDescription& subset,

@@ -910,36 +910,6 @@ TEST(StorePipeline, MakingTheKeysAnnouncesEachFrameItTracesOnce)
   EXPECT_EQ(again.raysTraced(), 0.0);
 }
 
-TEST(StorePipeline, AMovieWithoutAStoreRefusesAWholeFrameItHasNoRoomFor)
-{
-  // Without a store every whole frame stays in memory. Room for two and a half: the plan's first
-  // two keys are made, the third is refused before it is traced, naming the way out.
-  RampMovies ramp(9);
-  asrt::MovieSettings settings = rampSettings();
-  asrt::MovieMaker roomy = ramp.movie(settings, false);
-  std::vector<int> traced;
-  roomy.makeKeys([&traced](int k) { traced.push_back(k); });
-  ASSERT_GE(traced.size(), 3u) << "the plan traces too few frames whole to fill the room";
-  const double frameBytes = 48.0 * 48.0 * sizeof(asrt::RayRecord);
-  asrt::MovieFrameReport report;
-  ASSERT_EQ(static_cast<double>(roomy.frame(0, report).size()) * sizeof(asrt::RayRecord),
-            frameBytes)
-    << "the test's frame size is not the ramp source's";
-  settings.unstoredFrameBytes = 2.5 * frameBytes;
-  asrt::MovieMaker cramped = ramp.movie(settings, false);
-  int made = 0;
-  try
-  {
-    cramped.makeKeys([&made](int) { ++made; });
-    FAIL() << "a third whole frame was traced past the room for two and a half";
-  }
-  catch (const asrt::InvalidParameter& e)
-  {
-    EXPECT_NE(std::string(e.what()).find("--store"), std::string::npos) << e.what();
-  }
-  EXPECT_EQ(made, 2);
-}
-
 TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAndStoresThem)
 {
   RampMovies ramp(7);
