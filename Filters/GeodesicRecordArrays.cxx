@@ -3,6 +3,7 @@
 #include "FrameTracer.h" // kParallelRecords
 #include "SceneFile.h"
 
+#include "vtkAOSDataArrayTemplate.h"
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkCellData.h"
@@ -323,71 +324,151 @@ void RowsBuilder::finish()
     pd->AddArray(p.hits->GetPointData()->GetArray(name));
 }
 
-std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
+namespace
 {
-  const vtkIdType m = hits->GetNumberOfPoints();
-  vtkDataArray* pixel = requirePointArray(hits, "Pixel", 2);
-  vtkDataArray* origin = requirePointArray(hits, "Origin", 3);
-  vtkDataArray* direction = requirePointArray(hits, "Direction", 3);
-  vtkDataArray* momentum = requirePointArray(hits, "Momentum", 4);
-  vtkDataArray* term = requirePointArray(hits, "Termination", 1);
-  vtkDataArray* object = requirePointArray(hits, "ObjectId", 1);
-  vtkDataArray* normal = requirePointArray(hits, "HitNormal", 3);
-  vtkDataArray* uv = requirePointArray(hits, "UV", 2);
-  vtkDataArray* chord = requirePointArray(hits, "ChordError", 1);
-  vtkDataArray* length = requirePointArray(hits, "PathLength", 1);
-  vtkDataArray* winding = requirePointArray(hits, "Winding", 1);
-  vtkDataArray* imageOrder = requirePointArray(hits, "ImageOrder", 1);
-  vtkDataArray* steps = requirePointArray(hits, "Steps", 1);
-  vtkDataArray* maxH = requirePointArray(hits, "MaxAbsH", 1);
-  vtkDataArray* color = requirePointArray(hits, "Color", 3);
-  vtkDataArray* jacobian = requirePointArray(hits, "Jacobian", 4);
-  // Hit points made before anti-aliasing have no RaysPerPixel: their pixels had one ray each.
-  vtkDataArray* raysPerPixel = hits->GetPointData()->GetArray("RaysPerPixel")
-                                 ? requirePointArray(hits, "RaysPerPixel", 1)
-                                 : nullptr;
-  // Hit points made before the adaptive grid have no Traced: every ray of theirs was traced.
-  vtkDataArray* traced =
-    hits->GetPointData()->GetArray("Traced") ? requirePointArray(hits, "Traced", 1) : nullptr;
-  std::vector<RayRecord> records(static_cast<size_t>(m));
-  for (vtkIdType k = 0; k < m; ++k)
+template<class T>
+const void* contiguousValues(vtkDataArray* array)
+{
+  auto* typed = vtkArrayDownCast<vtkAOSDataArrayTemplate<T>>(array);
+  return typed ? static_cast<const void*>(typed->GetPointer(0)) : nullptr;
+}
+}
+
+HitPointRecords::Column::Column(vtkDataArray* array)
+  : Array(array)
+  , Type(array->GetDataType())
+  , Components(array->GetNumberOfComponents())
+{
+  switch (this->Type)
   {
-    RayRecord& r = records[static_cast<size_t>(k)];
-    hits->GetPoint(k, r.hitPoint.data());
-    r.i = static_cast<std::int32_t>(pixel->GetComponent(k, 0));
-    r.j = static_cast<std::int32_t>(pixel->GetComponent(k, 1));
-    origin->GetTuple(k, r.origin.data());
-    direction->GetTuple(k, r.direction.data());
-    momentum->GetTuple(k, r.momentum.data());
-    const int t = static_cast<int>(term->GetComponent(k, 0));
-    if (t < 0 || t > static_cast<int>(Termination::HitObject))
-      throw InvalidParameter("hit point " + std::to_string(k) + " has an unknown termination " +
-                             std::to_string(t));
-    r.termination = static_cast<Termination>(t);
-    r.objectId = static_cast<std::int32_t>(object->GetComponent(k, 0));
-    normal->GetTuple(k, r.hitNormal.data());
-    r.u = uv->GetComponent(k, 0);
-    r.v = uv->GetComponent(k, 1);
-    r.chordError = chord->GetComponent(k, 0);
-    r.affineLength = length->GetComponent(k, 0);
-    r.winding = winding->GetComponent(k, 0);
-    r.imageOrder = static_cast<std::int32_t>(imageOrder->GetComponent(k, 0));
-    r.steps = static_cast<std::int64_t>(steps->GetComponent(k, 0));
-    r.maxAbsH = maxH->GetComponent(k, 0);
-    color->GetTuple(k, r.color.data());
-    r.raysPerPixel = raysPerPixel ? static_cast<std::int32_t>(raysPerPixel->GetComponent(k, 0)) : 1;
-    const double flag = traced ? traced->GetComponent(k, 0) : 1.0;
+    case VTK_DOUBLE:
+      this->Data = contiguousValues<double>(array);
+      break;
+    case VTK_INT:
+      this->Data = contiguousValues<int>(array);
+      break;
+    case VTK_LONG_LONG:
+      this->Data = contiguousValues<long long>(array);
+      break;
+    case VTK_UNSIGNED_CHAR:
+      this->Data = contiguousValues<unsigned char>(array);
+      break;
+    default:
+      break;
+  }
+}
+
+double HitPointRecords::Column::operator()(vtkIdType k, int c) const
+{
+  const vtkIdType at = k * this->Components + c;
+  if (this->Data)
+    switch (this->Type)
+    {
+      case VTK_DOUBLE:
+        return static_cast<const double*>(this->Data)[at];
+      case VTK_INT:
+        return static_cast<double>(static_cast<const int*>(this->Data)[at]);
+      case VTK_LONG_LONG:
+        return static_cast<double>(static_cast<const long long*>(this->Data)[at]);
+      case VTK_UNSIGNED_CHAR:
+        return static_cast<double>(static_cast<const unsigned char*>(this->Data)[at]);
+      default:
+        break;
+    }
+  return this->Array->GetComponent(k, c);
+}
+
+HitPointRecords::HitPointRecords(vtkPolyData* hits)
+  : Count(hits->GetNumberOfPoints())
+  , Pixel(requirePointArray(hits, "Pixel", 2))
+  , Origin(requirePointArray(hits, "Origin", 3))
+  , Direction(requirePointArray(hits, "Direction", 3))
+  , Momentum(requirePointArray(hits, "Momentum", 4))
+  , Term(requirePointArray(hits, "Termination", 1))
+  , Object(requirePointArray(hits, "ObjectId", 1))
+  , Normal(requirePointArray(hits, "HitNormal", 3))
+  , Uv(requirePointArray(hits, "UV", 2))
+  , Chord(requirePointArray(hits, "ChordError", 1))
+  , Length(requirePointArray(hits, "PathLength", 1))
+  , Winding(requirePointArray(hits, "Winding", 1))
+  , ImageOrder(requirePointArray(hits, "ImageOrder", 1))
+  , Steps(requirePointArray(hits, "Steps", 1))
+  , MaxH(requirePointArray(hits, "MaxAbsH", 1))
+  , Color(requirePointArray(hits, "Color", 3))
+  , Jacobian(requirePointArray(hits, "Jacobian", 4))
+{
+  if (this->Count > 0)
+  {
+    vtkPoints* points = hits->GetPoints();
+    if (!points || points->GetData()->GetNumberOfComponents() != 3)
+      throw InvalidParameter("hit points lack their points");
+    this->Points = Column(points->GetData());
+  }
+  // Hit points made before anti-aliasing have no RaysPerPixel: their pixels had one ray each.
+  if (hits->GetPointData()->GetArray("RaysPerPixel"))
+    this->RaysPerPixel = Column(requirePointArray(hits, "RaysPerPixel", 1));
+  // Hit points made before the adaptive grid have no Traced: every ray of theirs was traced.
+  if (hits->GetPointData()->GetArray("Traced"))
+    this->Traced = Column(requirePointArray(hits, "Traced", 1));
+  // The values a record cannot hold, refused before any is read: the first one, as a reader in
+  // order would meet it.
+  for (vtkIdType k = 0; k < this->Count; ++k)
+  {
+    // What read() casts to an int: in range exactly when it lies in (−1, HitObject + 1).
+    const double t = this->Term(k, 0);
+    if (!(t > -1.0 && t < static_cast<int>(Termination::HitObject) + 1.0))
+      throw InvalidParameter(
+        "hit point " + std::to_string(k) + " has an unknown termination " +
+        (std::abs(t) < 1e9 ? std::to_string(static_cast<long long>(t)) : std::to_string(t)));
+    const double flag = this->Traced ? this->Traced(k, 0) : 1.0;
     if (flag != 0.0 && flag != 1.0)
       throw InvalidParameter("hit point " + std::to_string(k) + " has a \"Traced\" value of " +
                              std::to_string(flag) + ", neither 0 (interpolated) nor 1 (traced)");
-    r.traced = flag == 1.0;
-    double jac[4];
-    jacobian->GetTuple(k, jac);
-    r.dudi = jac[0];
-    r.dudj = jac[1];
-    r.dvdi = jac[2];
-    r.dvdj = jac[3];
   }
+}
+
+void HitPointRecords::read(vtkIdType k, RayRecord& r) const
+{
+  for (int c = 0; c < 3; ++c)
+  {
+    r.hitPoint[c] = this->Points(k, c);
+    r.origin[c] = this->Origin(k, c);
+    r.direction[c] = this->Direction(k, c);
+    r.hitNormal[c] = this->Normal(k, c);
+    r.color[c] = this->Color(k, c);
+  }
+  for (int c = 0; c < 4; ++c)
+    r.momentum[c] = this->Momentum(k, c);
+  r.i = static_cast<std::int32_t>(this->Pixel(k, 0));
+  r.j = static_cast<std::int32_t>(this->Pixel(k, 1));
+  r.termination = static_cast<Termination>(static_cast<int>(this->Term(k, 0)));
+  r.objectId = static_cast<std::int32_t>(this->Object(k, 0));
+  r.u = this->Uv(k, 0);
+  r.v = this->Uv(k, 1);
+  r.chordError = this->Chord(k, 0);
+  r.affineLength = this->Length(k, 0);
+  r.winding = this->Winding(k, 0);
+  r.imageOrder = static_cast<std::int32_t>(this->ImageOrder(k, 0));
+  r.steps = static_cast<std::int64_t>(this->Steps(k, 0));
+  r.maxAbsH = this->MaxH(k, 0);
+  r.raysPerPixel = this->RaysPerPixel ? static_cast<std::int32_t>(this->RaysPerPixel(k, 0)) : 1;
+  r.traced = !this->Traced || this->Traced(k, 0) == 1.0;
+  r.dudi = this->Jacobian(k, 0);
+  r.dudj = this->Jacobian(k, 1);
+  r.dvdi = this->Jacobian(k, 2);
+  r.dvdj = this->Jacobian(k, 3);
+}
+
+std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits)
+{
+  const HitPointRecords reader(hits);
+  std::vector<RayRecord> records(static_cast<size_t>(reader.count()));
+  const long n = static_cast<long>(reader.count());
+  // Each record from its own tuples; the pages of the records are first touched here, in
+  // parallel too.
+#pragma omp parallel for schedule(static) if (n > kParallelRecords)
+  for (long k = 0; k < n; ++k)
+    reader.read(k, records[static_cast<size_t>(k)]);
   return records;
 }
 

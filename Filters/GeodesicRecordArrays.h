@@ -80,9 +80,42 @@ private:
   std::unique_ptr<Parts> P;
 };
 
-/// The inverse of recordsToPolyData; throws InvalidParameter naming a missing or malformed array.
-/// Without a "RaysPerPixel" array (hit points made before anti-aliasing) every record gets 1;
-/// without a "Traced" array (made before the adaptive grid) every record is traced.
+/// The records of hit points (recordsToPolyData's), one at a time: the constructor throws
+/// InvalidParameter naming a missing or malformed array, or the first hit point with an unknown
+/// termination or a "Traced" value other than 0 or 1; read() then cannot fail, and may be called
+/// from several threads at once. Without a "RaysPerPixel" array (hit points made before
+/// anti-aliasing) every record gets 1; without a "Traced" array (made before the adaptive grid)
+/// every record is traced.
+class HitPointRecords
+{
+public:
+  explicit HitPointRecords(vtkPolyData* hits);
+  vtkIdType count() const { return this->Count; }
+  void read(vtkIdType k, RayRecord& r) const;
+
+  /// One array's values as doubles (vtkDataArray::GetComponent's), read straight from its memory
+  /// where it holds doubles, ints, long longs or bytes contiguously, as the source makes them.
+  class Column
+  {
+  public:
+    Column() = default;
+    explicit Column(vtkDataArray* array);
+    double operator()(vtkIdType k, int c) const;
+    explicit operator bool() const { return this->Array != nullptr; }
+
+  private:
+    vtkDataArray* Array = nullptr;
+    const void* Data = nullptr; ///< null: through Array
+    int Type = 0;
+    int Components = 1;
+  };
+
+private:
+  vtkIdType Count;
+  Column Points, Pixel, Origin, Direction, Momentum, Term, Object, Normal, Uv, Chord, Length,
+    Winding, ImageOrder, Steps, MaxH, Color, Jacobian, RaysPerPixel, Traced;
+};
+/// The inverse of recordsToPolyData (HitPointRecords, every record read).
 std::vector<RayRecord> polyDataToRecords(vtkPolyData* hits);
 /// Ray paths as polylines, one per path in order, double points with point data "Lambda", "R",
 /// "AbsH" and cell data "Pixel" (i, j) and "Termination": vtkGeodesicSource's port 2.

@@ -37,7 +37,9 @@ void vtkGeodesicPostgreSQLWriter::WriteData()
     if (!hits || hits->GetNumberOfPoints() == 0)
       throw asrt::InvalidParameter("nothing to write: the input has no hit points");
     const asrt::SceneDescription frame = asrt::frameFromFieldData(hits->GetFieldData());
-    const std::vector<asrt::RayRecord> records = asrt::polyDataToRecords(hits);
+    // Read from the arrays as the COPY streams them, on each of its connections: the frame's
+    // records are never all in memory beside the hit points.
+    const asrt::HitPointRecords records(hits);
     std::vector<asrt::RayPath> paths;
     if (this->GetNumberOfInputConnections(1) > 0)
     {
@@ -49,12 +51,14 @@ void vtkGeodesicPostgreSQLWriter::WriteData()
     this->UpdateProgress(0.1);
     asrt::RayStore store(asrt::storeConnection(this->ConnectionString));
     store.migrate();
-    this->FrameId =
-      static_cast<vtkIdType>(store.writeFrame(frame, this->Label ? this->Label : "", records,
-                                              asrt::FrameWriteOptions()
-                                                .withPaths(std::move(paths))
-                                                .replacing(this->ReplaceExisting)
-                                                .cancelledWhen(this->CancelRequested)));
+    this->FrameId = static_cast<vtkIdType>(store.writeFrame(
+      frame, this->Label ? this->Label : "", static_cast<std::size_t>(records.count()),
+      [&records](std::size_t k, asrt::RayRecord& r) { records.read(static_cast<vtkIdType>(k), r); },
+      asrt::FrameWriteOptions()
+        .withPaths(std::move(paths))
+        .replacing(this->ReplaceExisting)
+        .cancelledWhen(this->CancelRequested)
+        .fromConcurrentProducer()));
     this->UpdateProgress(1.0);
   }
   catch (const std::exception& e)

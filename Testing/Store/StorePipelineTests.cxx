@@ -123,6 +123,27 @@ TEST(StorePipeline, WriteThenReadGivesTheSameFrameBitForBit)
   }
 }
 
+TEST(StorePipeline, AFrameTheWriterStreamsOverSeveralConnectionsIsTheSameBitForBit)
+{
+  // Large enough for two tiles of at least RayStore::kParallelMinRays rays: the writer reads the
+  // hit points from two threads at once.
+  vtkNew<vtkGeodesicSource> source;
+  source->SetSceneFileName(scene("fig1-cylinders.json").c_str());
+  source->SetResolution(384, 352);
+  vtkNew<vtkGeodesicPostgreSQLWriter> writer;
+  writer->SetInputConnection(source->GetOutputPort(1));
+  writer->SetConnectionString(server().conninfo().c_str());
+  writer->SetLabel("two tiles");
+  ASSERT_EQ(writer->Write(), 1);
+  asrt::RayStore store(server().conninfo());
+  EXPECT_EQ(store.frameInfo(writer->GetFrameId()).tileCount, 2);
+  vtkNew<vtkGeodesicPostgreSQLReader> reader;
+  reader->SetConnectionString(server().conninfo().c_str());
+  reader->SetFrameId(writer->GetFrameId());
+  reader->Update();
+  EXPECT_EQ(bitsByPixel(reader->GetHitsOutput()), bitsByPixel(source->GetHitsOutput()));
+}
+
 TEST(StorePipeline, RaysPerPixelGoThroughTheWriterAndTheReader)
 {
   vtkNew<vtkGeodesicSource> source;
