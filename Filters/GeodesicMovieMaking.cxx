@@ -12,7 +12,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
 #include <sstream>
+#include <stdexcept>
+#include <thread>
 
 namespace asrt
 {
@@ -152,6 +157,13 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
     else
       records = allocateRecords(pixels);
     in.spare = std::vector<RayRecord>();
+    if (maker.Store)
+    {
+      double seconds = 0;
+      const std::int64_t stored = this->traceStreamed(k, tracer, records, seconds);
+      return this->keepMade(k, std::move(records), static_cast<double>(tracer.raysIntegrated()),
+                            std::chrono::steady_clock::now() - t0, stored);
+    }
     std::size_t filled = 0;
     traceRowsInBands(
       tracer, 0, maker.Height,
@@ -171,18 +183,120 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
   return this->keepWhole(k, std::move(records), rays, held);
 }
 
-const std::vector<RayRecord>& MovieMaking::keepMade(int k, std::vector<RayRecord> records,
-                                                    double rays,
-                                                    std::chrono::steady_clock::duration took)
+std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
+                                        std::vector<RayRecord>& records, double& seconds)
 {
   const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
-  // A frame with too many failed rays is no picture of its scene: neither used nor stored.
-  if (maker.Settings.checkTraced)
+  const std::size_t total = records.size();
+  const std::size_t lastRow = total - static_cast<std::size_t>(maker.Width);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Rows go from the tracing thread to the COPY's connections as they are finished: the store's
+  // work and the server's overlap the tracing of the rows after them. The last row waits for
+  // the frame's check, so that the write cannot commit a frame the check refuses.
+  std::mutex mutex;
+  std::condition_variable ready;
+  std::size_t visible = 0;
+  bool done = false, finished = false;
+  std::exception_ptr failure;
+  std::thread tracing(
+    [&]
+    {
+      std::size_t filled = 0;
+      bool complete = false;
+      try
+      {
+        complete = traceRowsInBands(
+          tracer, 0, maker.Height,
+          [&](const RayRecord* band, std::size_t count)
+          {
+            std::copy(band, band + count, records.begin() + static_cast<std::ptrdiff_t>(filled));
+            filled += count;
+            const std::lock_guard<std::mutex> lock(mutex);
+            visible = std::min(filled, lastRow);
+            ready.notify_all();
+          },
+          this->progress());
+        complete = complete && filled == total && !this->cancelled();
+        // A frame with too many failed rays is no picture of its scene: neither used nor stored.
+        if (complete && maker.Settings.checkTraced)
+          maker.Settings.checkTraced(records, k);
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
+      catch (...)
+      {
+        failure = std::current_exception();
+        complete = false;
+      }
+      const std::lock_guard<std::mutex> lock(mutex);
+      done = true;
+      finished = complete;
+      if (complete)
+        visible = total;
+      ready.notify_all();
+    });
+  const auto next = [&](std::size_t index, RayRecord& out)
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    ready.wait(lock, [&] { return visible > index || done; });
+    if (visible <= index)
+      throw std::runtime_error("the frame's tracing stopped before its rays were stored");
+    lock.unlock();
+    out = records[index];
+  };
+  std::optional<std::int64_t> id;
+  std::exception_ptr storeFailure;
+  std::function<bool()> cancelled =
+    maker.Settings.cancelled ? maker.Settings.cancelled : [] { return false; };
+  try
+  {
+    id = maker.Store->writeFrame(
+      f.identity, maker.Settings.label, total, next,
+      FrameWriteOptions().fromConcurrentProducer().cancelledWhen(cancelled).tracedSecondsWhenDone(
+        [&seconds] { return seconds; }));
+  }
+  catch (...)
+  {
+    storeFailure = std::current_exception();
+  }
+  tracing.join();
+  if (failure)
+    std::rethrow_exception(failure); // the tracer's, or the check's refusal
+  if (!finished || cancelled())
+    throw MovieCancelled();
+  if (storeFailure)
+  {
+    // As storeFrame: another writer may have stored the frame since it was looked up; then its
+    // copy stands.
+    try
+    {
+      std::rethrow_exception(storeFailure);
+    }
+    catch (const StoreError&)
+    {
+      id = maker.Store->findFrame(f.identity);
+      if (!id)
+        throw;
+    }
+  }
+  return *id;
+}
+
+const std::vector<RayRecord>& MovieMaking::keepMade(int k, std::vector<RayRecord> records,
+                                                    double rays,
+                                                    std::chrono::steady_clock::duration took,
+                                                    std::optional<std::int64_t> stored)
+{
+  const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
+  // A frame with too many failed rays is no picture of its scene: neither used nor stored (one
+  // stored as traced was checked before its last row went).
+  if (maker.Settings.checkTraced && !stored)
     maker.Settings.checkTraced(records, k);
   const double held = raysOf(records);
   maker.RaysTraced += rays;
   in.madeNow.insert(k);
-  if (maker.Store)
+  if (stored)
+    in.storedIds[k] = *stored;
+  else if (maker.Store)
     in.storedIds[k] = storeFrame(*maker.Store, maker.Settings, f.identity, records,
                                  std::chrono::duration<double>(took).count());
   // Made once: a frame traced again after it was let go (no store) has its pictures already.

@@ -119,9 +119,19 @@ struct MovieMaking
   const std::vector<RayRecord>& whole(int k);
 
   /// Whole frame k made by this movie (traced, or anti-aliased again), `rays` integrated in
-  /// `took`: checked, counted, stored with its pictures, and kept.
+  /// `took`: checked, counted, stored with its pictures, and kept; where it was `stored` as it
+  /// was traced (traceStreamed, which checked it), only counted and kept.
   const std::vector<RayRecord>& keepMade(int k, std::vector<RayRecord> records, double rays,
-                                         std::chrono::steady_clock::duration took);
+                                         std::chrono::steady_clock::duration took,
+                                         std::optional<std::int64_t> stored = std::nullopt);
+
+  /// Traces whole frame k into `records` (one for each pixel; every one written) on a thread of
+  /// its own while the store's write streams the rows already traced (MovieSettings::checkTraced
+  /// run before the last row goes), and returns the stored frame's id, or that of a copy another
+  /// writer stored meanwhile. `seconds`: the tracing's. Throws MovieCancelled when the movie is
+  /// asked to stop, and the tracer's or the check's exception, with nothing stored.
+  std::int64_t traceStreamed(int k, const FrameTracer& tracer, std::vector<RayRecord>& records,
+                             double& seconds);
 
   /// Whole frame k anti-aliased again from `records`, the same frame traced with the rendering
   /// `fromRendering` (FrameTracer::antialiasAgain): checked, counted, stored and kept as a frame

@@ -420,7 +420,8 @@ private:
       .i64(id)
       .i64(std::int64_t(this->Frame.count))
       .f64(seconds)
-      .f64(this->Frame.options.traceSeconds)
+      .f64(this->Frame.options.tracedSeconds ? this->Frame.options.tracedSeconds()
+                                             : this->Frame.options.traceSeconds)
       .exec(this->Conn,
             "UPDATE frames SET status = 'complete', ray_count = $2, write_seconds = $3, "
             "trace_seconds = nullif($4, 'NaN'), completed_at = clock_timestamp() WHERE id = $1",

@@ -143,6 +143,9 @@ struct FrameWriteOptions
   bool replace = false;
   /// How long tracing the frame took, stored with it; NaN when the writer does not say.
   double traceSeconds = std::numeric_limits<double>::quiet_NaN();
+  /// For the streaming writeFrame() of a producer that traces as the write goes: asked, once the
+  /// last record is produced, how long tracing took, instead of traceSeconds.
+  std::function<double()> tracedSeconds;
   /// The paths of some of its rays, stored in the same transaction (bit-exact, in the given
   /// order). At most one path per pixel, each pixel inside the frame's resolution: anything else
   /// is refused (StoreError) before touching the database.
@@ -175,6 +178,11 @@ struct FrameWriteOptions
   FrameWriteOptions& fromConcurrentProducer(bool c = true)
   {
     this->concurrentProducer = c;
+    return *this;
+  }
+  FrameWriteOptions& tracedSecondsWhenDone(std::function<double()> seconds)
+  {
+    this->tracedSeconds = std::move(seconds);
     return *this;
   }
   FrameWriteOptions& cancelledWhen(std::function<bool()> c)
