@@ -1,7 +1,6 @@
 // A movie without a store keeps its whole frames' records within a budget: beyond it, the least
 // recently used are let go and traced again where needed. The frames it makes are the same bit
-// for bit as those of a movie that keeps them all, and the pictures encoded as each frame is
-// traced serve its whole frames without their records.
+// for bit as those of a movie that keeps them all.
 #include "FiltersTestUtilities.h"
 
 #include "GeodesicMovie.h"
@@ -91,47 +90,4 @@ TEST(MovieMemory, WithoutAStoreWholeFramesStayWithinTheirBudgetAndTheFramesAreTh
     again += times - 1;
   EXPECT_GT(again, 0) << "no frame was let go and needed again: the budget is not exercised";
   EXPECT_GT(cramped.raysTraced(), roomy.raysTraced());
-}
-
-TEST(MovieMemory, WithoutAStorePicturesEncodedAsTracedServeTheWholeFramesOnce)
-{
-  constexpr int n = 9;
-  const std::vector<std::string> formats{ "test.1" };
-  asrt::MovieSettings settings = rampSettings();
-  asrt::MovieMaker truth = rampMovie(n, settings);
-  // Room for no frame beyond those in use: a whole frame's records go once its pictures are made.
-  settings.unstoredFrameBytes = 1;
-  settings.pictureFormats = formats;
-  int encodings = 0;
-  settings.encodePictures = [&encodings](const std::vector<asrt::RayRecord>& records)
-  {
-    ++encodings;
-    return std::vector<std::string>{ colourBytes(records) };
-  };
-  asrt::MovieMaker early = rampMovie(n, settings);
-  early.makeKeys();
-  int whole = 0;
-  for (int k = 0; k < n; ++k)
-  {
-    asrt::MovieFrameReport expected, report;
-    const std::string picture = colourBytes(truth.frame(k, expected));
-    std::optional<std::vector<std::string>> served = early.storedPictures(k, formats, report);
-    if (expected.method == asrt::FrameMethod::Interpolated)
-    {
-      EXPECT_FALSE(served.has_value()) << "frame " << k << " is interpolated, not traced whole";
-      EXPECT_TRUE(colourBytes(early.frame(k, report)) == picture) << "frame " << k;
-      continue;
-    }
-    ++whole;
-    ASSERT_TRUE(served.has_value()) << "whole frame " << k << ": its picture was not made";
-    EXPECT_TRUE(served->at(0) == picture) << "frame " << k;
-    EXPECT_EQ(report.method, expected.method) << "frame " << k;
-    EXPECT_EQ(report.shareRetraced, 1.0) << "frame " << k;
-    // Handed out once: asked again, the frame is made from its records.
-    EXPECT_FALSE(early.storedPictures(k, formats, report).has_value()) << "frame " << k;
-  }
-  ASSERT_GT(whole, 1);
-  ASSERT_LT(whole, n) << "the movie interpolates no frame: the mixture is not checked";
-  // Each whole frame encoded once, though the keys were let go and traced again.
-  EXPECT_EQ(encodings, whole);
 }
