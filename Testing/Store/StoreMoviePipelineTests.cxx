@@ -7,7 +7,7 @@
 #include "MoviePlan.h"
 #include "RayStore.h"
 #include "SceneFile.h"
-#include "ThrowawayPostgres.h"
+#include "SharedServer.h"
 #include "vtkGeodesicSource.h"
 
 #include "vtkSmartPointer.h"
@@ -19,20 +19,6 @@
 #include <string>
 #include <vector>
 
-namespace
-{
-asrt::testing::ThrowawayPostgres& server()
-{
-  static asrt::testing::ThrowawayPostgres instance;
-  return instance;
-}
-
-std::string scene(const char* name)
-{
-  return std::string(ASRT_SOURCE_DIR) + "/Data/scenes/" + name;
-}
-}
-
 // A movie's interpolated frame is made again between the keys it was made between, whatever
 // frames are stored since: another user storing a frame beside it whole (a key for free to any
 // later plan) changes neither its records nor its cost, nothing is traced for it.
@@ -43,7 +29,8 @@ namespace
 vtkSmartPointer<vtkGeodesicSource> smallRampSource()
 {
   auto source = vtkSmartPointer<vtkGeodesicSource>::New();
-  source->SetSceneFileName(scene("fig4-mass-start.json").c_str());
+  source->SetSceneFileName(
+    (std::string(ASRT_SOURCE_DIR) + "/Data/scenes/fig4-mass-start.json").c_str());
   source->SetResolution(48, 48);
   return source;
 }
@@ -63,7 +50,7 @@ struct RampMovies
     return asrt::MovieMaker(asrt::movieFrames(this->source, this->path), "mass",
                             stored ? &this->store : nullptr, settings);
   }
-  asrt::RayStore store{ server().conninfo() };
+  asrt::RayStore store{ asrt::testing::sharedServer().conninfo() };
   vtkSmartPointer<vtkGeodesicSource> source = smallRampSource();
   asrt::MoviePath path;
 };

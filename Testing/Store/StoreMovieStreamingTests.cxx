@@ -6,7 +6,7 @@
 #include "GeodesicSceneLoading.h"
 #include "RayStore.h"
 #include "SceneFile.h"
-#include "ThrowawayPostgres.h"
+#include "SharedServer.h"
 #include "vtkGeodesicSource.h"
 
 #include "vtkNew.h"
@@ -23,12 +23,6 @@
 
 namespace
 {
-asrt::testing::ThrowawayPostgres& server()
-{
-  static asrt::testing::ThrowawayPostgres instance;
-  return instance;
-}
-
 const std::string kScenes = std::string(ASRT_SOURCE_DIR) + "/Data/scenes";
 
 /// Figs. 4-5's mass ramp, M = 0.65 to 0.8 in 2 frames (both traced whole) at width × height,
@@ -79,7 +73,7 @@ std::vector<std::uint64_t> bits(const asrt::RayRecord& r)
 
 void expectStoredAsTraced(int width, int height, int tiles)
 {
-  asrt::RayStore store(server().conninfo("stored_" + std::to_string(width)));
+  asrt::RayStore store(asrt::testing::databaseNamed("stored_" + std::to_string(width)));
   store.migrate();
   asrt::MovieMaker movie = twoFrames(width, height, store, rampSettings());
   movie.makeKeys();
@@ -106,7 +100,7 @@ void expectNothingStored(int width, int height, bool refuse)
 {
   // A database of its own: no frame of another test's in it.
   asrt::RayStore store(
-    server().conninfo((refuse ? "refused_" : "stopped_") + std::to_string(width)));
+    asrt::testing::databaseNamed((refuse ? "refused_" : "stopped_") + std::to_string(width)));
   store.migrate();
   asrt::MovieSettings settings = rampSettings();
   bool stop = false;
