@@ -245,13 +245,13 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
   };
   std::optional<std::int64_t> id;
   std::exception_ptr storeFailure;
-  std::function<bool()> cancelled =
+  std::function<bool()> stop =
     maker.Settings.cancelled ? maker.Settings.cancelled : [] { return false; };
   try
   {
     id = maker.Store->writeFrame(
       f.identity, maker.Settings.label, total, next,
-      FrameWriteOptions().fromConcurrentProducer().cancelledWhen(cancelled).tracedSecondsWhenDone(
+      FrameWriteOptions().fromConcurrentProducer().cancelledWhen(stop).tracedSecondsWhenDone(
         [&seconds] { return seconds; }));
   }
   catch (...)
@@ -261,7 +261,7 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
   tracing.join();
   if (failure)
     std::rethrow_exception(failure); // the tracer's, or the check's refusal
-  if (!finished || cancelled())
+  if (!finished || this->cancelled())
     throw MovieCancelled();
   if (storeFailure)
   {

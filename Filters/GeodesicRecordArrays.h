@@ -93,6 +93,7 @@ public:
   vtkIdType count() const { return this->Count; }
   void read(vtkIdType k, RayRecord& r) const;
 
+private:
   /// One array's values as doubles (vtkDataArray::GetComponent's), read straight from its memory
   /// where it holds doubles, ints, long longs or bytes contiguously, as the source makes them.
   class Column
@@ -110,7 +111,6 @@ public:
     int Components = 1;
   };
 
-private:
   vtkIdType Count;
   Column Points, Pixel, Origin, Direction, Momentum, Term, Object, Normal, Uv, Chord, Length,
     Winding, ImageOrder, Steps, MaxH, Color, Jacobian, RaysPerPixel, Traced;
