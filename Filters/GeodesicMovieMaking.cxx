@@ -190,50 +190,14 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
   const std::size_t total = records.size();
   const std::size_t lastRow = total - static_cast<std::size_t>(maker.Width);
   const auto t0 = std::chrono::steady_clock::now();
-  // Rows go from the tracing thread to the COPY's connections as they are finished: the store's
-  // work and the server's overlap the tracing of the rows after them. The last row waits for
-  // the frame's check, so that the write cannot commit a frame the check refuses.
+  // The write runs on a thread of its own and takes the rows as they are finished: the store's
+  // work and the server's overlap the tracing of the rows after them. The tracing stays on this
+  // thread, with its progress (a filter's progress events) and its OpenMP threads. The last row
+  // waits for the frame's check, so that the write cannot commit a frame the check refuses.
   std::mutex mutex;
   std::condition_variable ready;
   std::size_t visible = 0;
-  bool done = false, finished = false;
-  std::exception_ptr failure;
-  std::thread tracing(
-    [&]
-    {
-      std::size_t filled = 0;
-      bool complete = false;
-      try
-      {
-        complete = traceRowsInBands(
-          tracer, 0, maker.Height,
-          [&](const RayRecord* band, std::size_t count)
-          {
-            std::copy(band, band + count, records.begin() + static_cast<std::ptrdiff_t>(filled));
-            filled += count;
-            const std::lock_guard<std::mutex> lock(mutex);
-            visible = std::min(filled, lastRow);
-            ready.notify_all();
-          },
-          this->progress());
-        complete = complete && filled == total && !this->cancelled();
-        // A frame with too many failed rays is no picture of its scene: neither used nor stored.
-        if (complete && maker.Settings.checkTraced)
-          maker.Settings.checkTraced(records, k);
-        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      }
-      catch (...)
-      {
-        failure = std::current_exception();
-        complete = false;
-      }
-      const std::lock_guard<std::mutex> lock(mutex);
-      done = true;
-      finished = complete;
-      if (complete)
-        visible = total;
-      ready.notify_all();
-    });
+  bool done = false;
   const auto next = [&](std::size_t index, RayRecord& out)
   {
     std::unique_lock<std::mutex> lock(mutex);
@@ -243,25 +207,63 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
     lock.unlock();
     out = records[index];
   };
+  const std::function<bool()> stop =
+    maker.Settings.cancelled ? maker.Settings.cancelled : [] { return false; };
   std::optional<std::int64_t> id;
   std::exception_ptr storeFailure;
-  std::function<bool()> stop =
-    maker.Settings.cancelled ? maker.Settings.cancelled : [] { return false; };
+  std::thread writing(
+    [&]
+    {
+      try
+      {
+        id = maker.Store->writeFrame(
+          f.identity, maker.Settings.label, total, next,
+          FrameWriteOptions().fromConcurrentProducer().cancelledWhen(stop).tracedSecondsWhenDone(
+            [&seconds] { return seconds; }));
+      }
+      catch (...)
+      {
+        storeFailure = std::current_exception();
+      }
+    });
+  std::size_t filled = 0;
+  bool complete = false;
+  std::exception_ptr failure;
   try
   {
-    id = maker.Store->writeFrame(
-      f.identity, maker.Settings.label, total, next,
-      FrameWriteOptions().fromConcurrentProducer().cancelledWhen(stop).tracedSecondsWhenDone(
-        [&seconds] { return seconds; }));
+    complete = traceRowsInBands(
+      tracer, 0, maker.Height,
+      [&](const RayRecord* band, std::size_t count)
+      {
+        std::copy(band, band + count, records.begin() + static_cast<std::ptrdiff_t>(filled));
+        filled += count;
+        const std::lock_guard<std::mutex> lock(mutex);
+        visible = std::min(filled, lastRow);
+        ready.notify_all();
+      },
+      this->progress());
+    complete = complete && filled == total && !this->cancelled();
+    // A frame with too many failed rays is no picture of its scene: neither used nor stored.
+    if (complete && maker.Settings.checkTraced)
+      maker.Settings.checkTraced(records, k);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   catch (...)
   {
-    storeFailure = std::current_exception();
+    failure = std::current_exception();
+    complete = false;
   }
-  tracing.join();
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    done = true;
+    if (complete)
+      visible = total;
+    ready.notify_all();
+  }
+  writing.join();
   if (failure)
     std::rethrow_exception(failure); // the tracer's, or the check's refusal
-  if (!finished || this->cancelled())
+  if (!complete || this->cancelled())
     throw MovieCancelled();
   if (storeFailure)
   {

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -103,7 +104,7 @@ void expectNothingStored(int width, int height, bool refuse)
     asrt::testing::databaseNamed((refuse ? "refused_" : "stopped_") + std::to_string(width)));
   store.migrate();
   asrt::MovieSettings settings = rampSettings();
-  bool stop = false;
+  std::atomic<bool> stop{ false }; // read by the write's cancellation thread too
   if (refuse)
     settings.checkTraced = [](const std::vector<asrt::RayRecord>&, int k)
     {
@@ -113,8 +114,12 @@ void expectNothingStored(int width, int height, bool refuse)
     };
   else
   {
-    settings.traceProgress = [&stop](double fraction) { stop = stop || fraction > 0.5; };
-    settings.cancelled = [&stop] { return stop; };
+    settings.traceProgress = [&stop](double fraction)
+    {
+      if (fraction > 0.5)
+        stop = true;
+    };
+    settings.cancelled = [&stop] { return stop.load(); };
   }
   asrt::MovieMaker movie = twoFrames(width, height, store, settings);
   if (refuse)
