@@ -48,17 +48,16 @@ std::string objectsText(const std::string& sceneText)
   return j.dump();
 }
 
-/// Stores a frame (whole or a subset). Another writer may have stored it since it was looked up:
-/// then its copy stands.
-std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
-                        const SceneDescription& identity, const std::vector<RayRecord>& records,
-                        double seconds)
+/// Stores a frame (whole or a subset) by `write`, given the options that cancel it with the movie.
+/// Another writer may have stored it since it was looked up: then its copy stands.
+std::int64_t storeOrFind(RayStore& store, const MovieSettings& settings,
+                         const SceneDescription& identity,
+                         const std::function<std::int64_t(FrameWriteOptions)>& write)
 {
   std::function<bool()> cancelled = settings.cancelled ? settings.cancelled : [] { return false; };
   try
   {
-    return store.writeFrame(identity, settings.label, records,
-                            FrameWriteOptions().tracedIn(seconds).cancelledWhen(cancelled));
+    return write(FrameWriteOptions().cancelledWhen(cancelled));
   }
   catch (const StoreError&)
   {
@@ -69,6 +68,17 @@ std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
       throw;
     return *theirs;
   }
+}
+
+/// Stores a frame's records, traced in `seconds` (storeOrFind).
+std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
+                        const SceneDescription& identity, const std::vector<RayRecord>& records,
+                        double seconds)
+{
+  return storeOrFind(
+    store, settings, identity,
+    [&](FrameWriteOptions options)
+    { return store.writeFrame(identity, settings.label, records, options.tracedIn(seconds)); });
 }
 }
 
@@ -159,8 +169,7 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
     in.spare = std::vector<RayRecord>();
     if (maker.Store)
     {
-      double seconds = 0;
-      const std::int64_t stored = this->traceStreamed(k, tracer, records, seconds);
+      const std::int64_t stored = this->traceStreamed(k, tracer, records);
       return this->keepMade(k, std::move(records), static_cast<double>(tracer.raysIntegrated()),
                             std::chrono::steady_clock::now() - t0, stored);
     }
@@ -184,7 +193,7 @@ const std::vector<RayRecord>& MovieMaking::whole(int k)
 }
 
 std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
-                                        std::vector<RayRecord>& records, double& seconds)
+                                        std::vector<RayRecord>& records)
 {
   const MovieFrame& f = maker.Frames[static_cast<std::size_t>(k)];
   const std::size_t total = records.size();
@@ -207,8 +216,7 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
     lock.unlock();
     out = records[index];
   };
-  const std::function<bool()> stop =
-    maker.Settings.cancelled ? maker.Settings.cancelled : [] { return false; };
+  double seconds = 0; // the tracing's, stored with the frame once it is known
   std::optional<std::int64_t> id;
   std::exception_ptr storeFailure;
   std::thread writing(
@@ -216,10 +224,14 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
     {
       try
       {
-        id = maker.Store->writeFrame(
-          f.identity, maker.Settings.label, total, next,
-          FrameWriteOptions().fromConcurrentProducer().cancelledWhen(stop).tracedSecondsWhenDone(
-            [&seconds] { return seconds; }));
+        id = storeOrFind(*maker.Store, maker.Settings, f.identity,
+                         [&](FrameWriteOptions options)
+                         {
+                           return maker.Store->writeFrame(
+                             f.identity, maker.Settings.label, total, next,
+                             options.fromConcurrentProducer().tracedSecondsWhenDone(
+                               [&seconds] { return seconds; }));
+                         });
       }
       catch (...)
       {
@@ -266,20 +278,7 @@ std::int64_t MovieMaking::traceStreamed(int k, const FrameTracer& tracer,
   if (!complete || this->cancelled())
     throw MovieCancelled();
   if (storeFailure)
-  {
-    // As storeFrame: another writer may have stored the frame since it was looked up; then its
-    // copy stands.
-    try
-    {
-      std::rethrow_exception(storeFailure);
-    }
-    catch (const StoreError&)
-    {
-      id = maker.Store->findFrame(f.identity);
-      if (!id)
-        throw;
-    }
-  }
+    std::rethrow_exception(storeFailure);
   return *id;
 }
 
@@ -406,15 +405,17 @@ void MovieMaking::keepWholeWithinBudget(const std::set<int>& inUse)
     maker.Settings.unstoredFrameBytes > 0
       ? maker.Settings.unstoredFrameBytes
       : std::min(defaultMemoryLimit() / 2, std::max(2.0 * (1 << 30), 8 * this->frameBytes()));
-  const std::set<int> keys = this->keysOfInterpolated();
   // The least recently used frame that may go: stored ones while above the budget; then, above
   // the unstored budget, those not stored, the frames no interpolated frame needs first.
+  std::optional<std::set<int>> keys; // looked up once a frame not stored must go
   const auto leastRecent = [&](bool stored, bool spareKeys)
   {
+    if (spareKeys && !keys)
+      keys = this->keysOfInterpolated();
     int oldest = -1;
     for (const auto& [k, records] : in.whole)
       if (!inUse.count(k) && this->storedId(k).has_value() == stored &&
-          !(spareKeys && keys.count(k)) && (oldest < 0 || in.lastUse[k] < in.lastUse[oldest]))
+          !(spareKeys && keys->count(k)) && (oldest < 0 || in.lastUse[k] < in.lastUse[oldest]))
         oldest = k;
     return oldest;
   };

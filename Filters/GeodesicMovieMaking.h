@@ -128,11 +128,9 @@ struct MovieMaking
   /// Traces whole frame k into `records` (one for each pixel; every one written) while the
   /// store's write, on a thread of its own, streams the rows already traced
   /// (MovieSettings::checkTraced run before the last row goes), and returns the stored frame's id,
-  /// or that of a copy another writer stored meanwhile. `seconds`: the tracing's. Throws
-  /// MovieCancelled when the movie is asked to stop, and the tracer's or the check's exception,
-  /// with nothing stored.
-  std::int64_t traceStreamed(int k, const FrameTracer& tracer, std::vector<RayRecord>& records,
-                             double& seconds);
+  /// or that of a copy another writer stored meanwhile. Throws MovieCancelled when the movie is
+  /// asked to stop, and the tracer's or the check's exception, with nothing stored.
+  std::int64_t traceStreamed(int k, const FrameTracer& tracer, std::vector<RayRecord>& records);
 
   /// Whole frame k anti-aliased again from `records`, the same frame traced with the rendering
   /// `fromRendering` (FrameTracer::antialiasAgain): checked, counted, stored and kept as a frame
