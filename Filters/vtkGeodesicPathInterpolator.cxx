@@ -13,6 +13,7 @@
 #include "PathInterpolation.h"
 #include "SceneFile.h"
 #include "SettingsError.h"
+#include "Spacetime.h"
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkDoubleArray.h"
@@ -29,7 +30,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -42,6 +45,26 @@ namespace
 std::string keyName(std::size_t k)
 {
   return "key frame " + std::to_string(k);
+}
+
+/// The spacetime along the keys' path at ±s (the interpolation's parameter, `direction` · s):
+/// between the two keys around s, their parameters interpolated as the frame's are.
+std::function<std::shared_ptr<const asrt::Spacetime>(double)> spacetimeAlongKeys(
+  const std::vector<asrt::SceneDescription>& scenes, const std::vector<double>& S, double direction)
+{
+  return [&scenes, &S, direction](double signedS) -> std::shared_ptr<const asrt::Spacetime>
+  {
+    const double s = direction * signedS;
+    std::size_t b = 0;
+    while (b + 2 < S.size() && direction * S[b + 1] <= signedS)
+      ++b;
+    const double span = S[b + 1] - S[b];
+    const double fraction = span != 0.0 ? std::clamp((s - S[b]) / span, 0.0, 1.0) : 0.0;
+    const asrt::FrameParameters p =
+      asrt::interpolateParameters(asrt::parametersOf(scenes[b]), asrt::parametersOf(scenes[b + 1]),
+                                  fraction, asrt::CameraPath::Automatic);
+    return asrt::makeSpacetime(p.spacetime);
+  };
 }
 
 /// The angle between the eye's directions from the hole in two frames, in degrees.
@@ -404,6 +427,7 @@ int vtkGeodesicPathInterpolator::RequestData(vtkInformation*, vtkInformationVect
     // The keys' leave-one-out errors only order the pixels to re-trace.
     options.leaveOneOut = this->QualityTarget > 0.0;
     options.leaveOneOutCache = in.LeftOut;
+    options.spacetimeAt = spacetimeAlongKeys(in.Scenes, in.S, in.Direction);
     asrt::PathFrame f = asrt::interpolateAlongPath(keys, in.Direction * s, cam.width, cam.height,
                                                    *in.Shading.scene, options);
     this->UpdateProgress(0.3);

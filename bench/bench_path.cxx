@@ -36,6 +36,7 @@
 #include "LeaveOneOut.h"
 #include "PathInterpolation.h"
 #include "SettingsError.h"
+#include "Spacetime.h"
 
 #include <omp.h>
 #include <unistd.h>
@@ -106,6 +107,17 @@ SceneDescription rampScene(double mass, const AntialiasOptions* rendering = null
   if (rendering)
     d.rendering = *rendering;
   return d;
+}
+
+/// The ramp's spacetime at mass s (PathOptions::spacetimeAt).
+SpacetimeAlongPath rampSpacetime()
+{
+  return [hole = rampScene(0.5).spacetime](double s) -> std::shared_ptr<const Spacetime>
+  {
+    SpacetimeParameters at = hole;
+    at.mass = s;
+    return makeSpacetime(at);
+  };
 }
 
 std::vector<std::uint8_t> rgbOf(const std::vector<RayRecord>& records)
@@ -244,6 +256,18 @@ SceneDescription pathScene(const BenchPath& path, double s,
   return d;
 }
 
+/// The path's spacetime at s (PathOptions::spacetimeAt).
+std::function<std::shared_ptr<const Spacetime>(double)> spacetimeAlong(const BenchPath& path)
+{
+  const SceneDescription d = pathScene(path, path.from);
+  return [path, d](double s) -> std::shared_ptr<const Spacetime>
+  {
+    SceneDescription at = d;
+    path.apply(at, s);
+    return makeSpacetime(at.spacetime);
+  };
+}
+
 /// One path frame's scores; the completions' per target (the paths table's targets).
 struct PathScore
 {
@@ -295,6 +319,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   r.tracedVsConverged = psnrOf(traced, reference);
   PathOptions with, without;
   with.pointIndex = kdTreeIndexFactory();
+  with.spacetimeAt = spacetimeAlong(path);
   without.movedEdges = false;
   const double n = double(kSide) * kSide;
   r.mustBefore = interpolateAlongPath(around, r.s, kSide, kSide, shading, without)
@@ -615,6 +640,7 @@ void runRampStudy(double tStart)
       const double tracedVsRef = psnrOf(f.tracedRgb, f.reference);
       PathOptions with, without;
       with.pointIndex = kdTreeIndexFactory();
+      with.spacetimeAt = rampSpacetime();
       without.movedEdges = false;
       const double tPlain = now();
       const PathFrame plain =
@@ -941,6 +967,7 @@ void runPreviewSequence()
       PathOptions options;
       options.pointIndex = kdTreeIndexFactory();
       options.hedgeNearShadow = true;
+      options.spacetimeAt = rampSpacetime();
       if (kept)
         options.matchCache = std::make_shared<PathMatchCache>();
       const double t0 = now();

@@ -110,7 +110,7 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
     {
       std::uint64_t id = mixWord(0x5851f42d4c957f2dULL, fingerprint(k));
       id = mixWord(id, (options.movedEdges ? 1u : 0u) | (options.hedgeMovedEdges ? 2u : 0u) |
-                         (options.hedgeNearShadow ? 4u : 0u));
+                         (options.hedgeNearShadow ? 4u : 0u) | (options.spacetimeAt ? 8u : 0u));
       for (const std::size_t q : used)
         id = mixWord(id, fingerprint(q));
       e = options.leaveOneOutCache->errors(id, make);

@@ -1,5 +1,7 @@
 #include "PathEdges.h"
 
+#include "Spacetime.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -75,10 +77,16 @@ class EdgeMover
 {
 public:
   EdgeMover(const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height,
-            const PointIndexFactory& index, PathMatchCache* cache)
+            const PointIndexFactory& index, PathMatchCache* cache, const SpacetimeAlongPath& along)
     : width_(width)
     , height_(height)
+    , atT_(along ? along(t) : nullptr)
+    , horizonAtT_(atT_ ? atT_->outerHorizon() : 0.0)
   {
+    // Where the hole grows between the inner keys, the horizon at t places what it swallows
+    // (PathEdges.h, The horizon), and the rim is not hedged.
+    if (along)
+      hedgeRim_ = !(along(keys[a + 1].s)->outerHorizon() > along(keys[a].s)->outerHorizon());
     const double va = viewAngleOf(*keys[a].records, width, height);
     // Each key's samples made once, and only for the pairs that are matched here.
     std::map<std::size_t, FrameSamples> made;
@@ -236,6 +244,30 @@ public:
     return found;
   }
 
+  /// A moved record as the frame at t shows it: a scene point inside the hole's outer horizon at
+  /// t (PathEdges.h, The horizon) gives way to the hole.
+  RayRecord shown(RayRecord r) const
+  {
+    if (atT_ && horizonAtT_ > 0.0 && r.termination == Termination::HitObject)
+    {
+      Vec4 x;
+      x << 0.0, r.hitPoint;
+      if (atT_->radius(x) <= horizonAtT_)
+      {
+        r.termination = Termination::Captured;
+        r.objectId = -1;
+        r.imageOrder = 0;
+      }
+    }
+    return r;
+  }
+
+  /// Whether the shadow's rim may be hedged here (PathEdges.h, The shadow's rim).
+  bool hedgeRim() const
+  {
+    return hedgeRim_;
+  }
+
   const Mover& mover(std::int64_t k) const
   {
     return movers_[static_cast<std::size_t>(k)];
@@ -330,6 +362,9 @@ private:
   }
 
   int width_, height_;
+  std::shared_ptr<const Spacetime> atT_;
+  double horizonAtT_;
+  bool hedgeRim_ = true;
   std::vector<Mover> movers_;
   Grid full_, linear_;
 };
@@ -340,7 +375,7 @@ RayRecord movedRecord(const EdgeMover& mover, std::int64_t k, double x, double y
                       double scale)
 {
   const Mover& m = mover.mover(k);
-  RayRecord r = *m.record;
+  RayRecord r = mover.shown(*m.record);
   if (r.objectId < 0)
     return r;
   double d[2];
@@ -395,7 +430,7 @@ bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre,
   {
     const std::int64_t k =
       fronts[w] != kNotSearched ? fronts[w] : mover.front(i, j, linear[w], sides[w]);
-    if (k < 0 || !endAlike(centre, *mover.mover(k).record))
+    if (k < 0 || !endAlike(centre, mover.shown(*mover.mover(k).record)))
       return true;
   }
   return centre.termination != Termination::Captured && mover.capturedCovering(i, j, false, 3) >= 0;
@@ -425,7 +460,7 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
       *alike = false;
     Color c = shadePrediction(scene, r);
     // The shadow's rim (PathEdges.h): the mean of the two, half the contrast off whichever shows.
-    if (hedgeNearShadow && r.termination != Termination::Captured)
+    if (hedgeNearShadow && mover.hedgeRim() && r.termination != Termination::Captured)
     {
       const std::int64_t h = mover.capturedCovering(x, y, linear, sides);
       if (h >= 0)
@@ -453,18 +488,16 @@ float awayFromInnerKeys(const std::vector<PathKey>& keys, std::size_t a, std::in
 }
 }
 
-std::vector<MovedEdgePixel> predictMovedEdges(const std::vector<PathKey>& keys, std::size_t a,
-                                              double t, int width, int height, const Scene& scene,
-                                              const PointIndexFactory& index,
-                                              const std::vector<std::int32_t>& pixels,
-                                              const std::vector<const RayRecord*>& perPixel,
-                                              bool hedged, bool hedgeNearShadow,
-                                              PathMatchCache* cache)
+std::vector<MovedEdgePixel> predictMovedEdges(
+  const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height,
+  const Scene& scene, const PointIndexFactory& index, const std::vector<std::int32_t>& pixels,
+  const std::vector<const RayRecord*>& perPixel, bool hedged, bool hedgeNearShadow,
+  PathMatchCache* cache, const SpacetimeAlongPath& along)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
     return out;
-  const EdgeMover mover(keys, a, t, width, height, index, cache);
+  const EdgeMover mover(keys, a, t, width, height, index, cache, along);
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::int64_t q = 0; q < static_cast<std::int64_t>(pixels.size()); ++q)
   {

@@ -284,7 +284,7 @@ namespace
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
                   const PointIndexFactory& index, const std::vector<RayRecord>& own,
                   const std::vector<std::uint8_t>& hasOwn, bool hedged, bool hedgeNearShadow,
-                  PathMatchCache* cache, PathFrame& f)
+                  PathMatchCache* cache, const SpacetimeAlongPath& along, PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -294,8 +294,9 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
       pixels.push_back(static_cast<std::int32_t>(p));
       perPixel.push_back(hasOwn[p] ? &own[p] : nullptr);
     }
-  const std::vector<MovedEdgePixel> moved = predictMovedEdges(
-    keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged, hedgeNearShadow, cache);
+  const std::vector<MovedEdgePixel> moved =
+    predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged,
+                      hedgeNearShadow, cache, along);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -539,7 +540,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       key.fingerprint = keyFingerprint(key);
   if (options.movedEdges)
     predictEdges(keyed, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
-                 options.hedgeNearShadow, options.matchCache.get(), f);
+                 options.hedgeNearShadow, options.matchCache.get(), options.spacetimeAt, f);
   if (weighed)
   {
     const std::vector<float> L = leaveOneOutError(keyed, t, width, height, scene, options);

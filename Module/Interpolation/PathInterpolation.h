@@ -59,9 +59,13 @@ namespace asrt
 {
 class FrameTracer;
 class LeaveOneOutCache;
+class Spacetime;
 
 /// Windings of one pixel in two keys that differ by this much or more are a change of image.
 constexpr double kWindingJump = 0.5 * M_PI;
+
+/// The spacetime of a path's frame at s.
+using SpacetimeAlongPath = std::function<std::shared_ptr<const Spacetime>(double s)>;
 
 /// One key frame of a path: its parameter and its records, one per pixel, row-major from the
 /// bottom-left (record k is pixel (k mod width, k / width)).
@@ -224,6 +228,11 @@ struct PathOptions
   /// 0.11 M apart, a frame completed to 35 dB from it scored 33.4 dB against the traced frame
   /// (39.9 without), its estimate missing what the mean leaves.
   bool hedgeNearShadow = false;
+  /// The path's spacetime at s, where the caller knows it (empty: not known). A scene point the
+  /// moved edges would show at t that lies inside the hole's outer horizon at t is not shown
+  /// there: a hole that grows along the path swallows the surfaces that reach into it
+  /// (PathEdges.h, The horizon).
+  SpacetimeAlongPath spacetimeAt;
   /// Where the moved edges' correspondences are kept between frames (null: each frame matches
   /// its keys afresh). The frames are the same either way.
   std::shared_ptr<PathMatchCache> matchCache;

@@ -3,10 +3,15 @@
 #include "InterpolationTestSupport.h"
 #include "vtkGeodesicPathInterpolator.h"
 
+#include "GeodesicRecordArrays.h"
+#include "KdTreeIndex.h"
 #include "PathInterpolation.h"
+#include "RampScene.h"
+#include "Spacetime.h"
 
 #include "vtkIdTypeArray.h"
 #include "vtkInformation.h"
+#include "vtkIntArray.h"
 
 #include <gtest/gtest.h>
 
@@ -113,6 +118,55 @@ TEST(PathInterpolator, TimeStepsRunThroughTheKeysAndKeysAreThemselves)
   ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
   EXPECT_DOUBLE_EQ(fieldValue(key, "Mass"), 0.75);
   EXPECT_EQ(rgbOf(key), rgbOf(rampKey(0.75).image));
+}
+
+// Keys 0.11 M apart on the ramp, where the hole grows between them and swallows the parts of the
+// cylinders that reach into it: the filter hands the path's spacetime to the interpolation, so
+// that what each pixel of its preview ends on is what the frame predicted with the horizon at
+// M = 0.615 shows, and not what the frame predicted without it shows.
+TEST(PathInterpolator, ThePreviewKnowsTheHorizonAtItsParameter)
+{
+  const std::vector<double> masses = { 0.45, 0.56, 0.67, 0.78 };
+  Pipeline p(rampKeys(masses));
+  vtkImageData* preview = p.at(1.5);
+  ASSERT_TRUE(p.catcher->Errors.empty()) << p.catcher->AllErrors();
+  const double t = fieldValue(preview, "Mass");
+  ASSERT_NEAR(t, 0.615, 1e-12);
+  std::vector<std::vector<asrt::RayRecord>> records;
+  for (double m : masses)
+    records.push_back(asrt::polyDataToRecords(rampKey(m).hits));
+  std::vector<asrt::PathKey> keys;
+  for (std::size_t k = 0; k < masses.size(); ++k)
+    keys.push_back({ masses[k], &records[k] });
+  const asrt::SceneDescription scene = rampScene(t, kSide);
+  asrt::PathOptions without;
+  without.pointIndex = asrt::kdTreeIndexFactory();
+  without.hedgeNearShadow = true; // the preview's
+  without.leaveOneOut = false;
+  asrt::PathOptions with = without;
+  with.spacetimeAt = [hole = scene.spacetime](double m)
+  {
+    asrt::SpacetimeParameters at = hole;
+    at.mass = m;
+    return std::shared_ptr<const asrt::Spacetime>(asrt::makeSpacetime(at));
+  };
+  const asrt::PathFrame a = asrt::interpolateAlongPath(keys, t, kSide, kSide, *scene.scene, with);
+  const asrt::PathFrame b =
+    asrt::interpolateAlongPath(keys, t, kSide, kSide, *scene.scene, without);
+  auto* ending = vtkIntArray::SafeDownCast(preview->GetPointData()->GetArray("Termination"));
+  ASSERT_NE(ending, nullptr);
+  ASSERT_EQ(ending->GetNumberOfTuples(), kSide * kSide);
+  std::size_t unlikeWith = 0, unlikeWithout = 0;
+  for (vtkIdType k = 0; k < ending->GetNumberOfTuples(); ++k)
+  {
+    unlikeWith += ending->GetValue(k) != static_cast<int>(a.records[k].termination);
+    unlikeWithout += ending->GetValue(k) != static_cast<int>(b.records[k].termination);
+  }
+  std::printf("[ path ] the preview at M = %.3f ends unlike the frame predicted with the horizon "
+              "at %zu pixels, unlike the one predicted without it at %zu\n",
+              t, unlikeWith, unlikeWithout);
+  EXPECT_EQ(unlikeWith, 0u);
+  EXPECT_GT(unlikeWithout, 10u);
 }
 
 // The frame at M = 0.72, between the keys 0.70 and 0.75, against the frame traced there: with a
