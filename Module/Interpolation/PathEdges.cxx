@@ -85,8 +85,12 @@ public:
   {
     // Where the hole grows between the inner keys, the horizon at t places what it swallows
     // (PathEdges.h, The horizon), and the rim is not hedged.
-    if (along)
-      hedgeRim_ = !(along(keys[a + 1].s)->outerHorizon() > along(keys[a].s)->outerHorizon());
+    if (atT_)
+    {
+      const std::shared_ptr<const Spacetime> before = along(keys[a].s),
+                                             after = along(keys[a + 1].s);
+      hedgeRim_ = !(before && after && after->outerHorizon() > before->outerHorizon());
+    }
     const double va = viewAngleOf(*keys[a].records, width, height);
     // Each key's samples made once, and only for the pairs that are matched here.
     std::map<std::size_t, FrameSamples> made;

@@ -228,7 +228,8 @@ struct PathOptions
   /// 0.11 M apart, a frame completed to 35 dB from it scored 33.4 dB against the traced frame
   /// (39.9 without), its estimate missing what the mean leaves.
   bool hedgeNearShadow = false;
-  /// The path's spacetime at s, where the caller knows it (empty: not known). A scene point the
+  /// The path's spacetime at s, where the caller knows it (empty, or null at s: not known; called
+  /// for t and the inner keys' s, from the calling thread). A scene point the
   /// moved edges would show at t that lies inside the hole's outer horizon at t is not shown
   /// there: a hole that grows along the path swallows the surfaces that reach into it
   /// (PathEdges.h, The horizon).
