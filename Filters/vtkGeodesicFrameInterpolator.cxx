@@ -10,6 +10,7 @@
 #include "KdTreeIndex.h"
 #include "RayStore.h"
 #include "SceneFile.h"
+#include "Spacetime.h"
 #include "StoreConnection.h"
 #include "vtkGeodesicSource.h"
 
@@ -411,7 +412,11 @@ int vtkGeodesicFrameInterpolator::RequestData(vtkInformation*, vtkInformationVec
     }
     this->UpdateProgress(0.6);
     asrt::InterpolatedFrame& f = this->Impl->Frame;
-    asrt::renderFrame(this->Impl->Splats, t, f, this->Impl->Workspace);
+    // The hole at t hides the scene points its horizon has grown over since A or B.
+    const double horizon =
+      asrt::makeSpacetime(this->Impl->At(t, this->CameraPath).spacetime)->outerHorizon();
+    asrt::renderFrame(this->Impl->Splats, t, f, this->Impl->Workspace, asrt::SplatSides::Both,
+                      horizon);
     this->UpdateProgress(0.7);
 
     const int W = f.width, H = f.height;

@@ -298,7 +298,8 @@ void copyTracedFrame(const SplatSet& set, std::size_t offset, InterpolatedFrame&
 /// may alias anything, and would otherwise have every field loaded again after each touch.
 struct BandPass
 {
-  BandPass(const SplatSet& splatSet, double t, SplatSides drawn, InterpolatedFrame& out)
+  BandPass(const SplatSet& splatSet, double t, SplatSides drawn, InterpolatedFrame& out,
+           double horizonRadius)
     : set(splatSet)
     , splats(splatSet.splats.data())
     , bandSplats(splatSet.bandSplats.data())
@@ -320,6 +321,8 @@ struct BandPass
     , rgbOut(out.rgb.data())
     , classOut(out.pixelClass.data())
     , sourceOut(out.source.data())
+    , hitRadius(horizonRadius > 0.0 ? splatSet.hitRadius.data() : nullptr)
+    , horizon(static_cast<float>(horizonRadius))
   {
   }
 
@@ -343,6 +346,10 @@ struct BandPass
   std::uint8_t* rgbOut;
   PixelClass* classOut;
   std::int32_t* sourceOut;
+  /// Where the hole at t hides scene points (renderFrame's horizonRadius): each splat's distance
+  /// from its centre, null where nothing is hidden.
+  const float* hitRadius;
+  float horizon;
 };
 
 /// The bands into ws.bandOrder, those with the most list entries to draw first, so that the
@@ -433,6 +440,8 @@ inline void drawList(const BandPass& pass, std::size_t list, int r0, int r1, Acc
   const std::int32_t* const bandSplats = pass.bandSplats;
   const std::array<std::uint8_t, 2>* const bandReach = pass.bandReach;
   const float* const jacobianDeviation = pass.jacobianDeviation;
+  const float* const hitRadius = pass.hitRadius;
+  const float horizon = pass.horizon;
   const std::array<float, 4>* const jacobians = pass.set.jacobians.data();
   const float layerStride = pass.layerStride, maxMag = pass.maxMag, maxExtent = pass.maxExtent;
   const int W = pass.W, stride = pass.stride;
@@ -452,6 +461,8 @@ inline void drawList(const BandPass& pass, std::size_t list, int r0, int r1, Acc
     if (below < r[0] || above > r[1])
       continue;
     const std::int32_t index = bandSplats[e];
+    if (hitRadius && hitRadius[index] <= horizon)
+      continue; // swallowed by the hole at t
     const SplatSet::Splat& sp = splats[index];
     // The lists skip through the splats (other groups, other bands): too irregular for the
     // hardware prefetcher, so the splats some way ahead are asked for explicitly.
@@ -601,9 +612,13 @@ std::int64_t drawAndResolveBands(const BandPass& pass, int bands, InterpolationW
 }
 
 void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
-                 InterpolationWorkspace& ws, SplatSides sides)
+                 InterpolationWorkspace& ws, SplatSides sides, double horizonRadius)
 {
   requireFinite(tIn, "interpolation time");
+  if (!(horizonRadius >= 0.0) || std::isinf(horizonRadius))
+    throw InvalidParameter("renderFrame: the horizon's radius must be finite and 0 or more");
+  if (horizonRadius > 0.0 && set.hitRadius.size() != set.splats.size())
+    throw InvalidParameter("renderFrame: the splats have no hit radii (buildSplats makes them)");
   const double t = std::clamp(tIn, 0.0, 1.0);
   const int W = set.width, H = set.height;
   const std::size_t n = set.pixelCount();
@@ -619,7 +634,7 @@ void renderFrame(const SplatSet& set, double tIn, InterpolatedFrame& out,
     copyTracedFrame(set, t == 0.0 ? 0 : n, out);
     return;
   }
-  const BandPass pass(set, t, sides, out);
+  const BandPass pass(set, t, sides, out, horizonRadius);
   const int bands = (H + pass.rows - 1) / pass.rows;
   const int threads = omp_get_max_threads();
   if (static_cast<int>(ws.bands.size()) < threads)

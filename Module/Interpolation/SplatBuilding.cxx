@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace asrt
 {
@@ -129,6 +130,9 @@ void buildSide(const FrameSamples& self, const FrameSamples& other,
     out.imageOrder[offset + p] = s.imageOrder;
     out.termination[offset + p] = static_cast<std::uint8_t>(s.termination);
     out.pathLength[offset + p] = s.pathLength;
+    out.hitRadius[offset + p] = s.termination == Termination::HitObject
+                                  ? static_cast<float>(s.point.norm())
+                                  : std::numeric_limits<float>::infinity();
   }
 }
 
@@ -289,6 +293,7 @@ SplatSet buildSplats(const FrameSamples& a, const FrameSamples& b, const Corresp
   set.imageOrder.resize(2 * n);
   set.termination.resize(2 * n);
   set.pathLength.resize(2 * n);
+  set.hitRadius.resize(2 * n);
   buildSide(a, b, c.aToB, 0, options, set);
   buildSide(b, a, c.bToA, n, options, set);
   markMutual(c.aToB, c.bToA, 0, set);
