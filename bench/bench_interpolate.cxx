@@ -9,6 +9,7 @@
 #include "ImageQuality.h"
 #include "KdTreeIndex.h"
 #include "RayStore.h"
+#include "Spacetime.h"
 #include "TraceAndStore.h"
 #include "vtkGeodesicFrameInterpolator.h"
 #include "vtkGeodesicSource.h"
@@ -447,6 +448,7 @@ Movie movie(int frames, int keys, RayStore& store, const std::string& label)
   }
   mv.storeEnds = now() - t0;
   t0 = now();
+  const SceneDescription ramp = scene(kScene, n, n, m0);
   std::vector<FrameSamples> samples;
   for (std::size_t q = 0; q < ids.size(); ++q)
     samples.push_back(
@@ -479,7 +481,11 @@ Movie movie(int frames, int keys, RayStore& store, const std::string& label)
     for (int k = ka + 1; k < kb; ++k)
     {
       t0 = now();
-      renderFrame(set, static_cast<double>(k - ka) / (kb - ka), f, ws);
+      // As the filter does: the hole at t hides what its horizon has grown over since the keys.
+      SpacetimeParameters hole = ramp.spacetime;
+      hole.mass = massOf(k);
+      renderFrame(set, static_cast<double>(k - ka) / (kb - ka), f, ws, SplatSides::Both,
+                  makeSpacetime(hole)->outerHorizon());
       mv.interpolate += now() - t0;
       scoreFrame(k, f.rgb, mv.meanPsnr, mv.minPsnr, mv.meanSsim);
     }

@@ -432,7 +432,10 @@ inline void drawFootprint(const float m[4], float maxMag, float x, float y, int 
 }
 
 /// Draws list `list` into the accumulators of the band of rows [r0, r1) (pixel (px, py) at
-/// origin[py · stride + px]): its splats of one side at side time s, in list order.
+/// origin[py · stride + px]): its splats of one side at side time s, in list order; `Hides`: the
+/// splats within the horizon at t (BandPass::hitRadius) left out, a test the frames without one
+/// do not pay for.
+template<bool Hides>
 inline void drawList(const BandPass& pass, std::size_t list, int r0, int r1, Accumulator* origin,
                      bool sideB, float s, float sideWeight)
 {
@@ -461,8 +464,9 @@ inline void drawList(const BandPass& pass, std::size_t list, int r0, int r1, Acc
     if (below < r[0] || above > r[1])
       continue;
     const std::int32_t index = bandSplats[e];
-    if (hitRadius && hitRadius[index] <= horizon)
-      continue; // swallowed by the hole at t
+    if constexpr (Hides)
+      if (hitRadius[index] <= horizon)
+        continue; // swallowed by the hole at t
     const SplatSet::Splat& sp = splats[index];
     // The lists skip through the splats (other groups, other bands): too irregular for the
     // hardware prefetcher, so the splats some way ahead are asked for explicitly.
@@ -519,8 +523,11 @@ inline void drawBand(const BandPass& pass, int b, int r0, int r1, Accumulator* o
       continue;
     const bool sideB = g >= 2;
     const float s = sideB ? 1.0f - pass.tf : pass.tf;
-    drawList(pass, pass.set.listIndex(b, gs < 4 ? 0 : pass.slice, g), r0, r1, origin, sideB, s,
-             pass.groups.weight[g]);
+    const std::size_t list = pass.set.listIndex(b, gs < 4 ? 0 : pass.slice, g);
+    if (pass.hitRadius)
+      drawList<true>(pass, list, r0, r1, origin, sideB, s, pass.groups.weight[g]);
+    else
+      drawList<false>(pass, list, r0, r1, origin, sideB, s, pass.groups.weight[g]);
   }
 }
 
