@@ -49,6 +49,8 @@ struct Mover
   const RayRecord* record = nullptr;
   std::uint8_t side = 0; ///< 0: key a's, 1: key a + 1's
   bool usable = false;
+  /// Its scene point lies inside the hole's outer horizon at t (PathEdges.h, The horizon).
+  bool swallowed = false;
 };
 
 /// Whether the spot at offset d within a mover's source pixel still lies on its object: the
@@ -195,6 +197,12 @@ public:
       m.reach = static_cast<std::uint8_t>(std::min(
         kReach, static_cast<int>(std::ceil((1.0 + 2.0 * kGap) * std::max(hx, hy) + 1e-6))));
       m.usable = true;
+      if (atT_ && horizonAtT_ > 0.0 && r.termination == Termination::HitObject)
+      {
+        Vec4 x;
+        x << 0.0, r.hitPoint;
+        m.swallowed = atT_->radius(x) <= horizonAtT_;
+      }
     }
     bucket(false, full_);
     bucket(true, linear_);
@@ -248,20 +256,17 @@ public:
     return found;
   }
 
-  /// A moved record as the frame at t shows it: a scene point inside the hole's outer horizon at
-  /// t (PathEdges.h, The horizon) gives way to the hole.
-  RayRecord shown(RayRecord r) const
+  /// Mover k's record as the frame at t shows it: a scene point inside the hole's outer horizon
+  /// at t (Mover::swallowed) gives way to the hole.
+  RayRecord shown(std::int64_t k) const
   {
-    if (atT_ && horizonAtT_ > 0.0 && r.termination == Termination::HitObject)
+    const Mover& m = this->mover(k);
+    RayRecord r = *m.record;
+    if (m.swallowed)
     {
-      Vec4 x;
-      x << 0.0, r.hitPoint;
-      if (atT_->radius(x) <= horizonAtT_)
-      {
-        r.termination = Termination::Captured;
-        r.objectId = -1;
-        r.imageOrder = 0;
-      }
+      r.termination = Termination::Captured;
+      r.objectId = -1;
+      r.imageOrder = 0;
     }
     return r;
   }
@@ -379,7 +384,7 @@ RayRecord movedRecord(const EdgeMover& mover, std::int64_t k, double x, double y
                       double scale)
 {
   const Mover& m = mover.mover(k);
-  RayRecord r = mover.shown(*m.record);
+  RayRecord r = mover.shown(k);
   if (r.objectId < 0)
     return r;
   double d[2];
@@ -434,7 +439,7 @@ bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre,
   {
     const std::int64_t k =
       fronts[w] != kNotSearched ? fronts[w] : mover.front(i, j, linear[w], sides[w]);
-    if (k < 0 || !endAlike(centre, mover.shown(*mover.mover(k).record)))
+    if (k < 0 || !endAlike(centre, mover.shown(k)))
       return true;
   }
   return centre.termination != Termination::Captured && mover.capturedCovering(i, j, false, 3) >= 0;

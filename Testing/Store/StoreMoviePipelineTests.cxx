@@ -122,6 +122,16 @@ std::string colourBytes(const std::vector<asrt::RayRecord>& records)
     bytes.append(reinterpret_cast<const char*>(&r.color), sizeof r.color);
   return bytes;
 }
+
+/// An encoder of one picture, a frame's colourBytes, that counts the frames it encodes.
+auto countedColourBytes(int& encoded)
+{
+  return [&encoded](const std::vector<asrt::RayRecord>& records)
+  {
+    ++encoded;
+    return std::vector<std::string>{ colourBytes(records) };
+  };
+}
 }
 
 TEST(StorePipeline, AMoviesStoredPicturesServeTheNextMakerAndAStalePictureIsLeftOut)
@@ -309,11 +319,7 @@ TEST(StorePipeline, AMovieEncodingWholeFramesWhenTracedHandsOutTheSamePicturesAn
   settings.keptFrameBytes = 1;
   settings.pictureFormats = formats;
   int encoded = 0;
-  settings.encodePictures = [&encoded](const std::vector<asrt::RayRecord>& records)
-  {
-    ++encoded;
-    return std::vector<std::string>{ colourBytes(records) };
-  };
+  settings.encodePictures = countedColourBytes(encoded);
   asrt::MovieMaker early = ramp.movie(settings);
   EXPECT_EQ(expectPicturesAsTraced(truth, early, 7, formats, true), encoded);
   EXPECT_EQ(early.raysTraced(), truth.raysTraced());
@@ -344,11 +350,7 @@ TEST(StorePipeline, AMovieWithoutAStoreHandsOutThePicturesEncodedAsTracedOnce)
   settings.unstoredFrameBytes = 1;
   settings.pictureFormats = formats;
   int encoded = 0;
-  settings.encodePictures = [&encoded](const std::vector<asrt::RayRecord>& records)
-  {
-    ++encoded;
-    return std::vector<std::string>{ colourBytes(records) };
-  };
+  settings.encodePictures = countedColourBytes(encoded);
   asrt::MovieMaker early = ramp.movie(settings, false);
   // Each whole frame encoded once, though its records were let go and traced again.
   EXPECT_EQ(expectPicturesAsTraced(truth, early, 9, formats, false), encoded);
