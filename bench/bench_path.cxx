@@ -147,41 +147,6 @@ double error2(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t
   return s;
 }
 
-/// Spearman's rank correlation (average ranks for ties).
-double spearman(const std::vector<double>& x, const std::vector<double>& y)
-{
-  auto ranks = [](const std::vector<double>& v)
-  {
-    std::vector<std::size_t> order(v.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
-    std::vector<double> r(v.size());
-    for (std::size_t k = 0; k < order.size();)
-    {
-      std::size_t e = k;
-      while (e + 1 < order.size() && v[order[e + 1]] == v[order[k]])
-        ++e;
-      for (std::size_t m = k; m <= e; ++m)
-        r[order[m]] = 0.5 * (k + e);
-      k = e + 1;
-    }
-    return r;
-  };
-  const std::vector<double> rx = ranks(x), ry = ranks(y);
-  const double n = static_cast<double>(x.size());
-  const double mx = std::accumulate(rx.begin(), rx.end(), 0.0) / n;
-  const double my = std::accumulate(ry.begin(), ry.end(), 0.0) / n;
-  double sxy = 0, sxx = 0, syy = 0;
-  for (std::size_t k = 0; k < rx.size(); ++k)
-  {
-    sxy += (rx[k] - mx) * (ry[k] - my);
-    sxx += (rx[k] - mx) * (rx[k] - mx);
-    syy += (ry[k] - my) * (ry[k] - my);
-  }
-  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
-}
-
 /// The smallest share of pixels that, re-traced in the given order after the must-re-trace ones,
 /// brings the frame to `db` against the traced frame.
 double shareFor(const std::vector<std::size_t>& order, std::size_t must,
@@ -272,7 +237,7 @@ std::function<std::shared_ptr<const Spacetime>(double)> spacetimeAlong(const Ben
 struct PathScore
 {
   double s = 0, tracedVsConverged = 0, mustBefore = 0, plainVsConverged = 0, plainVsTraced = 0,
-         spearman = 0, settingsBound = 0;
+         spearman = 0, spearmanUnrounded = 0, settingsBound = 0;
   std::vector<double> share, doneVsConverged, doneVsTraced, estimated;
   /// Per target: the share traced with the converged rendering (SettingsRefinement), and the
   /// rays the completion integrated over those the frame traced at s took.
@@ -311,7 +276,8 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   r.settingsBound = held.psnr();
   const SceneDescription atS = pathScene(path, r.s, keyRendering());
   const FrameTracer tracer(atS);
-  const std::vector<std::uint8_t> traced = rgbOf(tracer.traceRows(0, kSide));
+  const std::vector<RayRecord> tracedRecords = tracer.traceRows(0, kSide);
+  const std::vector<std::uint8_t> traced = rgbOf(tracedRecords);
   const double tracedRays = static_cast<double>(tracer.raysIntegrated());
   const AntialiasOptions converged = convergedRendering(kReferenceSide);
   const std::vector<std::uint8_t> reference =
@@ -334,14 +300,16 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
     rgbOf(interpolateAlongPath(around, r.s, kSide, kSide, shading, preview).records);
   r.plainVsConverged = psnrOf(previewRgb, reference);
   r.plainVsTraced = psnrOf(previewRgb, traced);
-  std::vector<double> est, truth;
+  std::vector<double> est, truth, truthUnrounded;
   for (std::size_t p = 0; p < plain.records.size(); ++p)
     if (plain.method[p] != static_cast<std::uint8_t>(PathMethod::Retrace))
     {
       est.push_back(plain.estimate[p]);
       truth.push_back(error2(plainRgb, traced, p));
+      truthUnrounded.push_back(colorError2(plain.records[p].color, tracedRecords[p].color));
     }
   r.spearman = spearman(est, truth);
+  r.spearmanUnrounded = spearman(est, truthUnrounded);
   for (double target : targets)
   {
     PathFrame done = plain;
@@ -383,15 +351,18 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               "frame traced at s (mean). PSNR as mean / "
               "worst; Spearman of the "
               "estimate against the true error (against the traced frame) over the predicted "
-              "pixels, mean / worst; *below T − 1*: frames under T − 1 dB against converged:\n\n",
+              "pixels, mean / worst, against the error of the 8-bit colours (most pixels tie at "
+              "0) and against the error of the colours before rounding; *below T − 1*: frames "
+              "under T − 1 dB against converged:\n\n",
               frameCount, kReferenceSide, kReferenceSide,
               kKeyPreset.empty() ? "the scene's rendering"
                                  : ("the `" + kKeyPreset + "` preset's rendering").c_str());
-  std::printf("| path | scene | h | traced vs converged | must re-trace without moved edges | "
-              "plain vs converged | plain vs traced | Spearman | T | settings | re-traced | "
-              "converged | rays × traced | vs converged | below T − 1 | estimated | vs traced | "
-              "time |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+    "| path | scene | h | traced vs converged | must re-trace without moved edges | "
+    "plain vs converged | plain vs traced | Spearman | Spearman (unrounded) | T | settings | "
+    "re-traced | converged | rays × traced | vs converged | below T − 1 | estimated | "
+    "vs traced | time |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const BenchPath& path : paths)
   {
     const double t0 = now();
@@ -433,15 +404,18 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
       const double mean = sum / static_cast<double>(scores.size());
       return percent ? pct(mean) : dbs(mean) + " / " + dbs(worst);
     };
-    double rhoSum = 0, rhoWorst = 1;
+    double rhoSum[2] = { 0, 0 }, rhoWorst[2] = { 1, 1 };
     for (const PathScore& r : scores)
-    {
-      rhoSum += r.spearman;
-      rhoWorst = std::min(rhoWorst, r.spearman);
-    }
-    char spearmanText[64];
-    std::snprintf(spearmanText, sizeof spearmanText, "%.2f / %.2f",
-                  rhoSum / static_cast<double>(scores.size()), rhoWorst);
+      for (int u = 0; u < 2; ++u)
+      {
+        const double rho = u ? r.spearmanUnrounded : r.spearman;
+        rhoSum[u] += rho;
+        rhoWorst[u] = std::min(rhoWorst[u], rho);
+      }
+    char spearmanText[2][64];
+    for (int u = 0; u < 2; ++u)
+      std::snprintf(spearmanText[u], sizeof spearmanText[u], "%.2f / %.2f",
+                    rhoSum[u] / static_cast<double>(scores.size()), rhoWorst[u]);
     char spacing[64];
     std::snprintf(spacing, sizeof spacing, "%g %s", path.h, path.parameter.c_str());
     for (std::size_t t = 0; t < targets.size(); ++t)
@@ -451,8 +425,8 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
         below += r.doneVsConverged[t] < targets[t] - 1.0;
       const bool first = t == 0;
       std::printf(
-        "| %s | %s | %s | %s | %s | %s | %s | %s | %.0f | %s | %s | %s | %.2f | %s | %d of %zu | "
-        "%s | %s | %s |\n",
+        "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %.0f | %s | %s | %s | %.2f | %s | %d of "
+        "%zu | %s | %s | %s |\n",
         first ? path.name.c_str() : "", first ? ("`" + path.scene + "`").c_str() : "",
         first ? spacing : "",
         first ? meanWorst([](const PathScore& r) { return r.tracedVsConverged; }, false).c_str()
@@ -461,7 +435,7 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
         first ? meanWorst([](const PathScore& r) { return r.plainVsConverged; }, false).c_str()
               : "",
         first ? meanWorst([](const PathScore& r) { return r.plainVsTraced; }, false).c_str() : "",
-        first ? spearmanText : "", targets[t],
+        first ? spearmanText[0] : "", first ? spearmanText[1] : "", targets[t],
         meanWorst([](const PathScore& r) { return r.settingsBound; }, false).c_str(),
         meanWorst([t](const PathScore& r) { return r.share[t]; }, true).c_str(),
         meanWorst([t](const PathScore& r) { return r.convergedShare[t]; }, true).c_str(),

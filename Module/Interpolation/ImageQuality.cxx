@@ -2,8 +2,10 @@
 
 #include "AsrtTypes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <sstream>
 
 namespace asrt
@@ -114,5 +116,46 @@ double ssim(const RgbView& a, const RgbView& b, const std::vector<std::uint8_t>*
   if (count == 0)
     throw InvalidParameter("SSIM over no pixels (the mask leaves none in the valid region)");
   return total / static_cast<double>(count);
+}
+
+namespace
+{
+/// Ranks from 1, tied values sharing the mean of their ranks.
+std::vector<double> ranksOf(const std::vector<double>& x)
+{
+  std::vector<std::size_t> order(x.size());
+  std::iota(order.begin(), order.end(), std::size_t{ 0 });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+  std::vector<double> rank(x.size());
+  for (std::size_t k = 0; k < order.size();)
+  {
+    std::size_t end = k + 1;
+    while (end < order.size() && x[order[end]] == x[order[k]])
+      ++end;
+    for (std::size_t m = k; m < end; ++m)
+      rank[order[m]] = 0.5 * static_cast<double>(k + 1 + end);
+    k = end;
+  }
+  return rank;
+}
+}
+
+double spearman(const std::vector<double>& x, const std::vector<double>& y)
+{
+  if (x.size() != y.size() || x.size() < 2)
+    throw InvalidParameter("a rank correlation needs two series of one size, at least 2 values, "
+                           "got " +
+                           std::to_string(x.size()) + " and " + std::to_string(y.size()));
+  const std::vector<double> a = ranksOf(x), b = ranksOf(y);
+  const double mean = 0.5 * (static_cast<double>(a.size()) + 1);
+  double ab = 0, aa = 0, bb = 0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    ab += (a[k] - mean) * (b[k] - mean);
+    aa += (a[k] - mean) * (a[k] - mean);
+    bb += (b[k] - mean) * (b[k] - mean);
+  }
+  return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : std::numeric_limits<double>::quiet_NaN();
 }
 }

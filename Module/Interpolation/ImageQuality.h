@@ -1,5 +1,6 @@
 // Image quality against a reference: PSNR and SSIM, the standard formulas, for judging
-// interpolated frames against traced ones (tests and benchmarks). Plain C++.
+// interpolated frames against traced ones (tests and benchmarks), and Spearman's rank correlation,
+// for judging an error estimate against the true error. Plain C++.
 #ifndef asrt_ImageQuality_h
 #define asrt_ImageQuality_h
 
@@ -29,6 +30,12 @@ ASRTINTERPOLATION_EXPORT double psnr(const RgbView& a, const RgbView& b,
 /// image (the paper's "valid" region) and, if given, inside `mask`. 1 for identical images.
 ASRTINTERPOLATION_EXPORT double ssim(const RgbView& a, const RgbView& b,
                                      const std::vector<std::uint8_t>* mask = nullptr);
+
+/// Spearman's rank correlation of x and y: Pearson's correlation of their ranks, tied values
+/// sharing the mean of their ranks. NaN where either is constant. Throws InvalidParameter for
+/// sizes that differ or fewer than 2 values.
+ASRTINTERPOLATION_EXPORT double spearman(const std::vector<double>& x,
+                                         const std::vector<double>& y);
 }
 
 #endif

@@ -566,6 +566,22 @@ std::vector<MovedEdgePixel> predictMovedEdges(
       oneSurface = oneSurface && endAlike(centreRecord, r);
       contrast = std::max(contrast, colorError2(color, shadePrediction(scene, r)));
     }
+    // Off the edges the contrast is the texture's, and a misplacement of up to half a pixel
+    // brings to the pixel only the texture within half a pixel of it: the neighbours' centres
+    // would count colours a pixel away, which leave a pixel of one colour as it is.
+    if (oneSurface)
+    {
+      contrast = 0.0f;
+      for (const auto& o : kNeighbours)
+      {
+        const double x = i + 0.5 * o[0], y = j + 0.5 * o[1];
+        const std::int64_t k = mover.front(x, y, false, 3);
+        if (k >= 0)
+          contrast = std::max(
+            contrast,
+            colorError2(color, shadePrediction(scene, movedRecord(mover, k, x, y, false, 1.0))));
+      }
+    }
     e.oneSurface = oneSurface;
     // Within one surface the contrast is the texture's, as the pixel moves by a fraction of itself.
     contrast *= oneSurface ? kEdgeShare : share;

@@ -469,6 +469,41 @@ TEST(ImageQuality, PsnrAndSsimAgainstClosedForms)
   EXPECT_THROW(ssim(small, small), InvalidParameter);
 }
 
+// Spearman's rank correlation against its closed form for distinct values,
+// 1 − 6 Σ d² / (n (n² − 1)), and against ranks worked by hand where values tie.
+TEST(ImageQuality, SpearmanAgainstItsClosedFormAndTies)
+{
+  const std::vector<double> x = { 3.0, 1.0, 4.0, 1.5, 5.0, 9.0, 2.0, 6.0 };
+  const std::vector<double> y = { 2.0, 7.0, 1.0, 8.0, 2.5, 3.0, 9.0, 4.0 };
+  auto rankOf = [](const std::vector<double>& v, std::size_t k)
+  {
+    double below = 0;
+    for (double w : v)
+      below += w < v[k];
+    return below + 1;
+  };
+  double d2 = 0;
+  for (std::size_t k = 0; k < x.size(); ++k)
+    d2 += std::pow(rankOf(x, k) - rankOf(y, k), 2);
+  const double n = static_cast<double>(x.size());
+  EXPECT_NEAR(spearman(x, y), 1.0 - 6.0 * d2 / (n * (n * n - 1.0)), 1e-12);
+  // Monotone maps of either series leave it unchanged; reversing one negates it.
+  std::vector<double> cubed = x, reversed = y;
+  for (double& v : cubed)
+    v = v * v * v;
+  for (double& v : reversed)
+    v = -v;
+  EXPECT_NEAR(spearman(cubed, y), spearman(x, y), 1e-12);
+  EXPECT_NEAR(spearman(x, reversed), -spearman(x, y), 1e-12);
+  EXPECT_NEAR(spearman(x, x), 1.0, 1e-12);
+  // Ties share their mean rank: x ranks 1, 2.5, 2.5, 4 and y ranks 1, 2, 3, 4, whose Pearson
+  // correlation is 4.5 / sqrt(4.5 · 5) = 3 / sqrt(10).
+  EXPECT_NEAR(spearman({ 0, 1, 1, 2 }, { 10, 20, 30, 40 }), 3.0 / std::sqrt(10.0), 1e-12);
+  EXPECT_TRUE(std::isnan(spearman({ 1, 1, 1 }, { 1, 2, 3 })));
+  EXPECT_THROW(spearman({ 1, 2 }, { 1, 2, 3 }), InvalidParameter);
+  EXPECT_THROW(spearman({ 1 }, { 1 }), InvalidParameter);
+}
+
 TEST(FrameTracerSubpixel, TraceAtIsTracePixelAtPixelCentresAndMovesInBetween)
 {
   // Sub-pixel rays check where an interpolated point should be: at integer positions they are

@@ -5,6 +5,7 @@
 // target meets it against that frame, re-tracing fewer pixels than when every pixel near the edge
 // is re-traced.
 #include "FrameTracer.h"
+#include "ImageQuality.h"
 #include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "RampScene.h"
@@ -199,27 +200,48 @@ TEST_F(PathEdges, MovedSurfacePixelsLieOffTheEdgesOfTheTracedFrame)
   EXPECT_LE(off[0], 0.5 * count[0]);
 }
 
-// Across an edge the pixel shows at t what one of the inner keys shows there: on the mass ramp
-// (keys 0.055 M apart, strongly lensed), the moved-edge pixels whose predicted colour is far from
-// both keys' colours there carry more of the error against the frame traced at t than those near
-// one, and their estimate counts that distance.
+namespace
+{
+/// The mass ramp between keys 0.055 M apart (strongly lensed), the frame at M = 0.6225 predicted
+/// from the 4 keys around it and the frame traced there, made once for the tests below.
+struct RampFrame
+{
+  static constexpr int side = 96;
+  static constexpr double t = 0.6225;
+  std::vector<std::vector<RayRecord>> keys;
+  std::vector<RayRecord> truth;
+  PathFrame frame;
+  RampFrame()
+  {
+    std::vector<PathKey> path;
+    for (double s : { 0.54, 0.595, 0.65, 0.705 })
+      keys.push_back(FrameTracer(asrt::testing::rampScene(s, side)).traceRows(0, side));
+    for (std::size_t k = 0; k < keys.size(); ++k)
+      path.push_back({ 0.54 + 0.055 * static_cast<double>(k), &keys[k] });
+    const SceneDescription atT = asrt::testing::rampScene(t, side);
+    truth = FrameTracer(atT).traceRows(0, side);
+    PathOptions options;
+    options.pointIndex = kdTreeIndexFactory();
+    options.leaveOneOut = false; // the estimates as predicted, not yet weighed by the keys' errors
+    frame = interpolateAlongPath(path, t, side, side, *atT.scene, options);
+  }
+  static const RampFrame& get()
+  {
+    static const RampFrame made;
+    return made;
+  }
+};
+}
+
+// Across an edge the pixel shows at t what one of the inner keys shows there: on the mass ramp,
+// the moved-edge pixels whose predicted colour is far from both keys' colours there carry more of
+// the error against the frame traced at t than those near one, and their estimate counts that
+// distance.
 TEST(PathEdgesOnTheRamp, AMovedEdgeFarFromBothInnerKeysColoursIsEstimatedSo)
 {
-  constexpr int side = 96;
-  constexpr double t = 0.6225;
-  std::vector<std::vector<RayRecord>> keys;
-  std::vector<PathKey> path;
-  for (double s : { 0.54, 0.595, 0.65, 0.705 })
-    keys.push_back(FrameTracer(asrt::testing::rampScene(s, side)).traceRows(0, side));
-  for (std::size_t k = 0; k < keys.size(); ++k)
-    path.push_back({ 0.54 + 0.055 * static_cast<double>(k), &keys[k] });
-  const SceneDescription atT = asrt::testing::rampScene(t, side);
-  const std::vector<RayRecord> truth = FrameTracer(atT).traceRows(0, side);
-  PathOptions options;
-  options.pointIndex = kdTreeIndexFactory();
-  options.leaveOneOut = false; // the estimates as predicted, not yet weighed by the keys' errors
-  const PathFrame f = interpolateAlongPath(path, t, side, side, *atT.scene, options);
-  const std::vector<RayRecord>&ka = keys[1], &kb = keys[2]; // 0.595 and 0.65 bracket t
+  const RampFrame& ramp = RampFrame::get();
+  const PathFrame& f = ramp.frame;
+  const std::vector<RayRecord>&ka = ramp.keys[1], &kb = ramp.keys[2]; // 0.595 and 0.65 bracket t
   std::vector<std::pair<double, double>> awayAndError;
   for (std::size_t p = 0; p < f.records.size(); ++p)
   {
@@ -228,7 +250,7 @@ TEST(PathEdgesOnTheRamp, AMovedEdgeFarFromBothInnerKeysColoursIsEstimatedSo)
     const Color& c = f.records[p].color;
     const double away = std::min(colorError2(c, ka[p].color), colorError2(c, kb[p].color));
     EXPECT_GE(f.estimate[p], 0.999 * away) << "pixel " << p;
-    awayAndError.emplace_back(away, colorError2(c, truth[p].color));
+    awayAndError.emplace_back(away, colorError2(c, ramp.truth[p].color));
   }
   ASSERT_GT(awayAndError.size(), 200u);
   std::sort(awayAndError.begin(), awayAndError.end());
@@ -240,6 +262,38 @@ TEST(PathEdgesOnTheRamp, AMovedEdgeFarFromBothInnerKeysColoursIsEstimatedSo)
               "the half nearer a key's colour, %.0f in the half farther\n",
               awayAndError.size(), near, far);
   EXPECT_GT(far, 2.0 * near);
+}
+
+// Off the edges (PathMethod::MovedSurface) a moved pixel errs as its texture changes within the
+// half pixel by which its moved points may be misplaced: on the mass ramp its estimate ranks the
+// error against the frame traced at t (Spearman, ties ranked alike), and a pixel whose texture is
+// one colour that far round it is estimated exact, and is.
+TEST(PathEdgesOnTheRamp, AMovedSurfacePixelIsEstimatedByItsTextureWithinHalfAPixel)
+{
+  const RampFrame& ramp = RampFrame::get();
+  const PathFrame& f = ramp.frame;
+  std::vector<double> estimate, error;
+  std::size_t exact = 0;
+  for (std::size_t p = 0; p < f.records.size(); ++p)
+  {
+    if (f.method[p] != static_cast<std::uint8_t>(PathMethod::MovedSurface))
+      continue;
+    estimate.push_back(f.estimate[p]);
+    error.push_back(colorError2(f.records[p].color, ramp.truth[p].color));
+    if (f.estimate[p] == 0.0f)
+    {
+      ++exact;
+      EXPECT_LT(error.back(), 1e-6) << "pixel " << p;
+    }
+  }
+  ASSERT_GT(estimate.size(), 200u);
+  const double rank = spearman(estimate, error);
+  std::printf("[ edges ] %zu moved-surface pixels, %zu estimated exact; Spearman of the estimate "
+              "against the error %.3f\n",
+              estimate.size(), exact, rank);
+  // Measured from the neighbours' centres, 13 pixels came out exact and the rank was 0.32.
+  EXPECT_GT(exact, estimate.size() / 20);
+  EXPECT_GT(rank, 0.6);
 }
 
 TEST_F(PathEdges, AFrameMeetsItsTargetReTracingLessThanWithoutMovedEdges)
