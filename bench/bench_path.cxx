@@ -16,7 +16,7 @@
 // ASRT_BENCH_PATH_STUDY (0 leaves out the mass ramp's study above), ASRT_BENCH_PATH_DUMP (a
 // directory: each study frame's pixels, their way of predicting, estimate, true error, surfaces
 // and the keys' leave-one-out error, as CSV, and the preview, plain, traced and converged pictures
-// as raw RGB).
+// as raw RGB; and each path frame's pixels, their way, estimate, true error and surfaces).
 // Then, at one key spacing each, the paths of ASRT_BENCH_PATH_PATHS ("ramp,orbit,kerr-orbit,spin",
 // "none" for none; NAME:H sets a path's key spacing): the mass ramp, a 90° camera orbit of Fig. 1,
 // the Kerr disk orbited through 90°, and its spin ramped a = 0 → 0.99; on
@@ -262,7 +262,9 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   PathScore r;
   r.s = path.from + (interval + 0.5) * path.h;
   std::vector<PathKey> around;
-  for (int k = std::max(0, interval - 1); k <= std::min(intervals, interval + 2); ++k)
+  // The nearest 4 keys: 2 on either side, or at an end of the path the 4 there.
+  const int firstKey = std::clamp(interval - 1, 0, std::max(0, intervals - 3));
+  for (int k = firstKey; k <= std::min(intervals, firstKey + 3); ++k)
   {
     if (!keys.count(k))
       keys[k] =
@@ -310,6 +312,22 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
     }
   r.spearman = spearman(est, truth);
   r.spearmanUnrounded = spearman(est, truthUnrounded);
+  if (const char* dump = std::getenv("ASRT_BENCH_PATH_DUMP"))
+  {
+    char name[512];
+    std::snprintf(name, sizeof name, "%s/%s-%.4f.csv", dump, path.name.c_str(), r.s);
+    if (FILE* out = std::fopen(name, "w"))
+    {
+      std::fprintf(out, "p,method,estimate,errf,obj,objt,term,termt\n");
+      for (std::size_t p = 0; p < plain.records.size(); ++p)
+        std::fprintf(out, "%zu,%d,%.9g,%.9g,%d,%d,%d,%d\n", p, int(plain.method[p]),
+                     double(plain.estimate[p]),
+                     double(colorError2(plain.records[p].color, tracedRecords[p].color)),
+                     plain.records[p].objectId, tracedRecords[p].objectId,
+                     int(plain.records[p].termination), int(tracedRecords[p].termination));
+      std::fclose(out);
+    }
+  }
   for (double target : targets)
   {
     PathFrame done = plain;

@@ -5,12 +5,15 @@
 //
 //  - Nodes. The inner pair of keys brackets t. If their records of the pixel end alike (object,
 //    termination, a winding that is continuous between them), the outer neighbours join when they
-//    end alike too: 4 nodes give a cubic Lagrange prediction, 3 a quadratic, 2 a linear one.
-//    Otherwise the keys cannot vouch for the pixel, nor for its 8 neighbours (an edge that moves
-//    between the keys may cross them at t): these are predicted by moving the keys' scene points
-//    across the picture (PathEdges.h, PathMethod::MovedEdge, or MovedSurface where no edge lies
-//    within a pixel of the pixel at t), and re-traced where no moved point covers them (or,
-//    without PathOptions::movedEdges, all re-traced).
+//    end alike too: 4 nodes give a cubic Lagrange prediction, 3 a quadratic, 2 a linear one. At
+//    an end of the keys, where one side has no outer neighbour, the second key beyond on the
+//    other side measures the quadratic's error where it ends alike (callers pass the keys around
+//    t: the nearest 4 where there are 4). Otherwise the keys cannot vouch for the
+//    pixel, nor for its 8 neighbours (an edge that moves between the keys may cross them at t):
+//    these are predicted by moving the keys' scene points across the picture (PathEdges.h,
+//    PathMethod::MovedEdge, or MovedSurface where no edge lies within a pixel of the pixel at t),
+//    and re-traced where no moved point covers them (or, without PathOptions::movedEdges, all
+//    re-traced).
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
@@ -27,15 +30,17 @@
 //    with its 4 neighbours (what the edge moving by a pixel changes).
 //  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
 //    dropped; for a linear prediction, the nearer key) differs from the prediction by about the
-//    lower order's error: that squared difference, summed over the channels in levels² of 255,
-//    ranks the pixels for re-tracing. Two orders may land on like colours while a bright feature
-//    of the texture lies just beside them (keys far apart move a pixel across many texels), so
-//    the texture is also sampled one disagreement in (u, v) further on and to either side (one
-//    side alone where the disagreement is a quarter of a pixel or less, where the filtered colour
-//    is linear across it and the other two samples say what the lower order and that side do). A
-//    linear prediction's estimate is also at least the squared colour step between its keys.
-//    A moved edge's estimate is the disagreement of the other ways of moving the scene points,
-//    and of the pixel's own prediction where there is one, with the prediction (PathEdges.h).
+//    lower order's error; at an end of the keys, one order higher (the key beyond joining)
+//    differs from the quadratic by about the quadratic's own: that squared difference, summed over
+//    the channels in levels² of 255, ranks the pixels for re-tracing. Two orders may land on like
+//    colours while a bright feature of the texture lies just beside them (keys far apart move a
+//    pixel across many texels), so the texture is also sampled one disagreement in (u, v) further
+//    on and to either side (one side alone where the disagreement is a quarter of a pixel or less,
+//    where the filtered colour is linear across it and the other two samples say what the lower
+//    order and that side do). A linear prediction's estimate is also at least the squared colour
+//    step between its keys. A moved edge's estimate is the disagreement of the other ways of moving
+//    the scene points, and of the pixel's own prediction where there is one, with the prediction
+//    (PathEdges.h).
 // Plain C++ with OpenMP over rows; the result does not depend on the number of threads.
 #ifndef asrt_PathInterpolation_h
 #define asrt_PathInterpolation_h

@@ -3,6 +3,7 @@
 // and frames the test traces itself at the interpolated parameter.
 #include "FrameTracer.h"
 #include "GeodesicMovie.h"
+#include "ImageQuality.h"
 #include "KdTreeIndex.h"
 #include "PathInterpolation.h"
 #include "RampScene.h"
@@ -430,6 +431,62 @@ TEST_F(PathInterpolationRamp, PredictedPixelsAreCloseAndTheEstimateFindsTheWorst
   std::printf("[ path ] the estimate's worst tenth holds %.0f %% of the true error\n",
               100.0 * worst / sum);
   EXPECT_GT(worst, 0.4 * sum);
+}
+
+// In the first interval of the keys there is no key before the inner pair: the pixels are
+// predicted through the first 3 keys (quadratic) as before, and the fourth, the second beyond,
+// measures their error (the difference to the cubic through all 4, not to the line through the
+// inner pair). On the Kerr disk's spin ramp at 64 × 64 (keys 0.198 apart from a = 0, the frame at
+// a = 0.099) the colours are those of the first 3 keys alone, and the estimate ranks their true
+// error, against the frame traced there, better than without the fourth key.
+TEST(PathInterpolation, AtAnEndOfTheKeysTheSecondKeyBeyondMeasuresTheError)
+{
+  constexpr int side = 64;
+  auto spinScene = [](double spin)
+  {
+    SceneDescription d =
+      loadSceneFile(std::string(ASRT_SOURCE_DIR) + "/Data/scenes/kerr-disk.json",
+                    [](const std::string& p) { return readPngTexture(p, TextureLimits{}); });
+    d.spacetime.spin = spin;
+    d.camera.width = d.camera.height = side;
+    return d;
+  };
+  TracedKeys four, three;
+  for (int k = 0; k < 4; ++k)
+  {
+    four.s.push_back(0.198 * k);
+    four.records.push_back(traceFrame(spinScene(four.s.back())));
+  }
+  three = four;
+  three.s.pop_back();
+  three.records.pop_back();
+  const double t = 0.099;
+  const SceneDescription atT = spinScene(t);
+  const std::vector<RayRecord> truth = traceFrame(atT);
+  PathOptions options;
+  options.movedEdges = false;
+  options.leaveOneOut = false; // the estimates as predicted
+  const PathFrame withFour = interpolateAlongPath(four.path(), t, side, side, *atT.scene, options);
+  const PathFrame withThree =
+    interpolateAlongPath(three.path(), t, side, side, *atT.scene, options);
+  EXPECT_EQ(withFour.counts()[static_cast<std::size_t>(PathMethod::Cubic)], 0u);
+  std::vector<double> estimate[2], error;
+  for (std::size_t p = 0; p < truth.size(); ++p)
+  {
+    ASSERT_EQ(withFour.method[p], withThree.method[p]) << p;
+    ASSERT_EQ(withFour.records[p].color, withThree.records[p].color) << p;
+    if (withFour.method[p] != static_cast<std::uint8_t>(PathMethod::Quadratic))
+      continue;
+    estimate[0].push_back(withThree.estimate[p]);
+    estimate[1].push_back(withFour.estimate[p]);
+    error.push_back(error2(withFour.records[p], truth[p]));
+  }
+  ASSERT_GT(estimate[0].size(), truth.size() / 2);
+  const double rank[2] = { spearman(estimate[0], error), spearman(estimate[1], error) };
+  std::printf("[ path ] %zu pixels predicted through 3 keys: the estimate's rank correlation with "
+              "their error %.3f, with the fourth key %.3f\n",
+              error.size(), rank[0], rank[1]);
+  EXPECT_GT(rank[1], rank[0] + 0.05);
 }
 
 TEST_F(PathInterpolationRamp, AQualityTargetIsMetByReTracingTheWorstPixels)
