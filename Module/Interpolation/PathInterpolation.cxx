@@ -156,8 +156,8 @@ RayRecord predictSurface(const RayRecord* const* nodes, const double* s, int n, 
 /// prediction (a cubic through keys all on one side of t fared worse than the quadratic on the
 /// orbits, 0.3 dB on the Kerr disk's) but measures its error: the difference to the cubic through
 /// all 4 is the quadratic's own error to the next order, where the difference to the line ranks
-/// its error poorly (on the spin ramp's first and last intervals, whose pixels are mostly
-/// quadratic, the estimate's rank correlation before rounding rose from 0.80 to 0.85–0.92).
+/// its error poorly (on the spin ramp, whose first and last intervals' pixels are mostly
+/// quadratic, the worst frame's rank correlation before rounding rose from 0.80 to 0.84).
 struct NodeRange
 {
   std::size_t first = 0, last = 0;
@@ -283,8 +283,8 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
     nodeRange(keys.size(), a,
               [&](std::size_t outer, std::size_t beside)
               { return endAlike((*keys[outer].records)[p], (*keys[beside].records)[p]); });
-  // The nodes, and at an end of the keys the key beyond before or after them (`used` of them
-  // from `offset` on predict; all of them measure the estimate).
+  // The nodes, and at an end of the keys the key beyond before or after them: n of them from
+  // `offset` on predict, all `count` measure the estimate.
   const std::size_t first =
     range.beyond && *range.beyond < range.first ? *range.beyond : range.first;
   const std::size_t last = range.beyond && *range.beyond > range.last ? *range.beyond : range.last;
