@@ -551,36 +551,30 @@ std::vector<MovedEdgePixel> predictMovedEdges(
       e.record.color = sum / static_cast<double>(ways);
     // An edge within a pixel of it that every prediction moves alike may still lie a fraction of
     // a pixel off, which changes the pixel by that fraction of the contrast across the edge.
-    float contrast = 0.0f;
     const float share = isDisputed ? kEdgeShare : kAgreedEdgeShare;
-    for (const auto& o : kNeighbours)
+    // The front movers at the neighbours' centres: whether an edge lies within a pixel.
+    std::int64_t neighbour[std::size(kNeighbours)];
+    for (std::size_t n = 0; n < std::size(kNeighbours); ++n)
     {
-      const double x = i + o[0], y = j + o[1];
-      const std::int64_t k = mover.front(x, y, false, 3);
-      if (k < 0)
-      {
-        oneSurface = false;
-        continue;
-      }
-      const RayRecord r = movedRecord(mover, k, x, y, false, 1.0);
-      oneSurface = oneSurface && endAlike(centreRecord, r);
-      contrast = std::max(contrast, colorError2(color, shadePrediction(scene, r)));
+      const double x = i + kNeighbours[n][0], y = j + kNeighbours[n][1];
+      neighbour[n] = mover.front(x, y, false, 3);
+      oneSurface = oneSurface && neighbour[n] >= 0 &&
+                   endAlike(centreRecord, movedRecord(mover, neighbour[n], x, y, false, 1.0));
     }
-    // Off the edges the contrast is the texture's, and a misplacement of up to half a pixel
-    // brings to the pixel only the texture within half a pixel of it: the neighbours' centres
-    // would count colours a pixel away, which leave a pixel of one colour as it is.
-    if (oneSurface)
+    // Across an edge, the contrast with the neighbours' centres. Off the edges the contrast is the
+    // texture's, and a misplacement of up to half a pixel brings to the pixel only the texture
+    // within half a pixel of it: the neighbours' centres would count colours a pixel away, which
+    // leave a pixel of one colour as it is.
+    const double reach = oneSurface ? 0.5 : 1.0;
+    float contrast = 0.0f;
+    for (std::size_t n = 0; n < std::size(kNeighbours); ++n)
     {
-      contrast = 0.0f;
-      for (const auto& o : kNeighbours)
-      {
-        const double x = i + 0.5 * o[0], y = j + 0.5 * o[1];
-        const std::int64_t k = mover.front(x, y, false, 3);
-        if (k >= 0)
-          contrast = std::max(
-            contrast,
-            colorError2(color, shadePrediction(scene, movedRecord(mover, k, x, y, false, 1.0))));
-      }
+      const double x = i + reach * kNeighbours[n][0], y = j + reach * kNeighbours[n][1];
+      const std::int64_t k = oneSurface ? mover.front(x, y, false, 3) : neighbour[n];
+      if (k >= 0)
+        contrast = std::max(
+          contrast,
+          colorError2(color, shadePrediction(scene, movedRecord(mover, k, x, y, false, 1.0))));
     }
     e.oneSurface = oneSurface;
     // Within one surface the contrast is the texture's, as the pixel moves by a fraction of itself.

@@ -168,6 +168,13 @@ double psnrOf(const std::vector<RayRecord>& a, const std::vector<RayRecord>& b)
   const double mse = sum / (3.0 * a.size());
   return mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
 }
+
+/// Whether a pixel was predicted by moving the keys' scene points (PathEdges.h).
+bool movedByPoints(std::uint8_t m)
+{
+  return m == static_cast<std::uint8_t>(PathMethod::MovedEdge) ||
+         m == static_cast<std::uint8_t>(PathMethod::MovedSurface);
+}
 }
 
 TEST(PathInterpolation, LagrangeWeightsReproducePolynomialsOfTheirDegree)
@@ -600,9 +607,7 @@ TEST(PathInterpolationMovedEdges, HedgingTheShadowsRimComesCloserToTheTracedFram
     if (a.records[p].color == b.records[p].color)
       continue;
     ++changed;
-    EXPECT_TRUE(a.method[p] == static_cast<std::uint8_t>(PathMethod::MovedEdge) ||
-                a.method[p] == static_cast<std::uint8_t>(PathMethod::MovedSurface))
-      << p;
+    EXPECT_TRUE(movedByPoints(a.method[p])) << p;
   }
   std::printf("[ path ] the shadow's rim at M = %.4f, keys 0.11 apart: %zu pixels hedged; squared "
               "error %.0f hedged, %.0f not\n",
@@ -639,13 +644,10 @@ TEST(PathInterpolationMovedEdges, AGrowingHorizonSwallowsTheSurfacesReachingInto
     std::size_t changed = 0, swallowedKnown = 0, swallowedNot = 0, inside = 0;
     for (std::size_t p = 0; p < truth.size(); ++p)
     {
-      const auto moved = [](std::uint8_t m)
-      {
-        return m == static_cast<std::uint8_t>(PathMethod::MovedEdge) ||
-               m == static_cast<std::uint8_t>(PathMethod::MovedSurface);
-      };
       // A surface given way to the hole may class a pixel as on an edge or off one.
-      ASSERT_TRUE(a.method[p] == b.method[p] || (moved(a.method[p]) && moved(b.method[p]))) << p;
+      ASSERT_TRUE(a.method[p] == b.method[p] ||
+                  (movedByPoints(a.method[p]) && movedByPoints(b.method[p])))
+        << p;
       errorKnown += error2(a.records[p], truth[p]);
       errorNot += error2(b.records[p], truth[p]);
       const bool hole = truth[p].termination == Termination::Captured;
@@ -656,7 +658,7 @@ TEST(PathInterpolationMovedEdges, AGrowingHorizonSwallowsTheSurfacesReachingInto
       if (a.records[p].color == b.records[p].color)
         continue;
       ++changed;
-      EXPECT_TRUE(moved(a.method[p])) << p;
+      EXPECT_TRUE(movedByPoints(a.method[p])) << p;
     }
     std::printf("[ path ] the horizon at M = %.4f, keys 0.11 apart: %zu pixels changed; a surface "
                 "where the traced frame shows the hole at %zu pixels, %zu without the spacetime; "
