@@ -285,6 +285,11 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
   const std::vector<std::uint8_t> reference =
     rgbOf(FrameTracer(pathScene(path, r.s, &converged)).traceRows(0, kSide));
   r.tracedVsConverged = psnrOf(traced, reference);
+  // The completion re-traces scattered pixels each with its own centre ray, as the path
+  // interpolator and the movie do: the keys' grid would trace each one's whole lattice block.
+  SceneDescription scattered = atS;
+  scattered.rendering = scatteredPixelRendering(scattered.rendering);
+  const FrameTracer retracer(scattered);
   PathOptions with, without;
   with.pointIndex = kdTreeIndexFactory();
   with.spacetimeAt = spacetimeAlong(path);
@@ -335,7 +340,7 @@ PathScore scorePathFrame(const BenchPath& path, int interval, int intervals,
     // settings fall short of the target, the strata holding their error traced converged.
     const AntialiasOptions judge = convergedRendering(convergedSideFor(target));
     const FrameTracer convergedAtS(pathScene(path, r.s, &judge));
-    const PathCompletion c = completePathFrame(done, pixelTracerOf(tracer), target, 0.01,
+    const PathCompletion c = completePathFrame(done, pixelTracerOf(retracer), target, 0.01,
                                                refinementFor(held, convergedAtS));
     r.convergedShare.push_back(c.refined / n);
     r.raysOverTraced.push_back(c.raysTraced / tracedRays);
@@ -365,8 +370,10 @@ void printPaths(const std::vector<BenchPath>& paths, int frameCount,
               "falls short of T, the strata holding the keys' error traced with the rendering "
               "that judges T (`SettingsRefinement`, `convergedSideFor`: 8×8 above 36 dB), as "
               "`vtkGeodesicPathInterpolator` does by default: *converged*, the share of pixels "
-              "traced so; *rays × traced*, the rays the completion integrated over those of the "
-              "frame traced at s (mean). PSNR as mean / "
+              "traced so; *rays × traced*, the rays the completion integrated (its pixels each "
+              "traced with its own centre ray, `scatteredPixelRendering`, as the interpolator "
+              "and the movie trace them) over those of the frame traced at s (mean). PSNR as "
+              "mean / "
               "worst; Spearman of the "
               "estimate against the true error (against the traced frame) over the predicted "
               "pixels, mean / worst, against the error of the 8-bit colours (most pixels tie at "
@@ -578,7 +585,8 @@ void runRampStudy(double tStart)
     "**Traced**: the frame traced at its mass with the keys' settings (%.2f s a frame "
     "on average). Each interpolated frame comes from the 4 keys around it "
     "(`interpolateAlongPath`), then `completePathFrame` re-traces to the target (against "
-    "the traced frame); its re-traced share counts every ray traced at t (the "
+    "the traced frame; each re-traced pixel its own centre ray, `scatteredPixelRendering`, as "
+    "the path interpolator traces them); its re-traced share counts every ray traced at t (the "
     "must-re-trace pixels, the chosen ones and the probes). **Moved edges**: the pixels near an "
     "edge the inner keys disagree on predicted from the keys' scene points moved through the "
     "chain (`PathOptions::movedEdges`, the default); **all re-traced**: without, every such pixel "
@@ -760,7 +768,9 @@ void runRampStudy(double tStart)
         std::printf("| %g | %.4f | %s | plain (nothing re-traced) | 0 | %s | %s | %.2f |\n", h,
                     f.mass, dbs(tracedVsRef).c_str(), dbs(psnrOf(previewRgb, f.tracedRgb)).c_str(),
                     dbs(psnrOf(previewRgb, f.reference)).c_str(), plainSeconds / f.traceSeconds);
-      const SceneDescription atT = rampScene(f.mass);
+      // Scattered pixels each with its own centre ray, as the path interpolator re-traces them.
+      SceneDescription atT = rampScene(f.mass);
+      atT.rendering = scatteredPixelRendering(atT.rendering);
       const FrameTracer tracer(atT);
       for (double target : targets)
         for (const bool moved : { false, true })
