@@ -208,6 +208,34 @@ public:
     bucket(true, linear_);
   }
 
+  /// One key's scene points where the key itself shows them (at its own parameter): each covers
+  /// its own pixel's unit square, as key a's points do at t = s_a. Nothing is matched.
+  EdgeMover(const std::vector<RayRecord>& key, int width, int height)
+    : width_(width)
+    , height_(height)
+    , atT_(nullptr)
+    , horizonAtT_(0.0)
+  {
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    movers_.resize(n);
+    for (std::size_t p = 0; p < n; ++p)
+    {
+      Mover& m = movers_[p];
+      m.record = &key[p];
+      m.length = key[p].termination == Termination::Captured
+                   ? std::numeric_limits<double>::infinity()
+                   : key[p].affineLength;
+      if (!followable(key[p]))
+        continue;
+      m.x[0] = m.lin[0] = static_cast<double>(p % static_cast<std::size_t>(width));
+      m.x[1] = m.lin[1] = static_cast<double>(p / static_cast<std::size_t>(width));
+      m.reach = 1; // (1 + 2 kGap) · ½ rounded up
+      m.usable = true;
+    }
+    bucket(false, full_);
+    bucket(true, linear_);
+  }
+
   /// The front mover covering spot (x, y) at t, −1 if none: with the positions through every
   /// matched key or through the inner pair alone, the movers of the sides in `sides` (bit 0: key
   /// a's, bit 1: key a + 1's).
@@ -452,9 +480,12 @@ bool disputed(const EdgeMover& mover, int i, int j, const RayRecord& centre,
 bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool linear, int sides,
                 Color& out, const RayRecord* centre = nullptr, bool* alike = nullptr,
                 float* nearShadow = nullptr, bool hedgeNearShadow = false,
-                std::int64_t* centreFront = nullptr)
+                std::int64_t* centreFront = nullptr, const std::vector<Color>* residuals = nullptr,
+                Color* residual = nullptr)
 {
   out = Color::Zero();
+  if (residual)
+    *residual = Color::Zero();
   Color halfContrast = Color::Zero();
   for (const auto& o : kSub)
   {
@@ -464,6 +495,8 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
       *centreFront = k;
     if (k < 0)
       return false;
+    if (residuals && residual)
+      *residual += (*residuals)[static_cast<std::size_t>(k)] / 9.0;
     const RayRecord r = movedRecord(mover, k, x, y, linear, 1 / 3.0);
     if (centre && alike && !endAlike(*centre, r))
       *alike = false;
@@ -486,6 +519,35 @@ bool subsampled(const EdgeMover& mover, const Scene& scene, int i, int j, bool l
   return true;
 }
 
+/// Each pixel of a key within a pixel of an edge in it (one of its 8 neighbours ends otherwise):
+/// its traced colour less the mean of its 3×3 sub-positions as the key's own points show them
+/// (PathEdges.h, The keys' own residual); 0 elsewhere. Appended to `out`, pixel order.
+void appendOwnResiduals(const std::vector<RayRecord>& key, int width, int height,
+                        const Scene& scene, std::vector<Color>& out)
+{
+  const std::size_t base = out.size();
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  out.resize(base + n, Color::Zero());
+  const EdgeMover own(key, width, height);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::int64_t q = 0; q < static_cast<std::int64_t>(n); ++q)
+  {
+    const int i = static_cast<int>(q % width), j = static_cast<int>(q / width);
+    const RayRecord& r = key[static_cast<std::size_t>(q)];
+    bool nearEdge = false;
+    for (int dj = -1; dj <= 1 && !nearEdge; ++dj)
+      for (int di = -1; di <= 1 && !nearEdge; ++di)
+      {
+        const int x = i + di, y = j + dj;
+        if (x >= 0 && x < width && y >= 0 && y < height)
+          nearEdge = !endAlike(r, key[static_cast<std::size_t>(y) * width + x]);
+      }
+    Color shown;
+    if (nearEdge && subsampled(own, scene, i, j, false, 1, shown))
+      out[base + static_cast<std::size_t>(q)] = r.color - shown;
+  }
+}
+
 /// The squared colour difference (levels² of 255, summed over the channels) between `color` and
 /// the nearer of the inner keys' (a, a + 1) colours at pixel p.
 float awayFromInnerKeys(const std::vector<PathKey>& keys, std::size_t a, std::int32_t p,
@@ -501,12 +563,17 @@ std::vector<MovedEdgePixel> predictMovedEdges(
   const std::vector<PathKey>& keys, std::size_t a, double t, int width, int height,
   const Scene& scene, const PointIndexFactory& index, const std::vector<std::int32_t>& pixels,
   const std::vector<const RayRecord*>& perPixel, bool hedged, bool hedgeNearShadow,
-  PathMatchCache* cache, const SpacetimeAlongPath& along)
+  PathMatchCache* cache, const SpacetimeAlongPath& along, double residualShare)
 {
   std::vector<MovedEdgePixel> out(pixels.size());
   if (pixels.empty())
     return out;
   const EdgeMover mover(keys, a, t, width, height, index, cache, along);
+  // The inner keys' own residuals, by mover (key a's pixels, then key a + 1's).
+  std::vector<Color> residuals;
+  if (residualShare > 0.0)
+    for (std::size_t side : { a, a + 1 })
+      appendOwnResiduals(*keys[side].records, width, height, scene, residuals);
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::int64_t q = 0; q < static_cast<std::int64_t>(pixels.size()); ++q)
   {
@@ -520,8 +587,9 @@ std::vector<MovedEdgePixel> predictMovedEdges(
     const RayRecord centreRecord = movedRecord(mover, centre, i, j, false, 1.0);
     bool oneSurface = true;
     float nearShadow = 0.0f;
+    Color residual = Color::Zero();
     if (!subsampled(mover, scene, i, j, false, 3, color, &centreRecord, &oneSurface, &nearShadow,
-                    hedgeNearShadow))
+                    hedgeNearShadow, nullptr, residuals.empty() ? nullptr : &residuals, &residual))
       continue;
     e.covered = true;
     e.record = centreRecord;
@@ -580,6 +648,10 @@ std::vector<MovedEdgePixel> predictMovedEdges(
     // Within one surface the contrast is the texture's, as the pixel moves by a fraction of itself.
     contrast *= oneSurface ? kEdgeShare : share;
     e.estimate = std::max({ e.estimate, contrast, nearShadow });
+    // Where an edge crosses the pixel, the keys' own residual carried with the points that cover
+    // it: where within their pixels the keys saw the edge (PathEdges.h, The keys' own residual).
+    if (!oneSurface)
+      e.record.color += residualShare * residual;
     if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
     {
       e.estimate = std::max(e.estimate, colorError2(color, own->color));

@@ -349,7 +349,8 @@ namespace
 void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
                   const PointIndexFactory& index, const std::vector<RayRecord>& own,
                   const std::vector<std::uint8_t>& hasOwn, bool hedged, bool hedgeNearShadow,
-                  PathMatchCache* cache, const SpacetimeAlongPath& along, PathFrame& f)
+                  PathMatchCache* cache, const SpacetimeAlongPath& along, double residualShare,
+                  PathFrame& f)
 {
   std::vector<std::int32_t> pixels;
   std::vector<const RayRecord*> perPixel;
@@ -361,7 +362,7 @@ void predictEdges(const std::vector<PathKey>& keys, std::size_t a, double t, con
     }
   const std::vector<MovedEdgePixel> moved =
     predictMovedEdges(keys, a, t, f.width, f.height, scene, index, pixels, perPixel, hedged,
-                      hedgeNearShadow, cache, along);
+                      hedgeNearShadow, cache, along, residualShare);
   for (std::size_t k = 0; k < pixels.size(); ++k)
     if (moved[k].covered && std::isfinite(moved[k].estimate))
     {
@@ -517,6 +518,9 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   checkKeys(keys, t, width, height);
   if (options.movedEdges && !options.pointIndex)
     invalid("PathOptions::pointIndex is empty: moved edges need a point index");
+  if (!(options.keyResidualShare >= 0.0 && options.keyResidualShare <= 1.0))
+    invalid("PathOptions::keyResidualShare must lie in [0, 1], got " +
+            std::to_string(options.keyResidualShare));
   PathFrame f;
   f.width = width;
   f.height = height;
@@ -605,7 +609,8 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
       key.fingerprint = keyFingerprint(key);
   if (options.movedEdges)
     predictEdges(keyed, a, t, scene, options.pointIndex, own, hasOwn, options.hedgeMovedEdges,
-                 options.hedgeNearShadow, options.matchCache.get(), options.spacetimeAt, f);
+                 options.hedgeNearShadow, options.matchCache.get(), options.spacetimeAt,
+                 options.keyResidualShare, f);
   if (weighed)
   {
     const std::vector<float> L = leaveOneOutError(keyed, t, width, height, scene, options);

@@ -227,6 +227,10 @@ struct PathOptions
   /// A moved edge's colour is the mean of the ways of moving the keys' points that cover the
   /// pixel, not that of both inner keys' points alone (PathEdges.h, Hedging).
   bool hedgeMovedEdges = true;
+  /// The share of the inner keys' own residual that a moved pixel an edge crosses takes: each
+  /// key's traced colour less what its own points show at its pixel's sub-positions, carried to
+  /// t with the points that cover the pixel (PathEdges.h, The keys' own residual). 0: none.
+  double keyResidualShare = 0.6;
   /// Where a surface's moved points and the hole's cover the same spot, the spot is the mean of
   /// their colours (PathEdges.h, the shadow's rim): for a frame shown as predicted, the plain
   /// preview. Not for one completed to a target (completePathFrame): on the mass ramp, keys

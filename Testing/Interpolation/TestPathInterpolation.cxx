@@ -310,6 +310,18 @@ TEST(PathInterpolation, BadKeysAndTargetsAreRefusedByName)
               })
               .find("PathOptions::pointIndex"),
             std::string::npos);
+  for (double bad : { -0.1, 1.5, std::nan("") })
+  {
+    PathOptions o = withMovedEdges();
+    o.keyResidualShare = bad;
+    EXPECT_NE(errorOf(
+                [&] {
+                  interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene, o);
+                })
+                .find("PathOptions::keyResidualShare"),
+              std::string::npos)
+      << bad;
+  }
   PathFrame f =
     interpolateAlongPath({ { 0.0, &r }, { 1.0, &r } }, 0.5, 4, 4, scene, withMovedEdges());
   const FrameTracer tracer(d);
