@@ -311,6 +311,23 @@ double movedEdgePsnr(const PathFrame& f, const std::vector<RayRecord>& truth, st
     }
   return 10.0 * std::log10(255.0 * 255.0 * 3.0 * static_cast<double>(count) / sum);
 }
+
+/// The frame `with` the keys' residual comes nearer `truth` on its moved-edge pixels (at least
+/// `least` of them) than the same frame `without` it, by more than 1.5 dB.
+void expectTheResidualBringsNearer(const PathFrame& without, const PathFrame& with,
+                                   const std::vector<RayRecord>& truth, std::size_t least,
+                                   const char* what)
+{
+  ASSERT_EQ(without.method, with.method); // the residual moves colours only
+  std::size_t count = 0;
+  const double before = movedEdgePsnr(without, truth, count);
+  const double after = movedEdgePsnr(with, truth, count);
+  std::printf("[ edges ] %zu moved-edge pixels of %s against the traced frame: %.2f dB without "
+              "the keys' residual, %.2f dB with it\n",
+              count, what, before, after);
+  ASSERT_GT(count, least);
+  EXPECT_GT(after, before + 1.5);
+}
 }
 
 // A key places an edge it moves only to its pixels' grain, but its traced colour holds where
@@ -330,38 +347,20 @@ TEST(PathEdgesOnTheRamp, TheKeysOwnResidualBringsTheMovedEdgesNearerTheTracedFra
   const PathFrame without =
     interpolateAlongPath(path, RampFrame::t, RampFrame::side, RampFrame::side,
                          *asrt::testing::rampScene(RampFrame::t, RampFrame::side).scene, options);
-  ASSERT_EQ(without.method, ramp.frame.method);
-  std::size_t count = 0;
-  const double before = movedEdgePsnr(without, ramp.truth, count);
-  const double after = movedEdgePsnr(ramp.frame, ramp.truth, count);
-  std::printf("[ edges ] %zu moved-edge pixels against the traced frame: %.2f dB without the keys' "
-              "residual, %.2f dB with it\n",
-              count, before, after);
-  ASSERT_GT(count, 200u);
-  EXPECT_GT(after, before + 1.5);
+  expectTheResidualBringsNearer(without, ramp.frame, ramp.truth, 200, "the ramp");
 }
 
 TEST_F(PathEdges, TheKeysOwnResidualBringsTheMovedEdgesNearerTheTracedFrame)
 {
+  PathOptions options;
+  options.pointIndex = kdTreeIndexFactory();
+  options.keyResidualShare = 0.0;
   std::vector<PathKey> path;
   for (std::size_t k = 0; k < keys().size(); ++k)
     path.push_back({ keyS()[k], &keys()[k] });
-  PathOptions options;
-  options.pointIndex = kdTreeIndexFactory();
-  const PathFrame with =
-    interpolateAlongPath(path, T, kSide, kSide, *slidingScene(T).scene, options);
-  options.keyResidualShare = 0.0;
   const PathFrame without =
     interpolateAlongPath(path, T, kSide, kSide, *slidingScene(T).scene, options);
-  ASSERT_EQ(without.method, with.method);
-  std::size_t count = 0;
-  const double before = movedEdgePsnr(without, truth(), count);
-  const double after = movedEdgePsnr(with, truth(), count);
-  std::printf("[ edges ] %zu moved-edge pixels of the sliding sphere: %.2f dB without the keys' "
-              "residual, %.2f dB with it\n",
-              count, before, after);
-  ASSERT_GT(count, 100u);
-  EXPECT_GT(after, before + 1.5);
+  expectTheResidualBringsNearer(without, interpolated(true), truth(), 100, "the sliding sphere");
 }
 
 TEST_F(PathEdges, AFrameMeetsItsTargetReTracingLessThanWithoutMovedEdges)
