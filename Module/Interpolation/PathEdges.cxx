@@ -650,8 +650,12 @@ std::vector<MovedEdgePixel> predictMovedEdges(
     e.estimate = std::max({ e.estimate, contrast, nearShadow });
     // Where an edge crosses the pixel, the keys' own residual carried with the points that cover
     // it: where within their pixels the keys saw the edge (PathEdges.h, The keys' own residual).
+    // It holds only in part at t, by about its own size: that adds to the estimate.
     if (!oneSurface)
+    {
       e.record.color += residualShare * residual;
+      e.estimate += colorError2(residual, Color::Zero());
+    }
     if (const RayRecord* own = perPixel[static_cast<std::size_t>(q)])
     {
       e.estimate = std::max(e.estimate, colorError2(color, own->color));

@@ -24,7 +24,9 @@
 //    not lying where the key's did. On the mass ramp's study frames (bench/REPORT.md) the plain
 //    frames against the traced ones gain 0.6–1.7 dB with a share of 0.6 (0.45 and 0.8 within
 //    0.3 dB of it; 1.4 gains or loses up to 0.5 dB); in the tests the moved-edge pixels gain
-//    2.7 dB.
+//    2.7 dB. The carried share holds only in part, by about the residual's own size: its squared
+//    colour difference adds to the pixel's estimate (the study's shares for 40 dB 0.1–0.5 %
+//    lower).
 //  - Hedging. The points of both inner keys, and each inner key's alone, move the edge three
 //    ways; where the keys lie far apart these disagree on where it is now. The pixel's colour is
 //    then the mean of the ways that cover it: a softened edge, whose expected squared error is
