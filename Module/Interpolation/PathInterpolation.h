@@ -347,7 +347,9 @@ ASRTINTERPOLATION_EXPORT double estimateScale(PathMethod m, const std::vector<Pr
 /// target's where the settings leave less (they alone then miss the target, and the estimate
 /// says so). With 0 the target is against the frame traced at t. Throws InvalidParameter for a
 /// target outside (0, kMaxQualityTargetDb] or NaN, a settings error below 0 or not finite, or a
-/// tracer of another size.
+/// tracer of another size. The tracer traces the pixels as its rendering says: with the adaptive
+/// grid each re-traced pixel costs its whole lattice block, so a tracer made for this has its
+/// rendering's scatteredPixelRendering(), each pixel its own centre ray (as the filters do).
 ASRTINTERPOLATION_EXPORT PathCompletion completePathFrame(
   PathFrame& frame, const FrameTracer& tracer, double targetDb, double probeFraction = 0.01,
   double settingsMse = 0.0, EstimateScaling scaling = EstimateScaling::Ratio);
