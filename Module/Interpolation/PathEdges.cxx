@@ -232,8 +232,9 @@ public:
       m.reach = 1; // (1 + 2 kGap) · ½ rounded up
       m.usable = true;
     }
+    // Only the positions through every key are asked for (at a key the inner pair's line is the
+    // same place): the linear grid stays empty, and a spot searched in it finds no mover.
     bucket(false, full_);
-    bucket(true, linear_);
   }
 
   /// The front mover covering spot (x, y) at t, −1 if none: with the positions through every
