@@ -98,11 +98,22 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
       }
     const auto make = [&]()
     {
-      const PathFrame left = interpolateAlongPath(others, keys[k].s, width, height, scene, inner);
       const std::vector<RayRecord>& own = *keys[k].records;
       std::vector<float> e(n);
-      for (std::size_t p = 0; p < n; ++p)
-        e[p] = colorError2(left.records[p].color, own[p].color);
+      if (inner.movedEdges)
+      {
+        const PathFrame left = interpolateAlongPath(others, keys[k].s, width, height, scene, inner);
+        for (std::size_t p = 0; p < n; ++p)
+          e[p] = colorError2(left.records[p].color, own[p].color);
+      }
+      else
+      {
+        // The colours alone, without the records a frame would write.
+        const std::vector<Color> left =
+          interpolatedColours(others, keys[k].s, width, height, scene);
+        for (std::size_t p = 0; p < n; ++p)
+          e[p] = colorError2(left[p], own[p].color);
+      }
       return e;
     };
     std::shared_ptr<const std::vector<float>> e;

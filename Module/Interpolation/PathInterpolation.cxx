@@ -246,6 +246,28 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   return out;
 }
 
+/// predictPixel's colour alone: the surface its nodes predict (predictSurface), shaded.
+Color predictedColour(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                      const Scene& scene)
+{
+  const NodeRange range =
+    nodeRange(keys.size(), a,
+              [&](std::size_t outer, std::size_t beside)
+              {
+                const RayRecord& r = (*keys[outer].records)[p];
+                return singleRay(r) && endAlike(r, (*keys[beside].records)[p]);
+              });
+  const RayRecord* nodes[4];
+  double s[4];
+  int n = 0;
+  for (std::size_t k = range.first; k <= range.last; ++k)
+  {
+    nodes[n] = &(*keys[k].records)[p];
+    s[n++] = keys[k].s;
+  }
+  return shadePrediction(scene, predictSurface(nodes, s, n, t));
+}
+
 /// The largest squared colour difference between pixel p of a key and its 4 neighbours there: what
 /// an edge through the pixel that moves by a pixel between the keys can change its colour by. The
 /// blend of an edge pixel's colours follows the edge's coverage only while the edge stays inside
@@ -343,6 +365,32 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
 
 namespace
 {
+
+/// Per pixel, whether the inner keys' records of it do not end alike.
+std::vector<std::uint8_t> disagreements(const std::vector<RayRecord>& ka,
+                                        const std::vector<RayRecord>& kb)
+{
+  std::vector<std::uint8_t> disagree(ka.size(), 0);
+  for (std::size_t p = 0; p < ka.size(); ++p)
+    disagree[p] = !endAlike(ka[p], kb[p]);
+  return disagree;
+}
+
+/// Whether pixel (i, j) or one of its 8 neighbours is one the inner keys disagree on: an edge
+/// that moved between the keys may cross it at t.
+bool nearDisagreement(const std::vector<std::uint8_t>& disagree, int i, int j, int width,
+                      int height)
+{
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di)
+    {
+      const int x = i + di, y = j + dj;
+      if (x >= 0 && x < width && y >= 0 && y < height &&
+          disagree[static_cast<std::size_t>(y) * width + x])
+        return true;
+    }
+  return false;
+}
 
 /// The pixels left to be re-traced, predicted where the keys' moved scene points cover them and
 /// the ways of predicting them give a finite estimate (PathEdges.h).
@@ -541,9 +589,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   const std::vector<RayRecord>& ka = *keys[a].records;
   const std::vector<RayRecord>& kb = *keys[a + 1].records;
   const bool nearerA = t - keys[a].s <= keys[a + 1].s - t;
-  std::vector<std::uint8_t> disagree(n, 0);
-  for (std::size_t p = 0; p < n; ++p)
-    disagree[p] = !endAlike(ka[p], kb[p]);
+  const std::vector<std::uint8_t> disagree = disagreements(ka, kb);
   f.records.resize(n);
   f.estimate.resize(n);
   f.method.resize(n);
@@ -569,16 +615,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
     for (int i = 0; i < width; ++i)
     {
       const std::size_t p = static_cast<std::size_t>(j) * width + i;
-      // An edge that moved between the keys may cross the disagreeing pixels' neighbours at t.
-      bool near = false;
-      for (int dj = -1; dj <= 1 && !near; ++dj)
-        for (int di = -1; di <= 1 && !near; ++di)
-        {
-          const int x = i + di, y = j + dj;
-          near = x >= 0 && x < width && y >= 0 && y < height &&
-                 disagree[static_cast<std::size_t>(y) * width + x];
-        }
-      if (near)
+      if (nearDisagreement(disagree, i, j, width, height))
       {
         f.records[p] = nearerA ? ka[p] : kb[p];
         f.estimate[p] = unknown;
@@ -618,6 +655,48 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
     f.leaveOneOutWeighed = !L.empty();
   }
   return f;
+}
+
+std::vector<Color> interpolatedColours(const std::vector<PathKey>& keys, double t, int width,
+                                       int height, const Scene& scene)
+{
+  checkKeys(keys, t, width, height);
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  std::size_t a = 0;
+  while (a + 2 < keys.size() && keys[a + 1].s <= t)
+    ++a;
+  std::vector<Color> colours(n);
+  for (const std::size_t k : { a, a + 1 })
+    if (keys[k].s == t)
+    {
+      for (std::size_t p = 0; p < n; ++p)
+        colours[p] = (*keys[k].records)[p].color;
+      return colours;
+    }
+  const std::vector<RayRecord>& ka = *keys[a].records;
+  const std::vector<RayRecord>& kb = *keys[a + 1].records;
+  const bool nearerA = t - keys[a].s <= keys[a + 1].s - t;
+  const std::vector<std::uint8_t> disagree = disagreements(ka, kb);
+  // interpolateAlongPath's loop, its records' colours alone: a pixel near a disagreement keeps
+  // the nearer key's record, the others are predicted (the surface alone, which is what the
+  // shading reads: predictSurface gives predictRecord's values of those fields).
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i)
+    {
+      const std::size_t p = static_cast<std::size_t>(j) * width + i;
+      if (nearDisagreement(disagree, i, j, width, height))
+      {
+        colours[p] = nearerA ? ka[p].color : kb[p].color;
+        continue;
+      }
+      PathMethod m;
+      float e;
+      colours[p] = !singleRay(ka[p]) || !singleRay(kb[p])
+                     ? predictEdgePixel(keys, a, p, t, width, height, scene, m, e, false).color
+                     : predictedColour(keys, a, p, t, scene);
+    }
+  return colours;
 }
 
 }

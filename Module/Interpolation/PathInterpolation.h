@@ -267,6 +267,15 @@ ASRTINTERPOLATION_EXPORT PathFrame interpolateAlongPath(const std::vector<PathKe
                                                         int width, int height, const Scene& scene,
                                                         const PathOptions& options);
 
+/// The colours of interpolateAlongPath's frame at t without moved edges and estimates
+/// (PathOptions::movedEdges and estimates off), the same bit for bit, and nothing else: for what
+/// reads the colours alone (the keys left out, LeaveOneOut.h). It skips what the frame's records,
+/// estimates and methods cost: a whole record written per pixel, and the shading of the lower
+/// orders. Throws as interpolateAlongPath does.
+ASRTINTERPOLATION_EXPORT std::vector<Color> interpolatedColours(const std::vector<PathKey>& keys,
+                                                                double t, int width, int height,
+                                                                const Scene& scene);
+
 /// What completing a path frame for a quality target did.
 struct PathCompletion
 {

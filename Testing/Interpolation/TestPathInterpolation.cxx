@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -412,6 +413,39 @@ TEST_F(PathInterpolationRamp, KeptCorrespondencesGiveTheSameFramesMatchingEachPa
   path[2].records = &changed;
   interpolateAlongPath(path, 0.72, Side, Side, scene, kept);
   EXPECT_EQ(kept.matchCache->made(), 5u);
+}
+
+// The colours alone (what the keys left out read) are the frame's colours bit for bit, with or
+// without its estimates, between every pair of keys, at an end of the keys and on a key; and the
+// frames compared hold every way of making a pixel that has a colour without moved edges.
+TEST_F(PathInterpolationRamp, TheColoursAloneAreTheFramesColoursBitForBit)
+{
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
+  const SceneDescription shading = rampScene(T, Side);
+  std::array<std::size_t, kPathMethodCount> seen{};
+  for (const double t : { 0.66, path[1].s, 0.72, 0.74, 0.79 })
+  {
+    const std::vector<Color> alone = interpolatedColours(path, t, Side, Side, *shading.scene);
+    for (const bool estimates : { false, true })
+    {
+      PathOptions options;
+      options.movedEdges = false;
+      options.estimates = estimates;
+      options.leaveOneOut = false;
+      const PathFrame f = interpolateAlongPath(path, t, Side, Side, *shading.scene, options);
+      ASSERT_EQ(alone.size(), f.records.size());
+      for (std::size_t p = 0; p < alone.size(); ++p)
+        ASSERT_EQ(alone[p], f.records[p].color) << "t = " << t << ", pixel " << p;
+      for (std::size_t p = 0; p < f.method.size(); ++p)
+        ++seen[f.method[p]];
+    }
+  }
+  for (const PathMethod m : { PathMethod::Key, PathMethod::Cubic, PathMethod::Quadratic,
+                              PathMethod::Linear, PathMethod::EdgeBlend, PathMethod::Retrace })
+    EXPECT_GT(seen[static_cast<int>(m)], 0u) << toString(m);
+  EXPECT_THROW(interpolatedColours(path, 0.6, Side, Side, *shading.scene), InvalidParameter);
 }
 
 TEST_F(PathInterpolationRamp, PredictedPixelsAreCloseAndTheEstimateFindsTheWorst)
