@@ -355,9 +355,12 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   const bool dropLeft = left && (!right || t - keys[range.first].s >= keys[range.last].s - t);
   const RayRecord other = range.beyond ? blend(0, count) : blend(dropLeft ? 1 : 0, n - 1);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
-  // roughly: the keys' colour step bounds what the edge's motion can change in between.
+  // roughly: the keys' colour step bounds what the edge's motion can change in between. The
+  // neighbours' contrast (a move by a whole pixel) is left out here: the outer keys' centre rays
+  // end as the inner keys' do, so the edge stayed within reach of the pixel over 3 or 4 keys. On
+  // the Kerr disk, whose edges barely move, it made the edge blends 2–4 % of the error and 50–60 %
+  // of the estimate, ranked above the moved edges that held over 90 % of it.
   estimate = std::max(colorError2(out.color, other.color), colorError2(ra.color, rb.color));
-  estimate = std::max(estimate, edgeContrast(*keys[nearerKey].records, p, width, height));
   return out;
 }
 

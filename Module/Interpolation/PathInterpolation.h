@@ -26,8 +26,9 @@
 //    rays end alike shows the average over the edge's two sides, which varies with s as the edge
 //    moves inside it: its centre ray is predicted and re-shaded as any pixel's, and what the keys'
 //    colours add to their centre rays' shades (the other side's share) is interpolated
-//    (EdgeBlend); the estimate is at least the keys' colour step and the nearer key's contrast
-//    with its 4 neighbours (what the edge moving by a pixel changes).
+//    (EdgeBlend); the estimate is at least the keys' colour step, and where the two inner keys
+//    alone end alike there, the nearer key's contrast with its 4 neighbours (what the edge moving
+//    by a pixel changes; with 3 or 4 keys, the edge stayed within reach of the pixel).
 //  - Estimate. The colour of the prediction of one order lower (the outer node farther from t
 //    dropped; for a linear prediction, the nearer key) differs from the prediction by about the
 //    lower order's error; at an end of the keys, one order higher (the key beyond joining)
