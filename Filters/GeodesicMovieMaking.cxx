@@ -89,14 +89,6 @@ std::string interpolationRecipe(const MovieSettings& settings)
          formatParameter(kMovieProbeFraction) + ", estimate scaled by its probes' ratio";
 }
 
-std::vector<int> keysAround(const std::vector<int>& keys, int k)
-{
-  const auto after = std::upper_bound(keys.begin(), keys.end(), k);
-  const auto from = after - std::min<std::ptrdiff_t>(2, after - keys.begin());
-  const auto to = after + std::min<std::ptrdiff_t>(2, keys.end() - after);
-  return std::vector<int>(from, to);
-}
-
 bool MovieMaking::cancelled() const
 {
   return maker.Settings.cancelled && maker.Settings.cancelled();

@@ -39,9 +39,6 @@ struct NotServed
 /// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame.
 std::string interpolationRecipe(const MovieSettings& settings);
 
-/// The keys of `keys` (sorted) that interpolating at frame k uses: the two on either side.
-std::vector<int> keysAround(const std::vector<int>& keys, int k);
-
 /// What a movie maker keeps between calls: the whole frames made and their rays, the pieces read
 /// or traced for interpolated frames, the plan's measurements, and what the store holds of them.
 struct MovieMaker::Internals

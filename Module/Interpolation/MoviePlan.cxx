@@ -589,4 +589,16 @@ MoviePlan planProgressively(const std::vector<double>& s, const std::vector<bool
   }
   return plan;
 }
+
+std::vector<int> keysAround(const std::vector<int>& keys, int k)
+{
+  const auto after = std::upper_bound(keys.begin(), keys.end(), k);
+  const std::ptrdiff_t before = after - keys.begin(), rest = keys.end() - after;
+  // Two on either side; a side short of two lends its places to the other.
+  const std::ptrdiff_t right =
+    std::min<std::ptrdiff_t>(rest, 4 - std::min<std::ptrdiff_t>(2, before));
+  const std::ptrdiff_t left = std::min<std::ptrdiff_t>(before, 4 - right);
+  return std::vector<int>(after - left, after + right);
+}
+
 }

@@ -118,6 +118,13 @@ ASRTINTERPOLATION_EXPORT MoviePlan planMovie(const std::vector<double>& s,
                                              const std::vector<bool>& stored,
                                              const MovieCostModel& model);
 
+/// The keys of `keys` (sorted, distinct) that interpolating frame k between them uses: the
+/// nearest 4, two on either side where there are two, and at an end of the keys the 4 there (or
+/// all, where there are fewer). At an end the key beyond the inner pair's outer neighbour does
+/// not join the prediction but measures the quadratic's error against the cubic through it
+/// (PathInterpolation.h), as vtkGeodesicPathInterpolator, given every key, measures it.
+ASRTINTERPOLATION_EXPORT std::vector<int> keysAround(const std::vector<int>& keys, int k);
+
 /// The plan whose keys are exactly the stored frames: every other frame interpolated between the
 /// stored frames before and after it, at no cost where `served[k]` (its re-traced pixels are
 /// stored for those keys already), else at its estimated share. None when the first or last

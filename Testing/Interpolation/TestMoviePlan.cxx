@@ -19,6 +19,7 @@
 namespace
 {
 using asrt::FrameMethod;
+using asrt::keysAround;
 
 std::vector<double> evenPath(int n, double from = 0.0, double to = 1.0)
 {
@@ -390,6 +391,40 @@ TEST(MoviePlan, ThePriorCountsTheEdgesAndTheInterpolation)
   asrt::MovieCostModel dear = model;
   dear.retraceShare = [](double, double, double) { return 0.36; };
   EXPECT_EQ(asrt::planMovie(evenPath(5), {}, dear).frames[2].method, FrameMethod::Traced);
+}
+
+// The keys a frame is interpolated from: the nearest 4, against every set of 4 consecutive keys
+// around the frame (brute force): two on either side inside, the 4 at an end, all where fewer.
+TEST(MoviePlan, FramesAreInterpolatedFromTheNearestFourKeys)
+{
+  const std::vector<int> keys = { 0, 3, 7, 8, 12, 20, 24 };
+  for (int k = 1; k < 24; ++k)
+  {
+    if (std::binary_search(keys.begin(), keys.end(), k))
+      continue;
+    const std::vector<int> around = keysAround(keys, k);
+    ASSERT_EQ(around.size(), 4u) << "frame " << k;
+    EXPECT_TRUE(std::is_sorted(around.begin(), around.end()));
+    EXPECT_LT(around[0], k);
+    EXPECT_GT(around[3], k);
+    // No other run of 4 consecutive keys bracketing k lies nearer: the farthest of its keys from
+    // k in index steps is the least, and the inner pair is always in.
+    const auto inner = std::upper_bound(keys.begin(), keys.end(), k) - keys.begin();
+    EXPECT_TRUE(std::count(around.begin(), around.end(), keys[inner - 1]) == 1 &&
+                std::count(around.begin(), around.end(), keys[inner]) == 1)
+      << "frame " << k;
+    const auto first = std::find(keys.begin(), keys.end(), around[0]) - keys.begin();
+    std::ptrdiff_t bestReach = 100;
+    for (std::ptrdiff_t f = 0; f + 4 <= static_cast<std::ptrdiff_t>(keys.size()); ++f)
+      if (f < inner && f + 3 >= inner)
+        bestReach = std::min(bestReach, std::max(inner - f, f + 4 - inner));
+    EXPECT_EQ(std::max(inner - first, first + 4 - inner), bestReach) << "frame " << k;
+  }
+  EXPECT_EQ(keysAround(keys, 1), (std::vector<int>{ 0, 3, 7, 8 }));
+  EXPECT_EQ(keysAround(keys, 10), (std::vector<int>{ 7, 8, 12, 20 }));
+  EXPECT_EQ(keysAround(keys, 22), (std::vector<int>{ 8, 12, 20, 24 }));
+  EXPECT_EQ(keysAround({ 0, 5, 9 }, 2), (std::vector<int>{ 0, 5, 9 }));
+  EXPECT_EQ(keysAround({ 0, 9 }, 4), (std::vector<int>{ 0, 9 }));
 }
 
 TEST(MoviePlan, RefusesBadInputNamingIt)
