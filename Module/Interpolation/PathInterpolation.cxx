@@ -180,11 +180,11 @@ NodeRange nodeRange(std::size_t keys, std::size_t a, Follows&& follows)
 
 /// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike
 /// (nodeRange); sets `estimate` as the header says.
-RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                       const Scene& scene, PathMethod& method, float& estimate,
-                       bool withEstimate = true)
+/// The nodes of pixel p's prediction from the inner pair (a, a + 1) (nodeRange: the outer keys
+/// whose single ray ends as the inner key's beside it), into `nodes` and `s`; returns the range.
+NodeRange pixelNodes(const std::vector<PathKey>& keys, std::size_t a, std::size_t p,
+                     const RayRecord* (&nodes)[4], double (&s)[4], int& n)
 {
-  const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
   const NodeRange range =
     nodeRange(keys.size(), a,
               [&](std::size_t outer, std::size_t beside)
@@ -192,17 +192,27 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
                 const RayRecord& r = (*keys[outer].records)[p];
                 return singleRay(r) && endAlike(r, (*keys[beside].records)[p]);
               });
-  const std::size_t first = range.first, last = range.last;
-  const bool left = first < a;
-  const bool right = last > a + 1;
-  const RayRecord* nodes[4];
-  double s[4];
-  int n = 0;
-  for (std::size_t k = first; k <= last; ++k)
+  n = 0;
+  for (std::size_t k = range.first; k <= range.last; ++k)
   {
     nodes[n] = &(*keys[k].records)[p];
     s[n++] = keys[k].s;
   }
+  return range;
+}
+
+RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                       const Scene& scene, PathMethod& method, float& estimate,
+                       bool withEstimate = true)
+{
+  const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
+  const RayRecord* nodes[4];
+  double s[4];
+  int n = 0;
+  const NodeRange range = pixelNodes(keys, a, p, nodes, s, n);
+  const std::size_t first = range.first, last = range.last;
+  const bool left = first < a;
+  const bool right = last > a + 1;
   RayRecord out = predictRecord(nodes, s, n, t);
   out.color = shadePrediction(scene, out);
   estimate = 0.0f;
@@ -250,21 +260,10 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
 Color predictedColour(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
                       const Scene& scene)
 {
-  const NodeRange range =
-    nodeRange(keys.size(), a,
-              [&](std::size_t outer, std::size_t beside)
-              {
-                const RayRecord& r = (*keys[outer].records)[p];
-                return singleRay(r) && endAlike(r, (*keys[beside].records)[p]);
-              });
   const RayRecord* nodes[4];
   double s[4];
   int n = 0;
-  for (std::size_t k = range.first; k <= range.last; ++k)
-  {
-    nodes[n] = &(*keys[k].records)[p];
-    s[n++] = keys[k].s;
-  }
+  pixelNodes(keys, a, p, nodes, s, n);
   return shadePrediction(scene, predictSurface(nodes, s, n, t));
 }
 
