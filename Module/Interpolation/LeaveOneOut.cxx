@@ -139,21 +139,24 @@ std::vector<float> leaveOneOutError(const std::vector<PathKey>& keys, double t, 
                       1);
 }
 
-void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L)
+void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L,
+                        const std::vector<std::uint8_t>& unweighed)
 {
   if (L.empty())
     return;
+  const auto weighed = [&](std::size_t p)
+  { return isPrediction(f.method[p]) && (unweighed.empty() || !unweighed[p]); };
   // The weights move each way's estimated error among its pixels without adding to it: the
   // way's total, which its probes calibrate, stays as it was.
   std::array<double, kPathMethodCount> before{}, after{};
   for (std::size_t p = 0; p < L.size(); ++p)
-    if (isPrediction(f.method[p]) && std::isfinite(f.estimate[p]))
+    if (weighed(p) && std::isfinite(f.estimate[p]))
     {
       before[f.method[p]] += f.estimate[p];
       after[f.method[p]] += f.estimate[p] * leaveOneOutWeight(L[p]);
     }
   for (std::size_t p = 0; p < L.size(); ++p)
-    if (isPrediction(f.method[p]) && after[f.method[p]] > 0)
+    if (weighed(p) && after[f.method[p]] > 0)
       f.estimate[p] = static_cast<float>(f.estimate[p] * leaveOneOutWeight(L[p]) *
                                          (before[f.method[p]] / after[f.method[p]]));
 }

@@ -50,8 +50,10 @@ inline float leaveOneOutWeight(float L)
 /// Weighs each predicted pixel's finite estimate by leaveOneOutWeight of its leave-one-out error
 /// `L` (one per pixel; empty: nothing to weigh), then scales each way of predicting's estimates so
 /// that their sum is the same as before: the order within a way changes, the way's total, which
-/// completePathFrame's probes calibrate, does not.
-ASRTINTERPOLATION_EXPORT void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L);
+/// completePathFrame's probes calibrate, does not. The pixels `unweighed` marks (one flag per
+/// pixel; empty: none) keep their estimates and count in no total.
+ASRTINTERPOLATION_EXPORT void weighByLeaveOneOut(PathFrame& f, const std::vector<float>& L,
+                                                 const std::vector<std::uint8_t>& unweighed = {});
 }
 
 #endif

@@ -178,38 +178,65 @@ NodeRange nodeRange(std::size_t keys, std::size_t a, Follows&& follows)
   return r;
 }
 
-/// The prediction of one pixel from the inner pair (a, a + 1) and the outer keys that end alike
-/// (nodeRange); sets `estimate` as the header says.
-/// The nodes of pixel p's prediction from the inner pair (a, a + 1) (nodeRange: the outer keys
-/// whose single ray ends as the inner key's beside it), into `nodes` and `s`; returns the range.
-NodeRange pixelNodes(const std::vector<PathKey>& keys, std::size_t a, std::size_t p,
-                     const RayRecord* (&nodes)[4], double (&s)[4], int& n)
+/// One pixel's records along the path, in order of s, that its prediction may run through: the
+/// keys' (KeyNodes), or the keys' and those of frames traced in part that hold the pixel
+/// (SampledNodes).
+struct KeyNodes
 {
-  const NodeRange range =
-    nodeRange(keys.size(), a,
-              [&](std::size_t outer, std::size_t beside)
-              {
-                const RayRecord& r = (*keys[outer].records)[p];
-                return singleRay(r) && endAlike(r, (*keys[beside].records)[p]);
-              });
+  const std::vector<PathKey>& keys;
+  std::size_t p;
+  std::size_t size() const { return keys.size(); }
+  double s(std::size_t k) const { return keys[k].s; }
+  const RayRecord& record(std::size_t k) const { return (*keys[k].records)[p]; }
+};
+
+/// At most this many records on either side of t join a pixel's chain of sampled nodes: the inner
+/// one, the outer one and the one beyond (nodeRange).
+constexpr std::size_t kSideNodes = 3;
+
+struct SampledNodes
+{
+  std::size_t count = 0;
+  double at[2 * kSideNodes];
+  const RayRecord* records[2 * kSideNodes];
+  std::size_t size() const { return count; }
+  double s(std::size_t k) const { return at[k]; }
+  const RayRecord& record(std::size_t k) const { return *records[k]; }
+};
+
+/// The nodes of a pixel's prediction from the inner pair (a, a + 1) of its records `chain`
+/// (nodeRange: the outer records whose single ray ends as the inner one's beside it), into
+/// `nodes` and `s`; returns the range.
+template<typename Nodes>
+NodeRange pixelNodes(const Nodes& chain, std::size_t a, const RayRecord* (&nodes)[4],
+                     double (&s)[4], int& n)
+{
+  const NodeRange range = nodeRange(chain.size(), a,
+                                    [&](std::size_t outer, std::size_t beside)
+                                    {
+                                      const RayRecord& r = chain.record(outer);
+                                      return singleRay(r) && endAlike(r, chain.record(beside));
+                                    });
   n = 0;
   for (std::size_t k = range.first; k <= range.last; ++k)
   {
-    nodes[n] = &(*keys[k].records)[p];
-    s[n++] = keys[k].s;
+    nodes[n] = &chain.record(k);
+    s[n++] = chain.s(k);
   }
   return range;
 }
 
-RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                       const Scene& scene, PathMethod& method, float& estimate,
-                       bool withEstimate = true)
+/// The prediction of one pixel from the inner pair (a, a + 1) of its records `chain` and the
+/// outer ones that end alike (nodeRange); sets `estimate` as the header says.
+template<typename Nodes>
+RayRecord predictPixel(const Nodes& chain, std::size_t a, double t, const Scene& scene,
+                       PathMethod& method, float& estimate, bool withEstimate = true)
 {
-  const RayRecord* inner[2] = { &(*keys[a].records)[p], &(*keys[a + 1].records)[p] };
+  const RayRecord* inner[2] = { &chain.record(a), &chain.record(a + 1) };
   const RayRecord* nodes[4];
   double s[4];
   int n = 0;
-  const NodeRange range = pixelNodes(keys, a, p, nodes, s, n);
+  const NodeRange range = pixelNodes(chain, a, nodes, s, n);
   const std::size_t first = range.first, last = range.last;
   const bool left = first < a;
   const bool right = last > a + 1;
@@ -223,10 +250,10 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   }
   if (n == 2)
   {
-    // One order lower is the nearer key itself: its (u, v) shows how far the pixel moved on the
-    // texture, and the keys' colour step what lies along the way.
+    // One order lower is the nearer record itself: its (u, v) shows how far the pixel moved on
+    // the texture, and the records' colour step what lies along the way.
     method = PathMethod::Linear;
-    const RayRecord& nearer = t - keys[a].s <= keys[a + 1].s - t ? *inner[0] : *inner[1];
+    const RayRecord& nearer = t - chain.s(a) <= chain.s(a + 1) - t ? *inner[0] : *inner[1];
     estimate =
       std::max(colorError2(inner[0]->color, inner[1]->color), predictionError(scene, out, nearer));
     return out;
@@ -234,12 +261,12 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
   method = n == 4 ? PathMethod::Cubic : PathMethod::Quadratic;
   if (range.beyond)
   {
-    // At an end of the keys: the quadratic against the cubic through the key beyond too.
+    // At an end of the chain: the quadratic against the cubic through the record beyond too.
     const RayRecord* all[4];
     double at[4];
     const int shift = *range.beyond < first ? 1 : 0;
-    all[shift ? 0 : 3] = &(*keys[*range.beyond].records)[p];
-    at[shift ? 0 : 3] = keys[*range.beyond].s;
+    all[shift ? 0 : 3] = &chain.record(*range.beyond);
+    at[shift ? 0 : 3] = chain.s(*range.beyond);
     for (int k = 0; k < 3; ++k)
     {
       all[k + shift] = nodes[k];
@@ -249,11 +276,18 @@ RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::siz
     return out;
   }
   // One order lower: without the outer node farther from t (the left one on a tie).
-  const bool dropLeft = left && (!right || t - keys[first].s >= keys[last].s - t);
+  const bool dropLeft = left && (!right || t - chain.s(first) >= chain.s(last) - t);
   const int offset = dropLeft ? 1 : 0;
   const RayRecord lower = predictSurface(nodes + offset, s + offset, n - 1, t);
   estimate = predictionError(scene, out, lower);
   return out;
+}
+
+RayRecord predictPixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                       const Scene& scene, PathMethod& method, float& estimate,
+                       bool withEstimate = true)
+{
+  return predictPixel(KeyNodes{ keys, p }, a, t, scene, method, estimate, withEstimate);
 }
 
 /// predictPixel's colour alone: the surface its nodes predict (predictSurface), shaded.
@@ -263,7 +297,7 @@ Color predictedColour(const std::vector<PathKey>& keys, std::size_t a, std::size
   const RayRecord* nodes[4];
   double s[4];
   int n = 0;
-  pixelNodes(keys, a, p, nodes, s, n);
+  pixelNodes(KeyNodes{ keys, p }, a, nodes, s, n);
   return shadePrediction(scene, predictSurface(nodes, s, n, t));
 }
 
@@ -294,16 +328,17 @@ float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, 
 /// orbit, with the edges in place) only the other side's share of its motion is left to the
 /// interpolation, not the whole of it; where the edge moves, the rest follows α as the colour
 /// itself would. The record is the centre ray's prediction, colour aside.
-RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                           int width, int height, const Scene& scene, PathMethod& method,
-                           float& estimate, bool withEstimate = true)
+template<typename Nodes, typename Contrast>
+RayRecord predictEdgePixel(const Nodes& chain, std::size_t a, double t, const Scene& scene,
+                           PathMethod& method, float& estimate, bool withEstimate,
+                           Contrast&& contrastOfNearer)
 {
-  const RayRecord& ra = (*keys[a].records)[p];
-  const RayRecord& rb = (*keys[a + 1].records)[p];
-  const NodeRange range =
-    nodeRange(keys.size(), a,
-              [&](std::size_t outer, std::size_t beside)
-              { return endAlike((*keys[outer].records)[p], (*keys[beside].records)[p]); });
+  const RayRecord& ra = chain.record(a);
+  const RayRecord& rb = chain.record(a + 1);
+  const NodeRange range = nodeRange(chain.size(), a,
+                                    [&](std::size_t outer, std::size_t beside) {
+                                      return endAlike(chain.record(outer), chain.record(beside));
+                                    });
   // The nodes, and at an end of the keys the key beyond before or after them: n of them from
   // `offset` on predict, all `count` measure the estimate.
   const std::size_t first =
@@ -318,9 +353,9 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   int count = 0;
   for (std::size_t k = first; k <= last; ++k)
   {
-    nodes[count] = &(*keys[k].records)[p];
+    nodes[count] = &chain.record(k);
     rest[count] = nodes[count]->color - shadePrediction(scene, *nodes[count]);
-    s[count++] = keys[k].s;
+    s[count++] = chain.s(k);
   }
   const int n = static_cast<int>(range.last - range.first) + 1;
   // The prediction through the nodes from `offset` on, `count` of them.
@@ -334,24 +369,23 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
     centre.color = out.cwiseMax(0.0).cwiseMin(1.0);
     return centre;
   };
-  const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
+  const std::size_t nearer = t - chain.s(a) <= chain.s(a + 1) - t ? a : a + 1;
   RayRecord out = blend(offset, n);
   // The record is the centre ray's prediction at t; its rays are the nearer key's (the
   // anti-aliasing an edge pixel took).
-  out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
+  out.raysPerPixel = chain.record(nearer).raysPerPixel;
   method = PathMethod::EdgeBlend;
   estimate = 0.0f;
   if (!withEstimate)
     return out;
   if (n == 2)
   {
-    estimate = std::max(colorError2(ra.color, rb.color),
-                        edgeContrast(*keys[nearerKey].records, p, width, height));
+    estimate = std::max(colorError2(ra.color, rb.color), contrastOfNearer(nearer));
     return out;
   }
   // One order lower: without the outer node farther from t; at an end of the keys one higher,
   // through the key beyond too.
-  const bool dropLeft = left && (!right || t - keys[range.first].s >= keys[range.last].s - t);
+  const bool dropLeft = left && (!right || t - chain.s(range.first) >= chain.s(range.last) - t);
   const RayRecord other = range.beyond ? blend(0, count) : blend(dropLeft ? 1 : 0, n - 1);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
   // roughly: the keys' colour step bounds what the edge's motion can change in between. The
@@ -361,6 +395,15 @@ RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std:
   // of the estimate, ranked above the moved edges that held over 90 % of it.
   estimate = std::max(colorError2(out.color, other.color), colorError2(ra.color, rb.color));
   return out;
+}
+
+RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                           int width, int height, const Scene& scene, PathMethod& method,
+                           float& estimate, bool withEstimate = true)
+{
+  return predictEdgePixel(KeyNodes{ keys, p }, a, t, scene, method, estimate, withEstimate,
+                          [&](std::size_t nearer)
+                          { return edgeContrast(*keys[nearer].records, p, width, height); });
 }
 
 }
@@ -392,6 +435,190 @@ bool nearDisagreement(const std::vector<std::uint8_t>& disagree, int i, int j, i
         return true;
     }
   return false;
+}
+
+void checkSamples(const std::vector<std::shared_ptr<const PathSamples>>& samples, int width,
+                  int height)
+{
+  const std::int64_t n = static_cast<std::int64_t>(width) * height;
+  for (std::size_t k = 0; k < samples.size(); ++k)
+  {
+    const std::string which = "sample frame " + std::to_string(k);
+    if (!samples[k])
+      invalid(which + " is null");
+    const PathSamples& f = *samples[k];
+    if (!std::isfinite(f.s))
+      invalid(which + ": its parameter s must be finite");
+    if (f.records.size() != f.pixels.size())
+      invalid(which + " has " + std::to_string(f.records.size()) + " records for " +
+              std::to_string(f.pixels.size()) + " pixels");
+    for (std::size_t r = 0; r < f.pixels.size(); ++r)
+    {
+      const std::int32_t p = f.pixels[r];
+      if (p < 0 || p >= n || (r > 0 && p <= f.pixels[r - 1]))
+        invalid(which + ": its pixels must be strictly ascending indices of the " +
+                std::to_string(width) + " x " + std::to_string(height) + " frame (entry " +
+                std::to_string(r) + " is " + std::to_string(p) + ")");
+      if (f.records[r].i != p % width || f.records[r].j != p / width)
+        invalid(which + ": record " + std::to_string(r) + " is pixel (" +
+                std::to_string(f.records[r].i) + ", " + std::to_string(f.records[r].j) +
+                "), not pixel " + std::to_string(p) + "'s");
+    }
+  }
+}
+
+/// A frame a pixel's chain may draw on: a key (every pixel) or a frame traced in part.
+struct ChainSource
+{
+  double s = 0;
+  const std::vector<RayRecord>* key = nullptr;
+  const PathSamples* samples = nullptr;
+  /// Pixel p's record here, or null where this frame did not trace it.
+  const RayRecord* record(std::size_t p) const
+  {
+    if (key)
+      return &(*key)[p];
+    const auto it =
+      std::lower_bound(samples->pixels.begin(), samples->pixels.end(), std::int32_t(p));
+    return it != samples->pixels.end() && *it == std::int32_t(p)
+             ? &samples->records[static_cast<std::size_t>(it - samples->pixels.begin())]
+             : nullptr;
+  }
+};
+
+/// The keys and the samples strictly between the inner keys (a, a + 1) other than at t, in order
+/// of s; `below` is the number of them before t.
+std::vector<ChainSource> chainSources(
+  const std::vector<PathKey>& keys, std::size_t a, double t,
+  const std::vector<std::shared_ptr<const PathSamples>>& samples, std::size_t& below)
+{
+  std::vector<ChainSource> sources;
+  for (const PathKey& key : keys)
+    sources.push_back({ key.s, key.records, nullptr });
+  for (const auto& f : samples)
+    if (f->s > keys[a].s && f->s < keys[a + 1].s && f->s != t)
+      sources.push_back({ f->s, nullptr, f.get() });
+  // Two samples at one s: the first given stands (a stable sort keeps them in order).
+  std::stable_sort(sources.begin(), sources.end(),
+                   [](const ChainSource& x, const ChainSource& y) { return x.s < y.s; });
+  sources.erase(std::unique(sources.begin(), sources.end(),
+                            [](const ChainSource& x, const ChainSource& y) { return x.s == y.s; }),
+                sources.end());
+  below = static_cast<std::size_t>(std::lower_bound(sources.begin(), sources.end(), t,
+                                                    [](const ChainSource& x, double v)
+                                                    { return x.s < v; }) -
+                                   sources.begin());
+  return sources;
+}
+
+/// Pixel p predicted from its chain (the header's Chains paragraph), where its chain vouches for
+/// it: the records of `sources` that hold it, at most kSideNodes on either side of t. `retrace`
+/// marks the pixels the keys cannot vouch for.
+bool predictFromChain(const std::vector<ChainSource>& sources, std::size_t below, std::size_t p,
+                      int width, int height, const std::vector<std::uint8_t>& retrace, double t,
+                      const Scene& scene, bool withEstimate, RayRecord& out, PathMethod& method,
+                      float& estimate)
+{
+  SampledNodes lower, upper; // nearest first
+  std::size_t from[2] = { 0, 0 };
+  for (std::size_t k = below; k-- > 0 && lower.count < kSideNodes;)
+    if (const RayRecord* r = sources[k].record(p))
+    {
+      if (lower.count == 0)
+        from[0] = k;
+      lower.at[lower.count] = sources[k].s;
+      lower.records[lower.count++] = r;
+    }
+  for (std::size_t k = below; k < sources.size() && upper.count < kSideNodes; ++k)
+    if (const RayRecord* r = sources[k].record(p))
+    {
+      if (upper.count == 0)
+        from[1] = k;
+      upper.at[upper.count] = sources[k].s;
+      upper.records[upper.count++] = r;
+    }
+  if (lower.count == 0 || upper.count == 0 || (sources[from[0]].key && sources[from[1]].key))
+    return false; // the keys themselves are the inner pair: they did not vouch for it
+  const RayRecord &lo = *lower.records[0], &hi = *upper.records[0];
+  if (!endAlike(lo, hi))
+    return false;
+  const int i = static_cast<int>(p % width), j = static_cast<int>(p / width);
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di)
+    {
+      const int x = i + di, y = j + dj;
+      if ((di == 0 && dj == 0) || x < 0 || x >= width || y < 0 || y >= height)
+        continue;
+      const std::size_t q = static_cast<std::size_t>(y) * width + x;
+      if (!retrace[q])
+        continue;
+      const RayRecord *qlo = sources[from[0]].record(q), *qhi = sources[from[1]].record(q);
+      if (!qlo || !qhi || !endAlike(*qlo, *qhi))
+        return false;
+    }
+  SampledNodes chain;
+  for (std::size_t k = lower.count; k-- > 0;)
+  {
+    chain.at[chain.count] = lower.at[k];
+    chain.records[chain.count++] = lower.records[k];
+  }
+  for (std::size_t k = 0; k < upper.count; ++k)
+  {
+    chain.at[chain.count] = upper.at[k];
+    chain.records[chain.count++] = upper.records[k];
+  }
+  const std::size_t a = lower.count - 1;
+  if (singleRay(lo) && singleRay(hi))
+  {
+    out = predictPixel(chain, a, t, scene, method, estimate, withEstimate);
+    return true;
+  }
+  // An edge runs through the pixel: blended as a key's edge pixel is, where an outer record ends
+  // alike too (two records alone would need the neighbours' contrast, which a frame traced in part
+  // may not hold).
+  const NodeRange range = nodeRange(chain.size(), a,
+                                    [&](std::size_t outer, std::size_t beside) {
+                                      return endAlike(chain.record(outer), chain.record(beside));
+                                    });
+  if (range.last - range.first < 2)
+    return false;
+  out = predictEdgePixel(chain, a, t, scene, method, estimate, withEstimate,
+                         [](std::size_t) { return std::numeric_limits<float>::infinity(); });
+  return true;
+}
+
+/// The pixels the inner keys (a, a + 1) cannot vouch for, predicted from their chains where those
+/// vouch for them (predictFromChain); marks them in `chained`.
+void predictChains(const std::vector<PathKey>& keys, std::size_t a, double t, const Scene& scene,
+                   const PathOptions& options, PathFrame& f, std::vector<std::uint8_t>& chained)
+{
+  std::size_t below = 0;
+  const std::vector<ChainSource> sources = chainSources(keys, a, t, options.samples, below);
+  if (sources.size() == keys.size())
+    return; // no sample between the inner keys
+  const std::size_t n = f.method.size();
+  std::vector<std::uint8_t> retrace(n, 0);
+  for (std::size_t p = 0; p < n; ++p)
+    retrace[p] = f.method[p] == static_cast<std::uint8_t>(PathMethod::Retrace);
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i)
+    {
+      const std::size_t p = static_cast<std::size_t>(j) * f.width + i;
+      if (!retrace[p])
+        continue;
+      RayRecord out;
+      PathMethod m;
+      float e = 0.0f;
+      if (predictFromChain(sources, below, p, f.width, f.height, retrace, t, scene,
+                           options.estimates, out, m, e))
+      {
+        f.records[p] = out;
+        f.estimate[p] = e;
+        f.method[p] = static_cast<std::uint8_t>(m);
+        chained[p] = 1;
+      }
+    }
 }
 
 /// The pixels left to be re-traced, predicted where the keys' moved scene points cover them and
@@ -566,6 +793,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
                                const Scene& scene, const PathOptions& options)
 {
   checkKeys(keys, t, width, height);
+  checkSamples(options.samples, width, height);
   if (options.movedEdges && !options.pointIndex)
     invalid("PathOptions::pointIndex is empty: moved edges need a point index");
   if (!(options.keyResidualShare >= 0.0 && options.keyResidualShare <= 1.0))
@@ -639,6 +867,12 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
         f.records[p] = predictPixel(keys, a, p, t, scene, m, f.estimate[p], options.estimates);
       f.method[p] = static_cast<std::uint8_t>(m);
     }
+  std::vector<std::uint8_t> chained; // pixels predicted from their chains, not weighed
+  if (!options.samples.empty())
+  {
+    chained.assign(n, 0);
+    predictChains(keys, a, t, scene, options, f, chained);
+  }
   // The kept correspondences and leave-one-out errors are both looked up by the keys'
   // fingerprints: each key's made once here, where the caller did not give it.
   const bool weighed = options.leaveOneOut && options.estimates; // the weights weigh the estimates
@@ -653,7 +887,7 @@ PathFrame interpolateAlongPath(const std::vector<PathKey>& keys, double t, int w
   if (weighed)
   {
     const std::vector<float> L = leaveOneOutError(keyed, t, width, height, scene, options);
-    weighByLeaveOneOut(f, L);
+    weighByLeaveOneOut(f, L, chained);
     f.leaveOneOutWeighed = !L.empty();
   }
   return f;

@@ -14,6 +14,15 @@
 //    PathMethod::MovedEdge, or MovedSurface where no edge lies within a pixel of the pixel at t),
 //    and re-traced where no moved point covers them (or, without PathOptions::movedEdges, all
 //    re-traced).
+//  - Chains. Frames between the keys that were traced in part (PathSamples: the pixels another
+//    frame re-traced) hold exact records of some pixels nearer t than the keys. A pixel the inner
+//    keys cannot vouch for is predicted from its chain of records, the keys' and those, in order
+//    of s: the nearest record on either side of t is its inner pair, and the outer ones join as
+//    above. It is vouched for where its inner pair is two single rays that end alike, and each of
+//    its 8 neighbours either ends alike in the same two frames or is one the keys vouch for (an
+//    edge that crossed the pixel between the inner pair would show on one of them). Its estimate
+//    is a prediction's, from the chain; the keys' leave-one-out errors do not weigh it (they
+//    measure the keys' spacing, not the chain's).
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
@@ -82,6 +91,16 @@ struct PathKey
   /// matchingFingerprint(*records), where the caller keeps it for keys it passes again and again
   /// (0: computed where it is needed).
   std::uint64_t fingerprint = 0;
+};
+
+/// Some pixels of a frame of the path traced at s: the pixels a frame between keys re-traced. Their
+/// records are exact, as a key's are, and join each of those pixels' chain of nodes beside the
+/// keys' (PathOptions::samples).
+struct PathSamples
+{
+  double s = 0;
+  std::vector<std::int32_t> pixels; ///< strictly ascending pixel indices, j · width + i
+  std::vector<RayRecord> records;   ///< one per pixel, in that order
 };
 
 /// How a pixel of a path frame got its record.
@@ -259,6 +278,12 @@ struct PathOptions
   /// Where the keys' leave-one-out errors are kept between frames (null: made afresh for each).
   /// The frames are the same either way.
   std::shared_ptr<LeaveOneOutCache> leaveOneOutCache;
+  /// Frames of the path traced in part (the pixels other frames between the keys re-traced), at
+  /// parameters other than t and the keys'. A pixel the inner keys cannot vouch for is predicted
+  /// from its own records, the keys' and these, where the nearest two around t end alike: what an
+  /// edge did between the keys, records nearer t may show it did not do there (the Chains
+  /// paragraph of this header). Samples outside the inner keys are not read.
+  std::vector<std::shared_ptr<const PathSamples>> samples;
 };
 
 /// The frame at t from the keys (at least 2, their s strictly increasing, t within

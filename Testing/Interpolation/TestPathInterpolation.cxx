@@ -897,3 +897,213 @@ TEST(PathInterpolationOrbit, EdgePixelsFollowATextureTurningUnderEdgesThatStay)
   ASSERT_GT(edges, 100u) << "no edge pixels: this test checks nothing";
   EXPECT_LT(predicted, 0.25 * colours);
 }
+
+namespace
+{
+/// Pixel (i, j)'s record on object 1 whose fields are the given polynomials of s (syntheticRecord),
+/// or its ray escaped where `escaped`.
+RayRecord syntheticPixel(int i, int j, double s, bool escaped)
+{
+  const std::vector<double> u = { 0.93, 0.2, -0.05, 0.03 }, v = { 0.2, 0.3, 0.1, -0.08 };
+  RayRecord r = syntheticRecord(s + 0.01 * (i + 4 * j), u, v);
+  r.i = i;
+  r.j = j;
+  if (escaped)
+  {
+    r.termination = Termination::Escaped;
+    r.objectId = -1;
+  }
+  return r;
+}
+
+/// A side × side frame of syntheticPixel records at s.
+std::vector<RayRecord> syntheticFrame(int side, double s, bool escaped)
+{
+  std::vector<RayRecord> f;
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+      f.push_back(syntheticPixel(i, j, s, escaped));
+  return f;
+}
+
+/// Every pixel of a side × side frame at s, as a frame traced in part.
+std::shared_ptr<PathSamples> wholeSamples(int side, double s)
+{
+  auto f = std::make_shared<PathSamples>();
+  f->s = s;
+  f->records = syntheticFrame(side, s, false);
+  for (int p = 0; p < side * side; ++p)
+    f->pixels.push_back(p);
+  return f;
+}
+}
+
+// Keys whose inner pair disagrees everywhere (the surface at s = 0, the rays escaped at s = 1):
+// the keys vouch for no pixel. Frames traced in part between them hold the surface nearer t,
+// and each pixel's chain through them and the keys that end alike is exact for a cubic in s.
+TEST(PathInterpolationChains, ChainsThroughFramesTracedInPartAreExactForCubics)
+{
+  constexpr int side = 5;
+  const SceneDescription d = rampScene(0.5, 8);
+  std::vector<std::vector<RayRecord>> keyRecords = { syntheticFrame(side, -1.0, false),
+                                                     syntheticFrame(side, 0.0, false),
+                                                     syntheticFrame(side, 1.0, true),
+                                                     syntheticFrame(side, 2.0, true) };
+  std::vector<PathKey> keys;
+  for (std::size_t k = 0; k < 4; ++k)
+    keys.push_back({ static_cast<double>(k) - 1.0, &keyRecords[k] });
+  PathOptions options;
+  options.movedEdges = false;
+  options.leaveOneOut = false;
+  const double t = 0.45;
+  const PathFrame plain = interpolateAlongPath(keys, t, side, side, *d.scene, options);
+  EXPECT_EQ(plain.counts()[static_cast<std::size_t>(PathMethod::Retrace)],
+            static_cast<std::size_t>(side * side));
+  options.samples = { wholeSamples(side, 0.3), wholeSamples(side, 0.5), wholeSamples(side, 0.6) };
+  const PathFrame chained = interpolateAlongPath(keys, t, side, side, *d.scene, options);
+  ASSERT_EQ(chained.counts()[static_cast<std::size_t>(PathMethod::Cubic)],
+            static_cast<std::size_t>(side * side));
+  for (std::size_t p = 0; p < chained.records.size(); ++p)
+  {
+    // Nodes 0, 0.3, 0.5 and 0.6: the key at 1 ends otherwise and the one at −1 lies beyond.
+    const RayRecord exact =
+      syntheticPixel(static_cast<int>(p % side), static_cast<int>(p / side), t, false);
+    EXPECT_NEAR(chained.records[p].u, exact.u, 1e-12) << p;
+    EXPECT_NEAR(chained.records[p].v, exact.v, 1e-12) << p;
+    EXPECT_NEAR(chained.records[p].dvdj, exact.dvdj, 1e-12) << p;
+    EXPECT_NEAR(chained.records[p].hitPoint.x(), exact.hitPoint.x(), 1e-12) << p;
+    EXPECT_EQ(chained.records[p].color, shadePrediction(*d.scene, chained.records[p])) << p;
+    // The estimate is the quadratic's error (the node farther from t, at 0, dropped): not zero
+    // for a cubic, and exactly the colour the quadratic's surface shades to, or more.
+    EXPECT_GT(chained.estimate[p], 0.0f) << p;
+  }
+  // A frame traced in part at t itself is not a node (it would be the frame), nor one outside
+  // the inner keys.
+  auto atT = std::make_shared<PathSamples>(*wholeSamples(side, t));
+  for (RayRecord& r : atT->records)
+    r.objectId = 2;
+  auto outside = std::make_shared<PathSamples>(*wholeSamples(side, -0.5));
+  for (RayRecord& r : outside->records)
+    r.objectId = 3;
+  PathOptions more = options;
+  more.samples.push_back(atT);
+  more.samples.push_back(outside);
+  const PathFrame same = interpolateAlongPath(keys, t, side, side, *d.scene, more);
+  for (std::size_t p = 0; p < same.records.size(); ++p)
+    ASSERT_EQ(same.records[p].color, chained.records[p].color) << p;
+
+  // The surface gone at pixel (1, 1) by s = 0.5: the inner pair there disagrees, and an edge
+  // between the two frames may cross its 8 neighbours at t too. The pixels beyond are vouched for.
+  auto edge = std::make_shared<PathSamples>(*wholeSamples(side, 0.5));
+  edge->records[static_cast<std::size_t>(1 + side)] = syntheticPixel(1, 1, 0.5, true);
+  options.samples = { wholeSamples(side, 0.3), edge, wholeSamples(side, 0.6) };
+  const PathFrame guarded = interpolateAlongPath(keys, t, side, side, *d.scene, options);
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+    {
+      const bool near = i <= 2 && j <= 2;
+      EXPECT_EQ(guarded.method[static_cast<std::size_t>(i + side * j)] ==
+                  static_cast<std::uint8_t>(PathMethod::Retrace),
+                near)
+        << i << ", " << j;
+    }
+}
+
+TEST(PathInterpolationChains, BadFramesTracedInPartAreRefusedByName)
+{
+  constexpr int side = 3;
+  const SceneDescription d = rampScene(0.5, 8);
+  std::vector<std::vector<RayRecord>> keyRecords = { syntheticFrame(side, 0.0, false),
+                                                     syntheticFrame(side, 1.0, true) };
+  const std::vector<PathKey> keys = { { 0.0, &keyRecords[0] }, { 1.0, &keyRecords[1] } };
+  PathOptions options;
+  options.movedEdges = false;
+  options.leaveOneOut = false;
+  auto refused = [&](const std::shared_ptr<PathSamples>& f)
+  {
+    PathOptions o = options;
+    o.samples = { wholeSamples(side, 0.25), f };
+    return errorOf([&] { interpolateAlongPath(keys, 0.5, side, side, *d.scene, o); });
+  };
+  auto f = wholeSamples(side, 0.75);
+  EXPECT_EQ(refused(f), "");
+  auto unsorted = wholeSamples(side, 0.75);
+  std::swap(unsorted->pixels[2], unsorted->pixels[3]);
+  std::swap(unsorted->records[2], unsorted->records[3]);
+  EXPECT_NE(refused(unsorted).find("sample frame 1: its pixels must be strictly ascending"),
+            std::string::npos)
+    << refused(unsorted);
+  auto outside = wholeSamples(side, 0.75);
+  outside->pixels.back() = side * side;
+  EXPECT_NE(refused(outside).find("sample frame 1: its pixels"), std::string::npos);
+  auto misplaced = wholeSamples(side, 0.75);
+  misplaced->records[4].i = 0;
+  EXPECT_NE(refused(misplaced).find("sample frame 1: record 4 is pixel (0, 1)"), std::string::npos)
+    << refused(misplaced);
+  auto short_ = wholeSamples(side, 0.75);
+  short_->records.pop_back();
+  EXPECT_NE(refused(short_).find("sample frame 1 has 8 records for 9 pixels"), std::string::npos);
+  auto nan = wholeSamples(side, std::nan(""));
+  EXPECT_NE(refused(nan).find("sample frame 1: its parameter s must be finite"), std::string::npos);
+  EXPECT_NE(refused(nullptr).find("sample frame 1 is null"), std::string::npos);
+}
+
+// The mass ramp: the frame at T between keys 0.05 apart, completed to a target against the frame
+// the test traces there, once from the keys alone and once with the pixels a frame nearer the
+// next key re-traced (completed first, as a movie makes its frames). Those hold edges nearer T:
+// fewer pixels must be re-traced, and the pixels they let it predict are close to the truth.
+TEST_F(PathInterpolationRamp, PixelsAnotherFrameReTracedLetTheFramePredictMore)
+{
+  const double target = 35.0;
+  const double nearer = 0.735;
+  std::vector<PathKey> path;
+  for (int k = 0; k < 4; ++k)
+    path.push_back({ 0.65 + 0.05 * k, &keys()[static_cast<std::size_t>(k)] });
+  auto retracer = [](double s)
+  {
+    SceneDescription d = rampScene(s, Side);
+    d.rendering = scatteredPixelRendering(d.rendering);
+    return d;
+  };
+  PathOptions options;
+  options.movedEdges = false;
+  PathFrame first =
+    interpolateAlongPath(path, nearer, Side, Side, *rampScene(nearer, Side).scene, options);
+  completePathFrame(first, FrameTracer(retracer(nearer)), target);
+  auto samples = std::make_shared<PathSamples>();
+  samples->s = nearer;
+  for (std::size_t p = 0; p < first.records.size(); ++p)
+    if (first.method[p] == static_cast<std::uint8_t>(PathMethod::Retraced))
+    {
+      samples->pixels.push_back(static_cast<std::int32_t>(p));
+      samples->records.push_back(first.records[p]);
+    }
+  const SceneDescription atT = rampScene(T, Side);
+  const Scene& scene = *atT.scene;
+  const PathFrame alone = interpolateAlongPath(path, T, Side, Side, scene, options);
+  PathOptions chained = options;
+  chained.samples = { samples };
+  PathFrame with = interpolateAlongPath(path, T, Side, Side, scene, chained);
+  const std::size_t retrace = static_cast<std::size_t>(PathMethod::Retrace);
+  double sum = 0;
+  std::size_t gained = 0;
+  for (std::size_t p = 0; p < with.records.size(); ++p)
+    if (alone.method[p] == retrace && with.method[p] != retrace)
+    {
+      ++gained;
+      sum += error2(with.records[p], truth()[p]);
+    }
+  const double gainedPsnr = 10.0 * std::log10(255.0 * 255.0 * 3.0 * gained / sum);
+  std::printf("[ path ] %zu pixels to re-trace from the keys alone, %zu with %zu pixels re-traced "
+              "at %.3f; the %zu predicted instead score %.1f dB against the traced frame\n",
+              alone.counts()[retrace], with.counts()[retrace], samples->pixels.size(), nearer,
+              gained, gainedPsnr);
+  EXPECT_LT(with.counts()[retrace] * 20, alone.counts()[retrace] * 19); // 5 % fewer at least
+  EXPECT_GT(gainedPsnr, target + 3.0);
+  const FrameTracer tracer(retracer(T));
+  const PathCompletion done = completePathFrame(with, tracer, target);
+  const double psnr = psnrOf(with.records, truth());
+  std::printf("[ path ] completed to %.0f dB with them: %.1f dB, %zu re-traced\n", target, psnr,
+              done.retraced);
+  EXPECT_GE(psnr, target - 1.0);
+}
