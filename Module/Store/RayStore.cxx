@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <iterator>
 #include <utility>
 
 namespace asrt
@@ -875,6 +876,39 @@ try
 catch (...)
 {
   storage::rethrowReadFailure(this->P->Limits);
+}
+
+std::vector<RayRecord> RayStore::readSubsetRecords(const SceneDescription& scene)
+{
+  std::vector<std::int64_t> ids;
+  try
+  {
+    const storage::SceneTexts texts = storage::sceneTexts(scene);
+    const storage::ReadScope read({ this->P->connected() }, this->P->Limits);
+    this->P->requireSchema();
+    ids = storage::subsetFrameIds(this->P->conn(), texts, scene);
+  }
+  catch (...)
+  {
+    storage::rethrowReadFailure(this->P->Limits);
+  }
+  std::vector<RayRecord> records;
+  for (std::int64_t id : ids)
+  {
+    std::vector<RayRecord> frame = this->readFrame(id);
+    records.insert(records.end(), std::make_move_iterator(frame.begin()),
+                   std::make_move_iterator(frame.end()));
+  }
+  // Ordered by pixel, the first stored of each pixel first (a stable sort keeps the frames'
+  // order), then the later ones dropped.
+  std::stable_sort(records.begin(), records.end(),
+                   [](const RayRecord& a, const RayRecord& b)
+                   { return a.j != b.j ? a.j < b.j : a.i < b.i; });
+  records.erase(std::unique(records.begin(), records.end(),
+                            [](const RayRecord& a, const RayRecord& b)
+                            { return a.i == b.i && a.j == b.j; }),
+                records.end());
+  return records;
 }
 
 void RayStore::storePicture(const PictureOrigin& origin, const FramePicture& picture)

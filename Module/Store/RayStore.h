@@ -374,6 +374,12 @@ public:
   /// re-traced, or the probes a whole frame's own error was measured with. Where none is, nothing
   /// of the frame was traced before.
   bool hasSubsetFrames(const SceneDescription& scene);
+  /// The records of the complete frames of some of the pixels of `scene` (the scene at its
+  /// parameters and at its rendering; a "subset" it names is left out), in one list ordered by
+  /// pixel (row j, then column i): what the frames between keys re-traced of that frame. Where two
+  /// such frames hold one pixel, the one stored first stands. Each frame is read as readFrame
+  /// reads it (its size checked, the memory limit held).
+  std::vector<RayRecord> readSubsetRecords(const SceneDescription& scene);
 
   /// Stores `picture` of `origin`, replacing one of the same origin and format. A whole frame's
   /// goes when the frame is deleted; an interpolated frame's serves only while its frame is

@@ -125,6 +125,11 @@ std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const Sc
 /// identity but for the subset and the rendering, which both sides leave out (so `scene` may name
 /// a subset itself; RayStore::hasSubsetFrames).
 bool subsetFramesExist(PGconn* conn, const SceneTexts& texts, const SceneDescription& scene);
+/// The ids of the complete frames of some of the pixels of `scene` (`texts` its texts) at its
+/// rendering, in the order stored: its identity and rendering, the subset left out on both sides
+/// (RayStore::readSubsetRecords).
+std::vector<std::int64_t> subsetFrameIds(PGconn* conn, const SceneTexts& texts,
+                                         const SceneDescription& scene);
 }
 }
 

@@ -140,3 +140,53 @@ TEST(InterpolatedFrames, SubsetFramesAreFoundByTheFramesIdentityAtAnyRendering)
   store.beginTiledFrame(subsetOf(scene(0.6)), "being written", 2);
   EXPECT_FALSE(store.hasSubsetFrames(scene(0.6)));
 }
+
+TEST(InterpolatedFrames, SubsetRecordsComeBackByPixelTheFirstStoredStanding)
+{
+  RayStore store(freshDatabase());
+  store.migrate();
+  // Pixels k of a 6-wide frame: the records of pixels k0 .. k0 + count − 1 of seed `seed`.
+  auto pixels = [](std::uint64_t seed, std::size_t k0, std::size_t count)
+  {
+    std::vector<RayRecord> all = syntheticRecords(seed, k0 + count);
+    return std::vector<RayRecord>(all.begin() + static_cast<std::ptrdiff_t>(k0), all.end());
+  };
+  auto subsetOf = [](asrt::SceneDescription d, const std::vector<RayRecord>& records)
+  {
+    std::vector<std::pair<int, int>> ij;
+    for (const RayRecord& r : records)
+      ij.emplace_back(r.i, r.j);
+    d.subset = asrt::pixelSubsetId(ij);
+    return d;
+  };
+  EXPECT_TRUE(store.readSubsetRecords(scene(0.4)).empty());
+  // Pixels 20–25 stored first, then 8–21 (newer records of 20 and 21), written in reverse order.
+  const std::vector<RayRecord> first = pixels(1, 20, 6);
+  std::vector<RayRecord> second = pixels(2, 8, 14);
+  std::reverse(second.begin(), second.end());
+  store.writeFrame(subsetOf(scene(0.4), first), "first", first);
+  store.writeFrame(subsetOf(scene(0.4), second), "second", second);
+  // Not the frame's: its pixels at another rendering, another frame's, the frame stored whole.
+  asrt::SceneDescription other = subsetOf(scene(0.4), pixels(3, 0, 8));
+  other.rendering.mode = asrt::AntialiasMode::Filter;
+  store.writeFrame(other, "another rendering", pixels(3, 0, 8));
+  store.writeFrame(subsetOf(scene(0.5), pixels(4, 0, 8)), "another frame", pixels(4, 0, 8));
+  store.writeFrame(scene(0.4), "whole", syntheticRecords(5));
+
+  const std::vector<RayRecord> read = store.readSubsetRecords(scene(0.4));
+  ASSERT_EQ(read.size(), 18u); // pixels 8 .. 25
+  for (std::size_t k = 0; k < read.size(); ++k)
+  {
+    const int pixel = static_cast<int>(k) + 8;
+    EXPECT_EQ(read[k].i, pixel % 6);
+    EXPECT_EQ(read[k].j, pixel / 6);
+    // The first stored stands where both hold the pixel.
+    const RayRecord& expected = pixel >= 20
+                                  ? first[static_cast<std::size_t>(pixel - 20)]
+                                  : second[second.size() - 1 - static_cast<std::size_t>(pixel - 8)];
+    EXPECT_EQ(recordBits(read[k]), recordBits(expected)) << pixel;
+  }
+  // The frame's subset named, or none: the same frame. Its pixels at the other rendering alone.
+  EXPECT_EQ(store.readSubsetRecords(subsetOf(scene(0.4), first)).size(), 18u);
+  EXPECT_EQ(store.readSubsetRecords(other).size(), 8u);
+}
