@@ -152,12 +152,20 @@ void MovieMaker::findRecorded()
   for (std::size_t k = 0; k < this->Frames.size(); ++k)
     if (this->Frames[k].storedId)
       frameOfId[*this->Frames[k].storedId] = static_cast<int>(k);
-  const std::string recipe = interpolationRecipe(this->Settings);
+  const std::string plain = interpolationRecipe(this->Settings),
+                    chained = interpolationRecipe(this->Settings, true);
   for (std::size_t k = 0; k < this->Frames.size() && this->Store; ++k)
   {
     if (this->Frames[k].storedId)
       continue;
-    const auto ids = this->Store->interpolatedFrameKeys(this->Frames[k].identity, recipe);
+    // Made between its keys alone, else through the chains too.
+    bool isChained = false;
+    auto ids = this->Store->interpolatedFrameKeys(this->Frames[k].identity, plain);
+    if (!ids)
+    {
+      ids = this->Store->interpolatedFrameKeys(this->Frames[k].identity, chained);
+      isChained = true;
+    }
     if (!ids)
       continue;
     std::vector<int> keys;
@@ -172,7 +180,12 @@ void MovieMaker::findRecorded()
     const bool bracketed = keys.size() == ids->size() && std::is_sorted(keys.begin(), keys.end()) &&
                            keys.front() < static_cast<int>(k) && keys.back() > static_cast<int>(k);
     if (bracketed)
+    {
       this->Impl->recorded[static_cast<int>(k)] = keys;
+      (isChained ? this->Impl->chained : this->Impl->chainSources).insert(static_cast<int>(k));
+      if (isChained)
+        this->Impl->recordedChained.insert(static_cast<int>(k));
+    }
   }
 }
 

@@ -21,6 +21,13 @@
 // movie encodes from a frame are stored with what it was made from (storePictures), and a frame
 // whose pictures are stored is written from them, nothing of it read or made (storedPictures).
 //
+// Chains. The pixels that frames recorded between a frame's inner keys re-traced (read back from
+// the store, RayStore::readSubsetRecords) join its pixels' chains of nodes (PathOptions::samples):
+// a denser movie over a stored path re-traces fewer of its new frames' pixels. Only frames the
+// store records as made from their keys alone serve so, and a frame made through them is recorded
+// by another recipe (interpolationRecipe's chained one): whenever it is made again, it finds the
+// same frames to run through, and asks for the same pixels.
+//
 // Learning. The plan starts from a prior of the re-trace share (SpacingShareModel) and of the
 // costs, in rays integrated: a whole frame's, a re-trace's (one ray a re-traced pixel, and the
 // rays of its edges: neighbours, midpoints, anti-aliasing samples) and interpolating a frame's

@@ -82,11 +82,12 @@ std::int64_t storeFrame(RayStore& store, const MovieSettings& settings,
 }
 }
 
-std::string interpolationRecipe(const MovieSettings& settings)
+std::string interpolationRecipe(const MovieSettings& settings, bool chained)
 {
   return "asrt movie 1: quality " + formatParameter(settings.quality) + " dB against " +
          (settings.holdToConverged ? "converged" : "traced") + ", probes " +
-         formatParameter(kMovieProbeFraction) + ", estimate scaled by its probes' ratio";
+         formatParameter(kMovieProbeFraction) + ", estimate scaled by its probes' ratio" +
+         (chained ? ", chained through the pixels the frames between its keys re-traced" : "");
 }
 
 bool MovieMaking::cancelled() const
@@ -597,10 +598,48 @@ SettingsError MovieMaking::settingsAt(int k, const MovieFrame& lowered)
   return settingsError(records, probes, probed, converged);
 }
 
+std::vector<std::shared_ptr<const PathSamples>> MovieMaking::samplesFor(
+  int k, const std::vector<int>& keys)
+{
+  std::vector<std::shared_ptr<const PathSamples>> out;
+  const auto after = std::upper_bound(keys.begin(), keys.end(), k);
+  if (!maker.Store || after == keys.begin() || after == keys.end())
+    return out;
+  const int lo = *(after - 1), hi = *after;
+  for (auto it = in.samples.begin(); it != in.samples.end();)
+    it = it->first > lo && it->first < hi ? std::next(it) : in.samples.erase(it);
+  const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
+  for (auto j = in.chainSources.upper_bound(lo); j != in.chainSources.end() && *j < hi; ++j)
+  {
+    if (*j == k)
+      continue;
+    auto kept = in.samples.find(*j);
+    if (kept == in.samples.end())
+    {
+      // The frame's re-traced lists: its subsets at the rendering it re-traces pixels with.
+      const MovieFrame& f = maker.Frames[static_cast<std::size_t>(*j)];
+      SceneDescription retraced = f.identity;
+      retraced.rendering = scatteredPixelRendering(retraced.rendering);
+      auto samples = std::make_shared<PathSamples>();
+      samples->s = direction * f.s;
+      for (RayRecord& r : maker.Store->readSubsetRecords(retraced))
+        if (r.i >= 0 && r.i < maker.Width && r.j >= 0 && r.j < maker.Height)
+        {
+          samples->pixels.push_back(r.j * maker.Width + r.i);
+          samples->records.push_back(std::move(r));
+        }
+      kept = in.samples.emplace(*j, std::move(samples)).first;
+    }
+    if (!kept->second->pixels.empty())
+      out.push_back(kept->second);
+  }
+  return out;
+}
+
 PathCompletion MovieMaking::interpolatedWith(int k, const std::vector<int>& keys,
                                              const PixelTracer& retrace,
                                              std::vector<RayRecord>& records, bool storeOnly,
-                                             SettingsError& settings)
+                                             SettingsError& settings, bool withSamples)
 {
   const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
   // Frame order is the order of direction · s: the keys go in as they are.
@@ -630,6 +669,18 @@ PathCompletion MovieMaking::interpolatedWith(int k, const std::vector<int>& keys
   // Fig. 1's orbit 3 % more (the plan measures frames between many sets of keys, each set's
   // keys left out made afresh).
   options.leaveOneOutCache = in.leftOut;
+  // The pixels the frames recorded between the inner keys re-traced: nearer t than the keys, they
+  // vouch for pixels an edge crossed between the keys (PathInterpolation.h, Chains). On the
+  // 200×200 movies of 61 frames, the 60 frames a run of 121 adds re-traced 10.7 % fewer rays
+  // with them on the mass ramp, 5.3 % fewer on Fig. 1's orbit.
+  if (withSamples)
+  {
+    options.samples = this->samplesFor(k, keys);
+    if (options.samples.empty())
+      in.chained.erase(k);
+    else
+      in.chained.insert(k);
+  }
   PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                          *in.shading->scene, options);
   const auto after = std::upper_bound(keys.begin(), keys.end(), k);
@@ -662,8 +713,11 @@ std::vector<RayRecord> MovieMaking::interpolated(int k, const std::vector<int>& 
   std::vector<RayRecord> records;
   SettingsError settings;
   in.heldRays[k] = 0;
-  const PathCompletion done = this->interpolatedWith(
-    k, keys, this->retracedPixels(k, tracer, report, storeOnly), records, storeOnly, settings);
+  // A frame recorded by the plain recipe is made again as it was made, from its keys alone.
+  const bool withSamples = !storeOnly && !in.chainSources.count(k);
+  const PathCompletion done =
+    this->interpolatedWith(k, keys, this->retracedPixels(k, tracer, report, storeOnly), records,
+                           storeOnly, settings, withSamples);
   if (!storeOnly) // made while planning: recorded when frame() hands it out
     this->recordKeys(k, keys);
   report.method = FrameMethod::Interpolated;
@@ -679,8 +733,10 @@ void MovieMaking::recordKeys(int k, const std::vector<int>& keys)
   if (!maker.Store)
     return;
   const std::vector<int> used = keysAround(keys, k);
+  const bool chained = in.chained.count(k) > 0;
   const auto before = in.recorded.find(k);
-  if (before != in.recorded.end() && before->second == used)
+  if (before != in.recorded.end() && before->second == used &&
+      in.recordedChained.count(k) == in.chained.count(k))
     return;
   std::vector<std::int64_t> ids;
   for (int key : used)
@@ -691,8 +747,12 @@ void MovieMaking::recordKeys(int k, const std::vector<int>& keys)
     ids.push_back(id->second);
   }
   maker.Store->recordInterpolatedFrame(maker.Frames[static_cast<std::size_t>(k)].identity,
-                                       interpolationRecipe(maker.Settings), ids);
+                                       interpolationRecipe(maker.Settings, chained), ids);
   in.recorded[k] = used;
+  if (chained)
+    in.recordedChained.insert(k);
+  else
+    in.recordedChained.erase(k);
 }
 
 std::optional<std::int64_t> MovieMaking::storedId(int k) const
@@ -715,7 +775,7 @@ std::optional<PictureOrigin> MovieMaking::pictureOrigin(int k) const
     return origin.wholeFrame ? std::optional<PictureOrigin>(origin) : std::nullopt;
   }
   origin.scene = maker.Frames[static_cast<std::size_t>(k)].identity;
-  origin.recipe = interpolationRecipe(maker.Settings);
+  origin.recipe = interpolationRecipe(maker.Settings, in.recordedChained.count(k) > 0);
   for (int key : recorded->second)
   {
     const std::optional<std::int64_t> id = this->storedId(key);

@@ -36,8 +36,10 @@ struct NotServed
 };
 
 /// How a movie's interpolated frames are made, as recorded with their keys in the store
-/// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame.
-std::string interpolationRecipe(const MovieSettings& settings);
+/// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame. `chained`:
+/// the frame's pixels were also predicted through the pixels that the frames recorded between the
+/// same inner keys by the plain recipe re-traced (MovieMaker::Internals::chainSources).
+std::string interpolationRecipe(const MovieSettings& settings, bool chained = false);
 
 /// What a movie maker keeps between calls: the whole frames made and their rays, the pieces read
 /// or traced for interpolated frames, the plan's measurements, and what the store holds of them.
@@ -67,6 +69,22 @@ struct MovieMaker::Internals
   /// Interpolated frames the store records as made from keys that are frames of this movie, and
   /// stored: each is made again between exactly those keys, whatever keys the plan has.
   std::map<int, std::vector<int>> recorded;
+  /// The frames of `recorded` that the store records by the plain recipe, as the plan found them:
+  /// made between their keys alone. The pixels they re-traced join the chains of the frames made
+  /// later between inner keys around them (PathOptions::samples), which are recorded as chained.
+  /// Only these: they were made from their keys alone whenever they were made, and a frame is made
+  /// so only where no such frame lies between its inner keys, so a chained frame made again finds
+  /// the same samples, and the same pixels to re-trace, as when it was made. (Unless a later movie
+  /// put new keys between its keys and made a frame there by the plain recipe: it is then made
+  /// again through that one too, and traces what that changes.)
+  std::set<int> chainSources;
+  /// Frames made, or recorded, through the chain sources' pixels (the chained recipe).
+  std::set<int> chained;
+  /// The frames of `recorded` whose record is by the chained recipe.
+  std::set<int> recordedChained;
+  /// The chain sources' re-traced pixels, read from the store, for the frames between the inner
+  /// keys of the frame made last.
+  std::map<int, std::shared_ptr<const PathSamples>> samples;
   bool keysMade = false; ///< makeKeys() done: the plan is final
   /// Whole frames whose rays are counted in the maker's totals (read, traced or served as
   /// pictures): each counted once.
@@ -191,12 +209,17 @@ struct MovieMaking
   /// subset of `lowered`'s scene) against their converged records.
   SettingsError settingsAt(int k, const MovieFrame& lowered);
 
+  /// The re-traced pixels of the chain sources between frame k's inner keys among `keys` (read
+  /// from the store once; those between other keys let go).
+  std::vector<std::shared_ptr<const PathSamples>> samplesFor(int k, const std::vector<int>& keys);
+
   /// Frame k interpolated between `keys` (the nearest of them around it), completed to the target
   /// with the pixels `retrace` gives, held to the converged picture through the inner keys' own
-  /// errors (settingsOf, with `storeOnly`).
+  /// errors (settingsOf, with `storeOnly`). With `withSamples`, each pixel's chain runs through
+  /// samplesFor(k, keys) too, and k is marked chained where there are any.
   PathCompletion interpolatedWith(int k, const std::vector<int>& keys, const PixelTracer& retrace,
                                   std::vector<RayRecord>& records, bool storeOnly,
-                                  SettingsError& settings);
+                                  SettingsError& settings, bool withSamples = false);
 
   /// Frame k interpolated between `keys` (the nearest of the plan's keys), completed to the target.
   std::vector<RayRecord> interpolated(int k, const std::vector<int>& keys, MovieFrameReport& report,

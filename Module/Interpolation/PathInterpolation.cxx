@@ -328,17 +328,16 @@ float edgeContrast(const std::vector<RayRecord>& key, std::size_t p, int width, 
 /// orbit, with the edges in place) only the other side's share of its motion is left to the
 /// interpolation, not the whole of it; where the edge moves, the rest follows α as the colour
 /// itself would. The record is the centre ray's prediction, colour aside.
-template<typename Nodes, typename Contrast>
-RayRecord predictEdgePixel(const Nodes& chain, std::size_t a, double t, const Scene& scene,
-                           PathMethod& method, float& estimate, bool withEstimate,
-                           Contrast&& contrastOfNearer)
+RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
+                           int width, int height, const Scene& scene, PathMethod& method,
+                           float& estimate, bool withEstimate = true)
 {
-  const RayRecord& ra = chain.record(a);
-  const RayRecord& rb = chain.record(a + 1);
-  const NodeRange range = nodeRange(chain.size(), a,
-                                    [&](std::size_t outer, std::size_t beside) {
-                                      return endAlike(chain.record(outer), chain.record(beside));
-                                    });
+  const RayRecord& ra = (*keys[a].records)[p];
+  const RayRecord& rb = (*keys[a + 1].records)[p];
+  const NodeRange range =
+    nodeRange(keys.size(), a,
+              [&](std::size_t outer, std::size_t beside)
+              { return endAlike((*keys[outer].records)[p], (*keys[beside].records)[p]); });
   // The nodes, and at an end of the keys the key beyond before or after them: n of them from
   // `offset` on predict, all `count` measure the estimate.
   const std::size_t first =
@@ -353,9 +352,9 @@ RayRecord predictEdgePixel(const Nodes& chain, std::size_t a, double t, const Sc
   int count = 0;
   for (std::size_t k = first; k <= last; ++k)
   {
-    nodes[count] = &chain.record(k);
+    nodes[count] = &(*keys[k].records)[p];
     rest[count] = nodes[count]->color - shadePrediction(scene, *nodes[count]);
-    s[count++] = chain.s(k);
+    s[count++] = keys[k].s;
   }
   const int n = static_cast<int>(range.last - range.first) + 1;
   // The prediction through the nodes from `offset` on, `count` of them.
@@ -369,23 +368,24 @@ RayRecord predictEdgePixel(const Nodes& chain, std::size_t a, double t, const Sc
     centre.color = out.cwiseMax(0.0).cwiseMin(1.0);
     return centre;
   };
-  const std::size_t nearer = t - chain.s(a) <= chain.s(a + 1) - t ? a : a + 1;
+  const std::size_t nearerKey = t - keys[a].s <= keys[a + 1].s - t ? a : a + 1;
   RayRecord out = blend(offset, n);
   // The record is the centre ray's prediction at t; its rays are the nearer key's (the
   // anti-aliasing an edge pixel took).
-  out.raysPerPixel = chain.record(nearer).raysPerPixel;
+  out.raysPerPixel = (*keys[nearerKey].records)[p].raysPerPixel;
   method = PathMethod::EdgeBlend;
   estimate = 0.0f;
   if (!withEstimate)
     return out;
   if (n == 2)
   {
-    estimate = std::max(colorError2(ra.color, rb.color), contrastOfNearer(nearer));
+    estimate = std::max(colorError2(ra.color, rb.color),
+                        edgeContrast(*keys[nearerKey].records, p, width, height));
     return out;
   }
   // One order lower: without the outer node farther from t; at an end of the keys one higher,
   // through the key beyond too.
-  const bool dropLeft = left && (!right || t - chain.s(range.first) >= chain.s(range.last) - t);
+  const bool dropLeft = left && (!right || t - keys[range.first].s >= keys[range.last].s - t);
   const RayRecord other = range.beyond ? blend(0, count) : blend(dropLeft ? 1 : 0, n - 1);
   // An edge's colour follows its coverage of the pixel, which polynomials in s follow only
   // roughly: the keys' colour step bounds what the edge's motion can change in between. The
@@ -395,15 +395,6 @@ RayRecord predictEdgePixel(const Nodes& chain, std::size_t a, double t, const Sc
   // of the estimate, ranked above the moved edges that held over 90 % of it.
   estimate = std::max(colorError2(out.color, other.color), colorError2(ra.color, rb.color));
   return out;
-}
-
-RayRecord predictEdgePixel(const std::vector<PathKey>& keys, std::size_t a, std::size_t p, double t,
-                           int width, int height, const Scene& scene, PathMethod& method,
-                           float& estimate, bool withEstimate = true)
-{
-  return predictEdgePixel(KeyNodes{ keys, p }, a, t, scene, method, estimate, withEstimate,
-                          [&](std::size_t nearer)
-                          { return edgeContrast(*keys[nearer].records, p, width, height); });
 }
 
 }
@@ -540,7 +531,7 @@ bool predictFromChain(const std::vector<ChainSource>& sources, std::size_t below
   if (lower.count == 0 || upper.count == 0 || (sources[from[0]].key && sources[from[1]].key))
     return false; // the keys themselves are the inner pair: they did not vouch for it
   const RayRecord &lo = *lower.records[0], &hi = *upper.records[0];
-  if (!endAlike(lo, hi))
+  if (!singleRay(lo) || !singleRay(hi) || !endAlike(lo, hi))
     return false;
   const int i = static_cast<int>(p % width), j = static_cast<int>(p / width);
   for (int dj = -1; dj <= 1; ++dj)
@@ -567,23 +558,7 @@ bool predictFromChain(const std::vector<ChainSource>& sources, std::size_t below
     chain.at[chain.count] = upper.at[k];
     chain.records[chain.count++] = upper.records[k];
   }
-  const std::size_t a = lower.count - 1;
-  if (singleRay(lo) && singleRay(hi))
-  {
-    out = predictPixel(chain, a, t, scene, method, estimate, withEstimate);
-    return true;
-  }
-  // An edge runs through the pixel: blended as a key's edge pixel is, where an outer record ends
-  // alike too (two records alone would need the neighbours' contrast, which a frame traced in part
-  // may not hold).
-  const NodeRange range = nodeRange(chain.size(), a,
-                                    [&](std::size_t outer, std::size_t beside) {
-                                      return endAlike(chain.record(outer), chain.record(beside));
-                                    });
-  if (range.last - range.first < 2)
-    return false;
-  out = predictEdgePixel(chain, a, t, scene, method, estimate, withEstimate,
-                         [](std::size_t) { return std::numeric_limits<float>::infinity(); });
+  out = predictPixel(chain, lower.count - 1, t, scene, method, estimate, withEstimate);
   return true;
 }
 

@@ -22,7 +22,9 @@
 //    its 8 neighbours either ends alike in the same two frames or is one the keys vouch for (an
 //    edge that crossed the pixel between the inner pair would show on one of them). Its estimate
 //    is a prediction's, from the chain; the keys' leave-one-out errors do not weigh it (they
-//    measure the keys' spacing, not the chain's).
+//    measure the keys' spacing, not the chain's). An edge pixel (an inner record supersampled) is
+//    left to be re-traced: blended through its chain as a key's edge pixel is (below), it cost a
+//    mass ramp's frames at 48 × 48 up to 4 dB against the traced ones, unseen by the estimate.
 //  - Winding. floor(winding/π), the image order, flips smoothly for escaping rays as a hole grows;
 //    a new image of an object instead shows as a jump of the winding between keys (a ray that now
 //    passes the hole on its other side, or goes once more round it). So continuity is judged on
