@@ -75,8 +75,9 @@ struct MovieMaker::Internals
   /// Only these: they were made from their keys alone whenever they were made, and a frame is made
   /// so only where no such frame lies between its inner keys, so a chained frame made again finds
   /// the same samples, and the same pixels to re-trace, as when it was made. (Unless a later movie
-  /// put new keys between its keys and made a frame there by the plain recipe: it is then made
-  /// again through that one too, and traces what that changes.)
+  /// put new keys between its keys and made a frame there by the plain recipe, or another movie
+  /// of the same rendering re-traced more pixels of the frames it runs through: it is then made
+  /// again through those too, and traces the pixels that changes.)
   std::set<int> chainSources;
   /// Frames made, or recorded, through the chain sources' pixels (the chained recipe).
   std::set<int> chained;
