@@ -494,55 +494,56 @@ std::optional<std::vector<std::int64_t>> interpolatedKeys(PGconn* conn, const Sc
   return keys;
 }
 
+namespace
+{
+/// The frame's text ($1), its parameters and size ($2 … $9): what narrows the rows to the frames
+/// of this view before any text is parsed (kSubsetOfView).
+pg::Params viewParams(const SceneTexts& texts, const SceneDescription& scene)
+{
+  const Vec3& eye = scene.camera.position;
+  pg::Params p;
+  p.text(texts.frame)
+    .f64(scene.spacetime.mass)
+    .f64(scene.spacetime.spin)
+    .f64(scene.spacetime.charge)
+    .f64(eye.x())
+    .f64(eye.y())
+    .f64(eye.z())
+    .i32(scene.camera.width)
+    .i32(scene.camera.height);
+  return p;
+}
+
+/// The complete frames of the view of viewParams whose texts name a subset.
+const std::string kSubsetOfView =
+  "status = 'complete' AND mass = $2 AND spin = $3 AND charge = $4 AND camera_x = $5 AND "
+  "camera_y = $6 AND camera_z = $7 AND width = $8 AND height = $9 AND "
+  "strpos(effective_text, '\"subset\"') > 0 AND effective_text::jsonb ? 'subset'";
+}
+
 bool subsetFramesExist(PGconn* conn, const SceneTexts& texts, const SceneDescription& scene)
 {
-  // The parameters and the size narrow the rows to the frames of this view before any text is
-  // parsed; the texts, less what a subset frame adds (its pixels) and changes (the rendering it
-  // traces scattered pixels with), are then the same identity.
-  const Vec3& eye = scene.camera.position;
-  pg::Result r =
-    pg::Params()
-      .text(texts.frame)
-      .f64(scene.spacetime.mass)
-      .f64(scene.spacetime.spin)
-      .f64(scene.spacetime.charge)
-      .f64(eye.x())
-      .f64(eye.y())
-      .f64(eye.z())
-      .i32(scene.camera.width)
-      .i32(scene.camera.height)
-      .exec(conn,
-            "SELECT EXISTS (SELECT 1 FROM frames WHERE status = 'complete' AND mass = $2 AND "
-            "spin = $3 AND charge = $4 AND camera_x = $5 AND camera_y = $6 AND camera_z = $7 AND "
-            "width = $8 AND height = $9 AND strpos(effective_text, '\"subset\"') > 0 AND "
-            "effective_text::jsonb ? 'subset' AND (effective_text::jsonb - 'subset' - "
-            "'rendering') = ($1::jsonb - 'subset' - 'rendering'))",
-            "looking for the frame's pixel subsets failed");
+  // The texts, less what a subset frame adds (its pixels) and changes (the rendering it traces
+  // scattered pixels with), are then the same identity.
+  pg::Result r = viewParams(texts, scene)
+                   .exec(conn,
+                         "SELECT EXISTS (SELECT 1 FROM frames WHERE " + kSubsetOfView +
+                           " AND (effective_text::jsonb - 'subset' - 'rendering') = ($1::jsonb - "
+                           "'subset' - 'rendering'))",
+                         "looking for the frame's pixel subsets failed");
   return PQntuples(r.get()) == 1 && pg::getBool(r.get(), 0, 0);
 }
 
 std::vector<std::int64_t> subsetFrameIds(PGconn* conn, const SceneTexts& texts,
                                          const SceneDescription& scene)
 {
-  const Vec3& eye = scene.camera.position;
-  pg::Result r =
-    pg::Params()
-      .text(texts.frame)
-      .f64(scene.spacetime.mass)
-      .f64(scene.spacetime.spin)
-      .f64(scene.spacetime.charge)
-      .f64(eye.x())
-      .f64(eye.y())
-      .f64(eye.z())
-      .i32(scene.camera.width)
-      .i32(scene.camera.height)
-      .exec(conn,
-            "SELECT id FROM frames WHERE status = 'complete' AND mass = $2 AND spin = $3 AND "
-            "charge = $4 AND camera_x = $5 AND camera_y = $6 AND camera_z = $7 AND width = $8 "
-            "AND height = $9 AND strpos(effective_text, '\"subset\"') > 0 AND "
-            "effective_text::jsonb ? 'subset' AND (effective_text::jsonb - 'subset') = "
-            "($1::jsonb - 'subset') ORDER BY id",
-            "looking for the frame's pixel subsets failed");
+  // The texts less the pixels alone: the same identity at the same rendering.
+  pg::Result r = viewParams(texts, scene)
+                   .exec(conn,
+                         "SELECT id FROM frames WHERE " + kSubsetOfView +
+                           " AND (effective_text::jsonb - 'subset') = ($1::jsonb - 'subset') "
+                           "ORDER BY id",
+                         "looking for the frame's pixel subsets failed");
   std::vector<std::int64_t> ids;
   for (int row = 0; row < PQntuples(r.get()); ++row)
     ids.push_back(pg::getI64(r.get(), row, 0));
