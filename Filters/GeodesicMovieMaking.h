@@ -37,8 +37,8 @@ struct NotServed
 
 /// How a movie's interpolated frames are made, as recorded with their keys in the store
 /// (RayStore::recordInterpolatedFrame): the same keys and recipe make the same frame. `chained`:
-/// the frame's pixels were also predicted through the pixels that the frames recorded between the
-/// same inner keys by the plain recipe re-traced (MovieMaker::Internals::chainSources).
+/// the frame's pixels were also predicted through the pixels that the frames recorded between its
+/// inner keys by the plain recipe re-traced (MovieMaker::Internals::chainSources).
 std::string interpolationRecipe(const MovieSettings& settings, bool chained = false);
 
 /// What a movie maker keeps between calls: the whole frames made and their rays, the pieces read
