@@ -182,9 +182,8 @@ void MovieMaker::findRecorded()
     if (bracketed)
     {
       this->Impl->recorded[static_cast<int>(k)] = keys;
-      (isChained ? this->Impl->chained : this->Impl->chainSources).insert(static_cast<int>(k));
-      if (isChained)
-        this->Impl->recordedChained.insert(static_cast<int>(k));
+      (isChained ? this->Impl->recordedChained : this->Impl->chainSources)
+        .insert(static_cast<int>(k));
     }
   }
 }
@@ -447,7 +446,7 @@ const std::vector<RayRecord>& MovieMaker::madeFrame(int k, MovieFrameReport& rep
     report = served->second.second;
     this->RaysOfMovie += report.raysReused;
     this->Impl->served.erase(served);
-    making.recordKeys(k, plan.keys());
+    making.recordKeys(k, plan.keys(), false); // made from the store alone, its keys alone
     made = std::move(records);
     return made;
   }

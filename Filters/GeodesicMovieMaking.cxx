@@ -639,7 +639,7 @@ std::vector<std::shared_ptr<const PathSamples>> MovieMaking::samplesFor(
 PathCompletion MovieMaking::interpolatedWith(int k, const std::vector<int>& keys,
                                              const PixelTracer& retrace,
                                              std::vector<RayRecord>& records, bool storeOnly,
-                                             SettingsError& settings, bool withSamples)
+                                             SettingsError& settings, bool* chained)
 {
   const double direction = maker.Frames.back().s > maker.Frames.front().s ? 1.0 : -1.0;
   // Frame order is the order of direction · s: the keys go in as they are.
@@ -673,13 +673,10 @@ PathCompletion MovieMaking::interpolatedWith(int k, const std::vector<int>& keys
   // vouch for pixels an edge crossed between the keys (PathInterpolation.h, Chains). On the
   // 200×200 movies of 61 frames, the 60 frames a run of 121 adds re-traced 10.7 % fewer rays
   // with them on the mass ramp, 5.3 % fewer on Fig. 1's orbit.
-  if (withSamples)
+  if (chained)
   {
     options.samples = this->samplesFor(k, keys);
-    if (options.samples.empty())
-      in.chained.erase(k);
-    else
-      in.chained.insert(k);
+    *chained = !options.samples.empty();
   }
   PathFrame frame = interpolateAlongPath(pathKeys, direction * f.s, maker.Width, maker.Height,
                                          *in.shading->scene, options);
@@ -714,12 +711,13 @@ std::vector<RayRecord> MovieMaking::interpolated(int k, const std::vector<int>& 
   SettingsError settings;
   in.heldRays[k] = 0;
   // A frame recorded by the plain recipe is made again as it was made, from its keys alone.
+  bool chained = false;
   const bool withSamples = !storeOnly && !in.chainSources.count(k);
   const PathCompletion done =
     this->interpolatedWith(k, keys, this->retracedPixels(k, tracer, report, storeOnly), records,
-                           storeOnly, settings, withSamples);
-  if (!storeOnly) // made while planning: recorded when frame() hands it out
-    this->recordKeys(k, keys);
+                           storeOnly, settings, withSamples ? &chained : nullptr);
+  if (!storeOnly) // made while planning, from its keys alone: recorded when frame() hands it out
+    this->recordKeys(k, keys, chained);
   report.method = FrameMethod::Interpolated;
   report.estimatedPsnr = done.estimatedPsnr;
   report.settingsPsnr = settings.psnr();
@@ -728,15 +726,14 @@ std::vector<RayRecord> MovieMaking::interpolated(int k, const std::vector<int>& 
   return records;
 }
 
-void MovieMaking::recordKeys(int k, const std::vector<int>& keys)
+void MovieMaking::recordKeys(int k, const std::vector<int>& keys, bool chained)
 {
   if (!maker.Store)
     return;
   const std::vector<int> used = keysAround(keys, k);
-  const bool chained = in.chained.count(k) > 0;
   const auto before = in.recorded.find(k);
   if (before != in.recorded.end() && before->second == used &&
-      in.recordedChained.count(k) == in.chained.count(k))
+      (in.recordedChained.count(k) > 0) == chained)
     return;
   std::vector<std::int64_t> ids;
   for (int key : used)

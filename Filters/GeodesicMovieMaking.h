@@ -79,9 +79,8 @@ struct MovieMaker::Internals
   /// of the same rendering re-traced more pixels of the frames it runs through: it is then made
   /// again through those too, and traces the pixels that changes.)
   std::set<int> chainSources;
-  /// Frames made, or recorded, through the chain sources' pixels (the chained recipe).
-  std::set<int> chained;
-  /// The frames of `recorded` whose record is by the chained recipe.
+  /// The frames of `recorded` whose record is by the chained recipe: made through the chain
+  /// sources' pixels.
   std::set<int> recordedChained;
   /// The chain sources' re-traced pixels, read from the store, for the frames between the inner
   /// keys of the frame made last.
@@ -216,11 +215,11 @@ struct MovieMaking
 
   /// Frame k interpolated between `keys` (the nearest of them around it), completed to the target
   /// with the pixels `retrace` gives, held to the converged picture through the inner keys' own
-  /// errors (settingsOf, with `storeOnly`). With `withSamples`, each pixel's chain runs through
-  /// samplesFor(k, keys) too, and k is marked chained where there are any.
+  /// errors (settingsOf, with `storeOnly`). Where `chained` is given, each pixel's chain runs
+  /// through samplesFor(k, keys) too, and *chained says whether there were any.
   PathCompletion interpolatedWith(int k, const std::vector<int>& keys, const PixelTracer& retrace,
                                   std::vector<RayRecord>& records, bool storeOnly,
-                                  SettingsError& settings, bool withSamples = false);
+                                  SettingsError& settings, bool* chained = nullptr);
 
   /// Frame k interpolated between `keys` (the nearest of the plan's keys), completed to the target.
   std::vector<RayRecord> interpolated(int k, const std::vector<int>& keys, MovieFrameReport& report,
@@ -228,7 +227,8 @@ struct MovieMaking
 
   /// Records in the store that frame k was made between the keys of `keys` around it, unless it
   /// was recorded so before; nothing without a store, or with a key it did not store.
-  void recordKeys(int k, const std::vector<int>& keys);
+  /// `chained`: made through the chain sources' pixels (the chained recipe).
+  void recordKeys(int k, const std::vector<int>& keys, bool chained);
 
   /// The store's id of whole frame k, if it is stored.
   std::optional<std::int64_t> storedId(int k) const;
